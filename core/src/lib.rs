@@ -1,0 +1,3 @@
+//! protogist core.
+#![no_std]
+#![forbid(unsafe_code)]
