@@ -1,0 +1,119 @@
+//! Edge-preserving colour smoothing: a symmetric-nearest-neighbour cell.
+//!
+//! For each of the 4 symmetric pairs of the 3x3 window (the conspicuity
+//! pairs, offsets (1,0), (1,1), (0,1), (-1,1)), the cell keeps the member
+//! nearer to the centre in CIELUV distance (the `p - δ` member on a tie). The
+//! output is the mean of the centre and the 4 kept pixels, rounded by
+//! [`div_round`]. Across an edge the kept members lie on the centre's side,
+//! so the edge is not blurred; inside a region the cell averages, like the
+//! centre of a difference-of-Gaussians. [`SmoothParams::iterations`] repeats
+//! it; each repetition widens the smoothing while edges stay put.
+//! Image borders replicate the outermost pixels.
+
+use super::ring::Ring;
+use super::{ConspicuityError, Luv};
+use crate::fixed::div_round;
+use crate::image::ImageViewMut;
+
+/// Parameters of [`smooth`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SmoothParams {
+    /// Number of passes of the cell; 0 leaves the image unchanged.
+    pub iterations: u8,
+}
+
+impl Default for SmoothParams {
+    /// Two passes: see `docs/CONSPICUITY.md` for the choice.
+    fn default() -> Self {
+        Self { iterations: 2 }
+    }
+}
+
+/// Smooths `img` in place, `params.iterations` times.
+///
+/// # Errors
+/// [`ConspicuityError::ScratchTooSmall`] when `rows` is shorter than
+/// [`row_scratch_len`](super::row_scratch_len)`(width)`.
+pub fn smooth(
+    params: &SmoothParams,
+    img: &mut ImageViewMut<'_, Luv>,
+    rows: &mut [Luv],
+) -> Result<(), ConspicuityError> {
+    for _ in 0..params.iterations {
+        smooth_step(img, rows)?;
+    }
+    Ok(())
+}
+
+/// One pass of the cell, in place.
+///
+/// # Errors
+/// As [`smooth`].
+pub fn smooth_step(
+    img: &mut ImageViewMut<'_, Luv>,
+    rows: &mut [Luv],
+) -> Result<(), ConspicuityError> {
+    let (w, h) = img.size();
+    let mut ring = Ring::new(rows, w)?;
+    ring.start(img.row(0).unwrap_or(&[]));
+    for y in 0..h {
+        ring.load_next(img.row((y + 1).min(h - 1)).unwrap_or(&[]));
+        if let Some(out) = img.row_mut(y) {
+            snn_row(ring.prev, ring.cur, ring.next, out);
+        }
+        ring.advance();
+    }
+    Ok(())
+}
+
+#[inline(always)]
+pub(crate) fn bits(p: Luv) -> [i32; 3] {
+    p.to_bits().map(i32::from)
+}
+
+/// Squared CIELUV distance in Q12. `u64` because arbitrary `i16` inputs can
+/// exceed `u32`; the CIELUV of real sRGB stays below 2^30.
+#[inline(always)]
+pub(crate) fn dist2(a: [i32; 3], b: [i32; 3]) -> u64 {
+    let sq = |x: i32, y: i32| {
+        let d = u64::from((x - y).unsigned_abs());
+        d * d
+    };
+    sq(a[0], b[0]) + sq(a[1], b[1]) + sq(a[2], b[2])
+}
+
+/// The pair member nearer to `c`; `minus` on a tie.
+#[inline(always)]
+fn nearer(c: [i32; 3], minus: Luv, plus: Luv) -> [i32; 3] {
+    let (m, p) = (bits(minus), bits(plus));
+    if dist2(c, m) <= dist2(c, p) {
+        m
+    } else {
+        p
+    }
+}
+
+fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) {
+    let cells = prev.windows(3).zip(cur.windows(3)).zip(next.windows(3));
+    for (((up, mid), down), o) in cells.zip(out.iter_mut()) {
+        let (&[a0, a1, a2], &[b0, b1, b2], &[c0, c1, c2]) = (up, mid, down) else {
+            continue;
+        };
+        let c = bits(b1);
+        let kept = [
+            nearer(c, b0, b2), // (1, 0)
+            nearer(c, a0, c2), // (1, 1)
+            nearer(c, a1, c1), // (0, 1)
+            nearer(c, a2, c0), // (-1, 1)
+        ];
+        let mut sum = c;
+        for k in kept {
+            sum[0] += k[0];
+            sum[1] += k[1];
+            sum[2] += k[2];
+        }
+        // The mean of 5 values in the I10F6 range stays in range.
+        let [l, u, v] = sum.map(|s| div_round(s, 5) as i16);
+        *o = Luv::from_bits(l, u, v);
+    }
+}

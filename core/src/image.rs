@@ -1,0 +1,495 @@
+//! Image views over caller-provided buffers, and the pixel newtypes.
+//!
+//! A view is a slice plus `width`, `height` and `stride` (elements from the
+//! start of one row to the start of the next). The constructor checks the
+//! geometry once; after that no accessor can panic: rows are exactly `width`
+//! long, and every out-of-range access returns `None`.
+//!
+//! ```
+//! use protogist::image::{ImageView, Luma8};
+//! let px = [Luma8(1), Luma8(2), Luma8(9), Luma8(3), Luma8(4), Luma8(9)];
+//! // 2x2 image whose rows are 3 elements apart (one padding element each).
+//! let img = ImageView::new(&px, 2, 2, 3).unwrap();
+//! assert_eq!(img.get(1, 1), Some(Luma8(4)));
+//! assert_eq!(img.get(2, 1), None);
+//! assert_eq!(img.row(1), Some(&px[3..5]));
+//! ```
+
+use core::fmt;
+
+/// Largest width or height a view accepts. It keeps every per-image count
+/// (pixels, sums of 8-bit values) inside `u32` with room to spare.
+pub const MAX_DIM: usize = 8192;
+
+/// Why a buffer cannot be viewed as an image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ImageError {
+    /// Width or height is zero.
+    ZeroSize,
+    /// Width or height is above [`MAX_DIM`].
+    TooLarge {
+        /// The offending width.
+        width: usize,
+        /// The offending height.
+        height: usize,
+    },
+    /// The stride is shorter than a row.
+    StrideTooSmall {
+        /// Image width.
+        width: usize,
+        /// Given stride.
+        stride: usize,
+    },
+    /// The slice cannot hold `height` rows of `stride` elements (the last row
+    /// needs only `width`).
+    BufferTooSmall {
+        /// Elements needed.
+        needed: usize,
+        /// Elements given.
+        got: usize,
+    },
+    /// Two images that must share a size do not.
+    SizeMismatch {
+        /// Expected `(width, height)`.
+        expected: (usize, usize),
+        /// Given `(width, height)`.
+        got: (usize, usize),
+    },
+}
+
+impl fmt::Display for ImageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::ZeroSize => write!(f, "image has zero width or height"),
+            Self::TooLarge { width, height } => {
+                write!(f, "image {width}x{height} exceeds the {MAX_DIM} px limit")
+            }
+            Self::StrideTooSmall { width, stride } => {
+                write!(f, "stride {stride} is shorter than the width {width}")
+            }
+            Self::BufferTooSmall { needed, got } => {
+                write!(f, "buffer holds {got} elements, the image needs {needed}")
+            }
+            Self::SizeMismatch { expected, got } => write!(
+                f,
+                "image is {}x{}, expected {}x{}",
+                got.0, got.1, expected.0, expected.1
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ImageError {}
+
+/// Elements a buffer needs to hold a `width` x `height` image with `stride`.
+///
+/// # Errors
+/// The geometry errors of [`ImageView::new`], except [`ImageError::BufferTooSmall`].
+pub const fn buffer_len(width: usize, height: usize, stride: usize) -> Result<usize, ImageError> {
+    if width == 0 || height == 0 {
+        return Err(ImageError::ZeroSize);
+    }
+    if width > MAX_DIM || height > MAX_DIM || stride > MAX_DIM * 4 {
+        return Err(ImageError::TooLarge { width, height });
+    }
+    if stride < width {
+        return Err(ImageError::StrideTooSmall { width, stride });
+    }
+    // Cannot overflow: all three are bounded above.
+    Ok((height - 1) * stride + width)
+}
+
+/// An 8-bit grey pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[repr(transparent)]
+pub struct Luma8(pub u8);
+
+/// An 8-bit sRGB pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[repr(C)]
+pub struct Rgb8 {
+    /// Red.
+    pub r: u8,
+    /// Green.
+    pub g: u8,
+    /// Blue.
+    pub b: u8,
+}
+
+impl Rgb8 {
+    /// A pixel from its three channels.
+    pub const fn new(r: u8, g: u8, b: u8) -> Self {
+        Self { r, g, b }
+    }
+}
+
+/// A read-only image over a borrowed slice.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageView<'a, P> {
+    data: &'a [P],
+    width: usize,
+    height: usize,
+    stride: usize,
+}
+
+/// A mutable image over a borrowed slice.
+#[derive(Debug)]
+pub struct ImageViewMut<'a, P> {
+    data: &'a mut [P],
+    width: usize,
+    height: usize,
+    stride: usize,
+}
+
+/// Checks that `(x, y, w, h)` lies inside a `width` x `height` image.
+const fn sub_rect_ok(width: usize, height: usize, x: usize, y: usize, w: usize, h: usize) -> bool {
+    w > 0 && h > 0 && x < width && y < height && w <= width - x && h <= height - y
+}
+
+impl<'a, P> ImageView<'a, P> {
+    /// Views `data` as `width` x `height` pixels, rows `stride` elements apart.
+    ///
+    /// # Errors
+    /// [`ImageError`] when the geometry is invalid or `data` is too short.
+    pub const fn new(
+        data: &'a [P],
+        width: usize,
+        height: usize,
+        stride: usize,
+    ) -> Result<Self, ImageError> {
+        match buffer_len(width, height, stride) {
+            Err(e) => Err(e),
+            Ok(needed) if needed > data.len() => Err(ImageError::BufferTooSmall {
+                needed,
+                got: data.len(),
+            }),
+            Ok(_) => Ok(Self {
+                data,
+                width,
+                height,
+                stride,
+            }),
+        }
+    }
+
+    /// A tightly packed view (`stride == width`).
+    ///
+    /// # Errors
+    /// As [`ImageView::new`].
+    pub const fn packed(data: &'a [P], width: usize, height: usize) -> Result<Self, ImageError> {
+        Self::new(data, width, height, width)
+    }
+
+    /// Width in pixels.
+    pub const fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub const fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Elements from one row start to the next.
+    pub const fn stride(&self) -> usize {
+        self.stride
+    }
+
+    /// `(width, height)`.
+    pub const fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// Number of pixels.
+    pub const fn len(&self) -> usize {
+        self.width * self.height
+    }
+
+    /// Always false: a valid view has at least one pixel.
+    pub const fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Row `y`, exactly `width` pixels long.
+    pub fn row(&self, y: usize) -> Option<&'a [P]> {
+        if y >= self.height {
+            return None;
+        }
+        let start = y * self.stride;
+        self.data.get(start..start + self.width)
+    }
+
+    /// All rows, top to bottom, each exactly `width` pixels long.
+    pub fn rows(&self) -> impl ExactSizeIterator<Item = &'a [P]> + DoubleEndedIterator + 'a {
+        let width = self.width;
+        // `chunks` yields the last (short) row too; the constructor
+        // guarantees it holds at least `width` elements.
+        self.data
+            .chunks(self.stride)
+            .take(self.height)
+            .map(move |r| r.get(..width).unwrap_or(&[]))
+    }
+
+    /// A sub-image of `w` x `h` pixels at `(x, y)`, or `None` if it does not fit.
+    pub fn sub_view(&self, x: usize, y: usize, w: usize, h: usize) -> Option<ImageView<'a, P>> {
+        if !sub_rect_ok(self.width, self.height, x, y, w, h) {
+            return None;
+        }
+        let data = self.data.get(y * self.stride + x..)?;
+        ImageView::new(data, w, h, self.stride).ok()
+    }
+}
+
+impl<P: Copy> ImageView<'_, P> {
+    /// The pixel at `(x, y)`.
+    pub fn get(&self, x: usize, y: usize) -> Option<P> {
+        self.row(y)?.get(x).copied()
+    }
+
+    /// Pixels in row-major order.
+    pub fn pixels(&self) -> impl Iterator<Item = P> + '_ {
+        self.rows().flat_map(|r| r.iter().copied())
+    }
+}
+
+impl<'a, P> ImageViewMut<'a, P> {
+    /// Views `data` mutably as `width` x `height` pixels, rows `stride` apart.
+    ///
+    /// # Errors
+    /// [`ImageError`] when the geometry is invalid or `data` is too short.
+    pub fn new(
+        data: &'a mut [P],
+        width: usize,
+        height: usize,
+        stride: usize,
+    ) -> Result<Self, ImageError> {
+        let needed = buffer_len(width, height, stride)?;
+        if needed > data.len() {
+            return Err(ImageError::BufferTooSmall {
+                needed,
+                got: data.len(),
+            });
+        }
+        Ok(Self {
+            data,
+            width,
+            height,
+            stride,
+        })
+    }
+
+    /// A tightly packed mutable view (`stride == width`).
+    ///
+    /// # Errors
+    /// As [`ImageViewMut::new`].
+    pub fn packed(data: &'a mut [P], width: usize, height: usize) -> Result<Self, ImageError> {
+        Self::new(data, width, height, width)
+    }
+
+    /// Width in pixels.
+    pub const fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub const fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Elements from one row start to the next.
+    pub const fn stride(&self) -> usize {
+        self.stride
+    }
+
+    /// `(width, height)`.
+    pub const fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// A read-only view of the same pixels.
+    pub fn as_view(&self) -> ImageView<'_, P> {
+        ImageView {
+            data: self.data,
+            width: self.width,
+            height: self.height,
+            stride: self.stride,
+        }
+    }
+
+    /// A shorter-lived mutable view of the same pixels.
+    pub fn reborrow(&mut self) -> ImageViewMut<'_, P> {
+        ImageViewMut {
+            data: self.data,
+            width: self.width,
+            height: self.height,
+            stride: self.stride,
+        }
+    }
+
+    /// Row `y`, exactly `width` pixels long.
+    pub fn row(&self, y: usize) -> Option<&[P]> {
+        if y >= self.height {
+            return None;
+        }
+        let start = y * self.stride;
+        self.data.get(start..start + self.width)
+    }
+
+    /// Row `y`, mutably.
+    pub fn row_mut(&mut self, y: usize) -> Option<&mut [P]> {
+        if y >= self.height {
+            return None;
+        }
+        let start = y * self.stride;
+        self.data.get_mut(start..start + self.width)
+    }
+
+    /// All rows, mutably, top to bottom.
+    pub fn rows_mut(&mut self) -> impl ExactSizeIterator<Item = &mut [P]> + '_ {
+        let width = self.width;
+        self.data
+            .chunks_mut(self.stride)
+            .take(self.height)
+            .map(move |r| r.get_mut(..width).unwrap_or(&mut []))
+    }
+
+    /// Row `y` mutably together with row `y + 1` read-only, for in-place
+    /// filters that read the next, still unmodified, row.
+    pub fn row_and_next_mut(&mut self, y: usize) -> Option<(&mut [P], &[P])> {
+        if y + 1 >= self.height {
+            return None;
+        }
+        let (head, tail) = self.data.split_at_mut((y + 1) * self.stride);
+        let row = head.get_mut(y * self.stride..y * self.stride + self.width)?;
+        let next = tail.get(..self.width)?;
+        Some((row, next))
+    }
+
+    /// A mutable sub-image of `w` x `h` pixels at `(x, y)`.
+    pub fn sub_view_mut(
+        &mut self,
+        x: usize,
+        y: usize,
+        w: usize,
+        h: usize,
+    ) -> Option<ImageViewMut<'_, P>> {
+        if !sub_rect_ok(self.width, self.height, x, y, w, h) {
+            return None;
+        }
+        let data = self.data.get_mut(y * self.stride + x..)?;
+        ImageViewMut::new(data, w, h, self.stride).ok()
+    }
+}
+
+impl<P: Copy> ImageViewMut<'_, P> {
+    /// The pixel at `(x, y)`.
+    pub fn get(&self, x: usize, y: usize) -> Option<P> {
+        self.row(y)?.get(x).copied()
+    }
+
+    /// Sets the pixel at `(x, y)`; returns `false` when it is outside.
+    pub fn set(&mut self, x: usize, y: usize, value: P) -> bool {
+        match self.row_mut(y).and_then(|r| r.get_mut(x)) {
+            Some(p) => {
+                *p = value;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Sets every pixel to `value`.
+    pub fn fill(&mut self, value: P) {
+        self.rows_mut().for_each(|r| r.fill(value));
+    }
+
+    /// Copies `src`, which must have the same size.
+    ///
+    /// # Errors
+    /// [`ImageError::SizeMismatch`].
+    pub fn copy_from(&mut self, src: &ImageView<'_, P>) -> Result<(), ImageError> {
+        if src.size() != self.size() {
+            return Err(ImageError::SizeMismatch {
+                expected: self.size(),
+                got: src.size(),
+            });
+        }
+        self.rows_mut()
+            .zip(src.rows())
+            .for_each(|(d, s)| d.copy_from_slice(s));
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn geometry_errors_are_typed() {
+        let buf = [0u8; 10];
+        assert_eq!(
+            ImageView::new(&buf, 0, 1, 1).err(),
+            Some(ImageError::ZeroSize)
+        );
+        assert_eq!(
+            ImageView::new(&buf, 1, 0, 1).err(),
+            Some(ImageError::ZeroSize)
+        );
+        assert_eq!(
+            ImageView::new(&buf, 3, 2, 2).err(),
+            Some(ImageError::StrideTooSmall {
+                width: 3,
+                stride: 2
+            })
+        );
+        assert_eq!(
+            ImageView::new(&buf, 3, 3, 4).err(),
+            Some(ImageError::BufferTooSmall {
+                needed: 11,
+                got: 10
+            })
+        );
+        assert!(matches!(
+            ImageView::new(&buf, MAX_DIM + 1, 1, MAX_DIM + 1),
+            Err(ImageError::TooLarge { .. })
+        ));
+        // The last row needs only `width` elements, not a whole stride.
+        assert!(ImageView::new(&buf, 3, 3, 4).is_err());
+        assert!(ImageView::new(&buf[..], 2, 3, 4).is_ok());
+    }
+
+    #[test]
+    fn rows_skip_padding_and_sub_views_clip() {
+        let buf: [u8; 12] = core::array::from_fn(|i| i as u8);
+        let img = ImageView::new(&buf, 3, 3, 4).unwrap();
+        let mut rows = img.rows();
+        assert_eq!(rows.next(), Some(&[0u8, 1, 2][..]));
+        assert_eq!(rows.next(), Some(&[4u8, 5, 6][..]));
+        assert_eq!(rows.next(), Some(&[8u8, 9, 10][..]));
+        assert_eq!(rows.next(), None);
+        let sub = img.sub_view(1, 1, 2, 2).unwrap();
+        assert_eq!(sub.get(0, 0), Some(5));
+        assert_eq!(sub.get(1, 1), Some(10));
+        assert_eq!(sub.get(2, 0), None);
+        assert!(img.sub_view(2, 0, 2, 1).is_none());
+        assert!(img.sub_view(0, 0, 0, 1).is_none());
+        assert!(img.sub_view(3, 0, 1, 1).is_none());
+    }
+
+    #[test]
+    fn mutable_views_write_only_inside() {
+        let mut buf = [0u8; 8];
+        let mut img = ImageViewMut::new(&mut buf, 3, 2, 4).unwrap();
+        img.fill(7);
+        assert!(img.set(2, 1, 9));
+        assert!(!img.set(3, 1, 9));
+        {
+            let (row0, row1) = img.row_and_next_mut(0).unwrap();
+            row0[0] = row1[2];
+        }
+        assert!(img.row_and_next_mut(1).is_none());
+        assert_eq!(buf, [9, 7, 7, 0, 7, 7, 9, 0]);
+    }
+}
