@@ -1,0 +1,1 @@
+//! Image loading, downscaling and PNG panels (being written).

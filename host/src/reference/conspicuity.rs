@@ -1,0 +1,1 @@
+//! f32 reference of `protogist::conspicuity` (being written).

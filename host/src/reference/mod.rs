@@ -1,0 +1,3 @@
+//! f32 references of the core stages, same names and argument order.
+
+pub mod conspicuity;
