@@ -1,1 +1,86 @@
-//! Shared strategies for integration tests.
+//! Shared strategies and helpers for the cross-crate tests.
+
+use proptest::prelude::*;
+use protogist::image::Rgb8;
+use std::path::PathBuf;
+
+/// An RGB image buffer with its geometry; `stride >= width`, and the padding
+/// holds random pixels that no stage may read.
+#[derive(Clone, Debug)]
+pub struct RgbCase {
+    /// Pixels, `(height - 1) * stride + width` of them.
+    pub data: Vec<Rgb8>,
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+    /// Stride.
+    pub stride: usize,
+}
+
+impl RgbCase {
+    /// The image as a view.
+    pub fn view(&self) -> protogist::image::ImageView<'_, Rgb8> {
+        protogist::image::ImageView::new(&self.data, self.width, self.height, self.stride)
+            .expect("strategy makes valid geometry")
+    }
+}
+
+fn rgb() -> impl Strategy<Value = Rgb8> {
+    any::<[u8; 3]>().prop_map(|[r, g, b]| Rgb8::new(r, g, b))
+}
+
+/// Images from 1x1 to `max` x `max`, strides up to 5 wider than the row,
+/// either uniform noise or blocks from a small palette (flat regions, exact
+/// ties, strong edges).
+pub fn rgb_image(max: usize) -> impl Strategy<Value = RgbCase> {
+    (1..=max, 1..=max, 0usize..=5, any::<bool>()).prop_flat_map(|(w, h, pad, blocky)| {
+        let stride = w + pad;
+        let len = (h - 1) * stride + w;
+        let noise = proptest::collection::vec(rgb(), len).boxed();
+        let pixels = if blocky {
+            (
+                proptest::collection::vec(rgb(), 3),
+                proptest::collection::vec(0usize..3, len),
+            )
+                .prop_map(|(pal, idx)| idx.into_iter().map(|i| pal[i]).collect())
+                .boxed()
+        } else {
+            noise
+        };
+        pixels.prop_map(move |data| RgbCase {
+            data,
+            width: w,
+            height: h,
+            stride,
+        })
+    })
+}
+
+/// Where fetched data lives: `$PROTOGIST_DATA`, else `<workspace>/.cache/data`.
+pub fn data_dir() -> PathBuf {
+    std::env::var_os("PROTOGIST_DATA").map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../.cache/data"),
+        PathBuf::from,
+    )
+}
+
+/// The path of a fetched file, or `None` when it is missing and data is not
+/// required. `cargo xtask ci` sets `PROTOGIST_REQUIRE_DATA=1`, which turns a
+/// missing file into a test failure.
+pub fn data_file(rel: &str) -> Option<PathBuf> {
+    let p = data_dir().join(rel);
+    if p.is_file() {
+        return Some(p);
+    }
+    assert!(
+        std::env::var_os("PROTOGIST_REQUIRE_DATA").is_none(),
+        "{} is missing: run `cargo xtask fetch-data`",
+        p.display()
+    );
+    eprintln!(
+        "skipping: {} is missing (run `cargo xtask fetch-data`)",
+        p.display()
+    );
+    None
+}

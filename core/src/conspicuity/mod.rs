@@ -45,7 +45,7 @@ pub use luv::{
     MAX_ERR_V, SRGB_TO_XYZ, WHITE_U, WHITE_V,
 };
 pub use ring::row_scratch_len;
-pub use smooth::{smooth, smooth_step, SmoothParams};
+pub use smooth::{smooth, smooth_step, SmoothParams, MAX_ERR_SMOOTH_STEP_LSB};
 
 use crate::checksum::Fnv1a;
 use crate::fixed::{isqrt_round, U10F6};

@@ -15,6 +15,12 @@ use super::{ConspicuityError, Luv};
 use crate::fixed::div_round;
 use crate::image::ImageViewMut;
 
+/// Largest error of one [`smooth_step`] against its f32 reference given the
+/// same input, in output LSBs, at pixels where the float and integer
+/// distance comparisons agree: the exact mean is rounded once (0.5 LSB) and
+/// the f32 mean is off by under 0.01 LSB.
+pub const MAX_ERR_SMOOTH_STEP_LSB: f32 = 0.51;
+
 /// Parameters of [`smooth`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SmoothParams {
@@ -115,5 +121,59 @@ fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) {
         // The mean of 5 values in the I10F6 range stays in range.
         let [l, u, v] = sum.map(|s| div_round(s, 5) as i16);
         *o = Luv::from_bits(l, u, v);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::conspicuity::row_scratch_len;
+
+    fn lum(l: &[i16]) -> [Luv; 8] {
+        core::array::from_fn(|i| Luv::from_bits(*l.get(i).unwrap_or(&0), 0, 0))
+    }
+
+    fn run(px: &mut [Luv], w: usize, h: usize, iterations: u8) {
+        let mut rows = [Luv::default(); row_scratch_len(8)];
+        let mut img = ImageViewMut::packed(px, w, h).unwrap();
+        smooth(&SmoothParams { iterations }, &mut img, &mut rows).unwrap();
+    }
+
+    #[test]
+    fn a_tie_keeps_the_minus_member() {
+        // 3x1: centre 10 between 0 and 20; the horizontal pair ties.
+        let mut px = lum(&[0, 10, 20]);
+        run(&mut px[..3], 3, 1, 1);
+        // (10 + 0 + 10 + 10 + 10) / 5: the three other pairs replicate the centre.
+        assert_eq!(px[1].to_bits(), [8, 0, 0]);
+    }
+
+    #[test]
+    fn a_step_edge_stays_sharp_and_noise_is_averaged() {
+        let mut step = lum(&[0, 0, 0, 0, 640, 640, 640, 640]);
+        run(&mut step, 8, 1, 3);
+        assert_eq!(
+            step.map(|p| p.l.to_bits()),
+            [0, 0, 0, 0, 640, 640, 640, 640]
+        );
+        let mut spike = lum(&[100, 100, 100, 160, 100, 100, 100, 100]);
+        run(&mut spike, 8, 1, 1);
+        // Three pairs keep a 100; the vertical pair replicates the centre
+        // in a one-row image: (160 + 100 + 100 + 160 + 100) / 5.
+        assert_eq!(spike[3].l.to_bits(), 124);
+    }
+
+    #[test]
+    fn zero_iterations_change_nothing_and_short_scratch_is_an_error() {
+        let mut px = lum(&[1, 2, 3, 4, 5, 6, 7, 8]);
+        let before = px;
+        run(&mut px, 4, 2, 0);
+        assert_eq!(px, before);
+        let mut rows = [Luv::default(); 5];
+        let mut img = ImageViewMut::packed(&mut px, 4, 2).unwrap();
+        assert_eq!(
+            smooth_step(&mut img, &mut rows),
+            Err(ConspicuityError::ScratchTooSmall { needed: 18, got: 5 })
+        );
     }
 }
