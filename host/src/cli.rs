@@ -7,7 +7,7 @@
 //! ```
 
 use crate::demo::{finish, run_demo, DemoOptions};
-use crate::error::Result;
+use crate::error::{HostError, Result};
 use crate::io;
 use crate::panels::{rgb_from, Panel};
 use crate::stages::run_conspicuity;
@@ -60,7 +60,7 @@ pub enum Command {
 /// Runs the parsed command line; returns the summary to print.
 ///
 /// # Errors
-/// Whatever the command fails with, as a [`HostError`](crate::error::HostError).
+/// Whatever the command fails with, as a [`HostError`].
 pub fn run(cli: Cli) -> Result<Summary> {
     match cli.command {
         None => run_demo(&DemoOptions::default()),
@@ -87,13 +87,15 @@ pub struct ImageOptions {
 /// directory.
 ///
 /// # Errors
-/// [`HostError`](crate::error::HostError) for a zero width, an unreadable or
+/// [`HostError`] for a zero width, an unreadable or
 /// corrupt image, a size the core rejects, or an unwritable directory.
 pub fn run_image(opts: &ImageOptions) -> Result<Summary> {
     let start = Instant::now();
     // Check the width before touching the file, so `--width 0` is reported
     // as such whatever the input.
-    io::working_size(1, 1, opts.width)?;
+    if opts.width == 0 {
+        return Err(HostError::ZeroDimension { name: "width" });
+    }
     let original = io::load_rgb(&opts.image)?;
     let (ow, oh) = original.dimensions();
     let (w, h) = io::working_size(ow, oh, opts.width)?;

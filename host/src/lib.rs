@@ -1,7 +1,7 @@
 //! protogist-host: the f32 reference of every core stage, image I/O, the CLI
 //! and the demo.
 //!
-//! [`reference`] mirrors `protogist` stage by stage, with the same names and
+//! [`reference`](mod@reference) mirrors `protogist` stage by stage, with the same names and
 //! argument order, in `f32`. It is what the fixed-point core is tested against.
 //!
 //! The CLI side: [`cli`] parses and dispatches, [`demo`] runs the synthetic

@@ -156,7 +156,7 @@ pub fn luv_to_srgb(p: Luv, xyz_to_rgb: &[[f32; 3]; 3]) -> Rgb8 {
 }
 
 /// Gap between montage tiles and around the border, px.
-const GAP: u32 = 4;
+pub const GAP: u32 = 4;
 /// Montage background.
 const BACKGROUND: Rgb<u8> = Rgb([32, 32, 32]);
 
