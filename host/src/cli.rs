@@ -1,1 +1,120 @@
-//! Command-line interface (being written).
+//! Command-line interface: argument parsing and the commands.
+//!
+//! ```text
+//! protogist                                   # same as `protogist demo`
+//! protogist demo [--out DIR] [--width W --height H]
+//! protogist conspicuity --image FILE --out DIR [--width W]
+//! ```
+
+use crate::demo::{finish, run_demo, DemoOptions};
+use crate::error::{HostError, Result};
+use crate::io;
+use crate::panels::{rgb_from, Panel};
+use crate::stages::run_conspicuity;
+use crate::summary::Summary;
+use clap::{Parser, Subcommand};
+use protogist::conspicuity::{EdgeParams, LuvTables};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Proto-object detection for microcontroller camera boards: host tools.
+#[derive(Debug, Parser)]
+#[command(name = "protogist", version, about)]
+pub struct Cli {
+    /// What to run; without one, the demo runs with its defaults.
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run the built-in synthetic stereo scene through every stage and write
+    /// PNG panels.
+    Demo {
+        /// Output directory (created if missing).
+        #[arg(long, default_value = "protogist-out")]
+        out: PathBuf,
+        /// Frame width, px.
+        #[arg(long, default_value_t = 160)]
+        width: usize,
+        /// Frame height, px.
+        #[arg(long, default_value_t = 120)]
+        height: usize,
+    },
+    /// Run the conspicuity stage on a PNG or JPEG and write its panels.
+    Conspicuity {
+        /// Input image (PNG or JPEG).
+        #[arg(long)]
+        image: PathBuf,
+        /// Output directory (created if missing).
+        #[arg(long)]
+        out: PathBuf,
+        /// Working width, px: wider inputs are area-averaged down to it,
+        /// keeping the aspect ratio; narrower ones are kept as they are.
+        #[arg(long, default_value_t = 160)]
+        width: u32,
+    },
+}
+
+/// Runs the parsed command line; returns the summary to print.
+///
+/// # Errors
+/// Whatever the command fails with, as a [`HostError`].
+pub fn run(cli: Cli) -> Result<Summary> {
+    match cli.command {
+        None => run_demo(&DemoOptions::default()),
+        Some(Command::Demo { out, width, height }) => run_demo(&DemoOptions { out, width, height }),
+        Some(Command::Conspicuity { image, out, width }) => {
+            run_image(&ImageOptions { image, out, width })
+        }
+    }
+}
+
+/// Options of `protogist conspicuity`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ImageOptions {
+    /// Input PNG or JPEG.
+    pub image: PathBuf,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Working width (never upscaled to).
+    pub width: u32,
+}
+
+/// Loads an image, brings it to the working width, runs the conspicuity
+/// stage and writes `input`, its panels and `overview` into the output
+/// directory.
+///
+/// # Errors
+/// [`HostError`] for a zero width, an unreadable or
+/// corrupt image, a size the core rejects, or an unwritable directory.
+pub fn run_image(opts: &ImageOptions) -> Result<Summary> {
+    let start = Instant::now();
+    // Check the width before touching the file, so `--width 0` is reported
+    // as such whatever the input.
+    if opts.width == 0 {
+        return Err(HostError::ZeroDimension { name: "width" });
+    }
+    let original = io::load_rgb(&opts.image)?;
+    let (ow, oh) = original.dimensions();
+    let (w, h) = io::working_size(ow, oh, opts.width)?;
+    let img = if (w, h) == (ow, oh) {
+        original
+    } else {
+        io::area_downscale(&original, w, h)
+    };
+    let (w, h) = (w as usize, h as usize);
+    let px = io::to_core_rgb(&img);
+
+    let mut summary = Summary::new(format!("protogist conspicuity: {}", opts.image.display()));
+    summary.push("input", format!("{ow}x{oh}"));
+    summary.push("working size", format!("{w}x{h}"));
+    let maps = run_conspicuity(&LuvTables::new(), &EdgeParams::default(), &px, w, h)?;
+    let mut out = vec![Panel::new("input", rgb_from(&px, w, h))];
+    out.extend(maps.panels());
+    maps.summarise(&mut summary);
+
+    finish(&opts.out, out, &mut summary, start)?;
+    Ok(summary)
+}

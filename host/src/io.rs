@@ -1,1 +1,279 @@
-//! Image loading, downscaling and PNG panels (being written).
+//! Image loading, exact area-average downscaling and all-or-nothing PNG
+//! output.
+//!
+//! The downscaler is written here rather than taken from a resizing crate:
+//! the common "box" filters (Pillow's and `fast_image_resize`'s) weight a
+//! source pixel 1 or 0 by whether its centre falls in the output footprint,
+//! which is not area averaging for non-integer ratios. [`area_downscale`]
+//! weights every source pixel by its exact overlap with the output pixel, in
+//! integers, and rounds once.
+
+use crate::error::{HostError, Result};
+use crate::panels::Panel;
+use image::{ImageReader, RgbImage};
+use protogist::image::Rgb8;
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Loads a PNG or JPEG (the format is sniffed from the bytes) as 8-bit RGB.
+///
+/// # Errors
+/// [`HostError::Io`] when the file cannot be opened or read,
+/// [`HostError::Decode`] when it is not a supported, intact image.
+pub fn load_rgb(path: &Path) -> Result<RgbImage> {
+    let decode = |source| HostError::Decode {
+        path: path.to_path_buf(),
+        source,
+    };
+    let reader = ImageReader::open(path)
+        .map_err(|e| HostError::io(path, e))?
+        .with_guessed_format()
+        .map_err(|e| HostError::io(path, e))?;
+    let img = reader.decode().map_err(decode)?;
+    Ok(img.to_rgb8())
+}
+
+/// The working size for a `width` x `height` input and a target width:
+/// `max_width` wide with the aspect ratio kept (height rounded, at least 1),
+/// or the input size when it is not wider than `max_width` (never upscale).
+///
+/// # Errors
+/// [`HostError::ZeroDimension`] when `max_width` is 0.
+pub fn working_size(width: u32, height: u32, max_width: u32) -> Result<(u32, u32)> {
+    if max_width == 0 {
+        return Err(HostError::ZeroDimension { name: "width" });
+    }
+    if width <= max_width {
+        return Ok((width, height));
+    }
+    let h = (u64::from(height) * u64::from(max_width) + u64::from(width) / 2) / u64::from(width);
+    Ok((max_width, u32::try_from(h.max(1)).unwrap_or(u32::MAX)))
+}
+
+/// For each of `dst` output cells along one axis of `src` input pixels, the
+/// source pixels it overlaps and their integer overlap weights.
+///
+/// In units of `1 / dst` source pixel, output `o` covers `[o·src, (o+1)·src)`
+/// and source `i` covers `[i·dst, (i+1)·dst)`; the overlaps are integers and
+/// each output's weights sum to `src`.
+fn axis_weights(src: u32, dst: u32) -> Vec<Vec<(usize, u64)>> {
+    let (src, dst) = (u64::from(src), u64::from(dst));
+    (0..dst)
+        .map(|o| {
+            let (lo, hi) = (o * src, (o + 1) * src);
+            (lo / dst..hi.div_ceil(dst))
+                .filter_map(|i| {
+                    let overlap = hi.min((i + 1) * dst).saturating_sub(lo.max(i * dst));
+                    let i = usize::try_from(i).ok()?;
+                    (overlap > 0).then_some((i, overlap))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Resizes `src` to `dst_w` x `dst_h` by exact area averaging: each output
+/// pixel is the mean of the source area it covers, every source pixel
+/// weighted by its overlap, rounded to nearest once. Meant for downscaling;
+/// upscaling works too (as area sampling). A zero target size gives an
+/// empty image.
+pub fn area_downscale(src: &RgbImage, dst_w: u32, dst_h: u32) -> RgbImage {
+    let (sw, sh) = src.dimensions();
+    if dst_w == 0 || dst_h == 0 || sw == 0 || sh == 0 {
+        return RgbImage::new(dst_w, dst_h);
+    }
+    let (wx, wy) = (axis_weights(sw, dst_w), axis_weights(sh, dst_h));
+    // Horizontal pass: per source row, weighted channel sums (<= 255 · sw).
+    let mut rows = vec![[0u64; 3]; wx.len() * sh as usize];
+    for (y, out_row) in rows.chunks_mut(wx.len()).enumerate() {
+        let y = y as u32;
+        for (acc, taps) in out_row.iter_mut().zip(&wx) {
+            for &(x, w) in taps {
+                let p = src.get_pixel(x as u32, y).0;
+                for (a, c) in acc.iter_mut().zip(p) {
+                    *a += w * u64::from(c);
+                }
+            }
+        }
+    }
+    // Vertical pass, then one rounded division by the total weight sw · sh.
+    let total = u64::from(sw) * u64::from(sh);
+    RgbImage::from_fn(dst_w, dst_h, |x, y| {
+        let mut acc = [0u64; 3];
+        for &(sy, w) in &wy[y as usize] {
+            let row = &rows[sy * wx.len() + x as usize];
+            for (a, r) in acc.iter_mut().zip(row) {
+                *a += w * r;
+            }
+        }
+        image::Rgb(acc.map(|a| ((a + total / 2) / total).min(255) as u8))
+    })
+}
+
+/// The pixels of `img` as core [`Rgb8`]s, row-major and packed.
+pub fn to_core_rgb(img: &RgbImage) -> Vec<Rgb8> {
+    img.pixels()
+        .map(|p| Rgb8::new(p.0[0], p.0[1], p.0[2]))
+        .collect()
+}
+
+/// Creates `dir` (and its parents) if needed.
+///
+/// # Errors
+/// [`HostError::NotADirectory`] when `dir` is a file, [`HostError::Io`] when
+/// it cannot be created.
+pub fn ensure_dir(dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(HostError::NotADirectory(dir.to_path_buf()));
+    }
+    fs::create_dir_all(dir).map_err(|e| HostError::io(dir, e))
+}
+
+/// Writes every panel as `DIR/{name}.png`, all or nothing.
+///
+/// All PNGs are encoded in memory first; then each is written to a hidden
+/// temporary name in `dir` and, once every temporary file is complete, all
+/// are renamed into place. On any failure the temporary files, and any
+/// panel already renamed by this call, are removed. Returns the final paths.
+///
+/// # Errors
+/// [`HostError::Encode`] or [`HostError::Io`]; `dir` is then left without
+/// any panel of this call.
+pub fn write_panels(dir: &Path, panels: &[Panel]) -> Result<Vec<PathBuf>> {
+    ensure_dir(dir)?;
+    let encoded = panels
+        .iter()
+        .map(|p| p.encode_png().map(|bytes| (p.name.as_str(), bytes)))
+        .collect::<Result<Vec<_>>>()?;
+    let pid = std::process::id();
+    let mut staged: Vec<(PathBuf, PathBuf)> = Vec::with_capacity(encoded.len());
+    let mut renamed: Vec<PathBuf> = Vec::new();
+    let result = (|| {
+        for (name, bytes) in &encoded {
+            let tmp = dir.join(format!(".{name}.png.tmp-{pid}"));
+            let fin = dir.join(format!("{name}.png"));
+            staged.push((tmp.clone(), fin));
+            write_synced(&tmp, bytes)?;
+        }
+        for (tmp, fin) in &staged {
+            fs::rename(tmp, fin).map_err(|e| HostError::io(fin, e))?;
+            renamed.push(fin.clone());
+        }
+        Ok(())
+    })();
+    if let Err(e) = result {
+        // Best effort: the original error is what the user needs to see.
+        for path in staged.iter().map(|(t, _)| t).chain(&renamed) {
+            let _ = fs::remove_file(path);
+        }
+        return Err(e);
+    }
+    Ok(renamed)
+}
+
+/// Writes `bytes` to `path` and flushes them to disk.
+fn write_synced(path: &Path, bytes: &[u8]) -> Result<()> {
+    let io = |e| HostError::io(path, e);
+    let mut file = fs::File::create(path).map_err(io)?;
+    file.write_all(bytes).map_err(io)?;
+    file.sync_all().map_err(io)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use image::Rgb;
+
+    fn mean(img: &RgbImage) -> [f64; 3] {
+        let n = f64::from(img.width() * img.height());
+        let mut m = [0.0; 3];
+        for p in img.pixels() {
+            for (a, c) in m.iter_mut().zip(p.0) {
+                *a += f64::from(c) / n;
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn four_by_four_to_two_by_two_is_the_exact_block_mean() {
+        let src = RgbImage::from_fn(4, 4, |x, y| {
+            let v = (y * 4 + x) as u8 * 16;
+            Rgb([v, 255 - v, (x * 60) as u8])
+        });
+        let out = area_downscale(&src, 2, 2);
+        for (ox, oy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let mut sum = [0u32; 3];
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let p = src.get_pixel(2 * ox + dx, 2 * oy + dy).0;
+                for (s, c) in sum.iter_mut().zip(p) {
+                    *s += u32::from(c);
+                }
+            }
+            let expected = sum.map(|s| ((s + 2) / 4) as u8);
+            assert_eq!(out.get_pixel(ox, oy).0, expected, "({ox}, {oy})");
+        }
+    }
+
+    #[test]
+    fn a_constant_image_stays_constant() {
+        let src = RgbImage::from_pixel(97, 61, Rgb([13, 200, 77]));
+        for (w, h) in [(40, 25), (33, 7), (1, 1), (97, 61)] {
+            let out = area_downscale(&src, w, h);
+            assert_eq!(out.dimensions(), (w, h));
+            assert!(out.pixels().all(|p| p.0 == [13, 200, 77]), "{w}x{h}");
+        }
+    }
+
+    #[test]
+    fn odd_ratios_preserve_the_mean() {
+        let src = RgbImage::from_fn(101, 67, |x, y| {
+            Rgb([(x * 7 + y * 3) as u8, (x * y) as u8, ((x ^ y) * 5) as u8])
+        });
+        for (w, h) in [(33, 22), (50, 31), (7, 5), (100, 66)] {
+            let (a, b) = (mean(&src), mean(&area_downscale(&src, w, h)));
+            for c in 0..3 {
+                // Every output pixel covers the same area; only rounding differs.
+                assert!((a[c] - b[c]).abs() <= 0.5, "{w}x{h} ch{c}: {a:?} vs {b:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn weights_cover_each_output_with_the_whole_source_ratio() {
+        for (src, dst) in [(10, 3), (7, 7), (160, 160), (1000, 160), (3, 10)] {
+            let w = axis_weights(src, dst);
+            assert_eq!(w.len(), dst as usize);
+            for taps in &w {
+                assert_eq!(taps.iter().map(|t| t.1).sum::<u64>(), u64::from(src));
+            }
+        }
+    }
+
+    #[test]
+    fn working_size_keeps_the_aspect_and_never_upscales() {
+        assert_eq!(working_size(640, 480, 160).unwrap(), (160, 120));
+        assert_eq!(working_size(100, 50, 160).unwrap(), (100, 50));
+        assert_eq!(working_size(1000, 1, 160).unwrap(), (160, 1));
+        assert_eq!(working_size(333, 250, 160).unwrap(), (160, 120));
+        assert!(matches!(
+            working_size(10, 10, 0),
+            Err(HostError::ZeroDimension { name: "width" })
+        ));
+    }
+
+    #[test]
+    fn a_failed_write_leaves_no_panel_of_the_run() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = image::DynamicImage::ImageRgb8(RgbImage::new(2, 2));
+        let panels = [
+            Panel::new("first", img.clone()),
+            // A name inside a missing sub-directory fails on write.
+            Panel::new("missing/second", img),
+        ];
+        assert!(write_panels(dir.path(), &panels).is_err());
+        let left: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
+        assert!(left.is_empty(), "{left:?}");
+    }
+}

@@ -1,10 +1,19 @@
 //! protogist-host: the f32 reference of every core stage, image I/O, the CLI
 //! and the demo.
 //!
-//! [`reference`] mirrors `protogist` stage by stage, with the same names and
+//! [`reference`](mod@reference) mirrors `protogist` stage by stage, with the same names and
 //! argument order, in `f32`. It is what the fixed-point core is tested against.
+//!
+//! The CLI side: [`cli`] parses and dispatches, [`demo`] runs the synthetic
+//! scene, [`stages`] runs the core stages step by step and turns their maps
+//! into [`panels`], [`io`] loads, downscales and writes images, [`summary`]
+//! is what gets printed, and [`error`] is the one error type of them all.
 
 pub mod cli;
 pub mod demo;
+pub mod error;
 pub mod io;
+pub mod panels;
 pub mod reference;
+pub mod stages;
+pub mod summary;

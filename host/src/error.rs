@@ -1,0 +1,70 @@
+//! The host error type: every way the CLI and the demo can fail.
+//!
+//! Each variant's message is one line, so `main` can print
+//! `error: {err}` and exit non-zero.
+
+use protogist::conspicuity::ConspicuityError;
+use protogist::image::ImageError;
+use protogist::synth::SynthError;
+use std::path::PathBuf;
+
+/// Why a host command failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum HostError {
+    /// A working width or height of zero.
+    #[error("--{name} must be at least 1, got 0")]
+    ZeroDimension {
+        /// The option's name, `width` or `height`.
+        name: &'static str,
+    },
+    /// A frame size the core rejects (zero, or above its limit).
+    #[error("invalid frame size: {0}")]
+    Image(#[from] ImageError),
+    /// The conspicuity stage rejected its input or buffers.
+    #[error("conspicuity stage: {0}")]
+    Conspicuity(#[from] ConspicuityError),
+    /// The synthetic scene generator failed.
+    #[error("{0}")]
+    Synth(#[from] SynthError),
+    /// A file or directory could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// An input image could not be decoded (corrupt, truncated, unsupported).
+    #[error("cannot decode {}: {source}", path.display())]
+    Decode {
+        /// The input file.
+        path: PathBuf,
+        /// The decoder's error.
+        source: image::ImageError,
+    },
+    /// A panel could not be encoded as PNG.
+    #[error("cannot encode panel {name}: {source}")]
+    Encode {
+        /// The panel's name.
+        name: String,
+        /// The encoder's error.
+        source: image::ImageError,
+    },
+    /// An output path exists and is not a directory.
+    #[error("{} exists and is not a directory", .0.display())]
+    NotADirectory(PathBuf),
+}
+
+impl HostError {
+    /// An [`HostError::Io`] for `path`.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+/// Result of host operations.
+pub type Result<T, E = HostError> = std::result::Result<T, E>;

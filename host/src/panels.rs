@@ -1,0 +1,221 @@
+//! Display panels: turning core maps into images, and the overview montage.
+//!
+//! Everything here is for display only. The CIELUV to sRGB inverse in
+//! [`luv_to_srgb`] is plain f32 and is not part of any stage.
+
+use crate::error::{HostError, Result};
+use image::{DynamicImage, GrayImage, Rgb, RgbImage};
+use protogist::conspicuity::{EdgeCell, Luv, SRGB_TO_XYZ, WHITE_U, WHITE_V};
+use protogist::image::Rgb8;
+
+/// One named output image; it is written as `{name}.png`.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    /// File stem, e.g. `lightness`.
+    pub name: String,
+    /// The picture.
+    pub image: DynamicImage,
+}
+
+impl Panel {
+    /// A panel from a name and an image.
+    pub fn new(name: impl Into<String>, image: impl Into<DynamicImage>) -> Self {
+        Self {
+            name: name.into(),
+            image: image.into(),
+        }
+    }
+
+    /// The panel encoded as PNG bytes.
+    ///
+    /// # Errors
+    /// [`HostError::Encode`].
+    pub fn encode_png(&self) -> Result<Vec<u8>> {
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        self.image
+            .write_to(&mut bytes, image::ImageFormat::Png)
+            .map_err(|source| HostError::Encode {
+                name: self.name.clone(),
+                source,
+            })?;
+        Ok(bytes.into_inner())
+    }
+}
+
+fn dims(width: usize, height: usize) -> (u32, u32) {
+    let c = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+    (c(width), c(height))
+}
+
+/// A grey image from a packed row-major map and a per-cell value function.
+pub fn grey_from<T: Copy>(
+    map: &[T],
+    width: usize,
+    height: usize,
+    f: impl Fn(T) -> u8,
+) -> GrayImage {
+    let (w, h) = dims(width, height);
+    let px = map.iter().map(|&v| f(v)).collect();
+    GrayImage::from_raw(w, h, px).unwrap_or_else(|| GrayImage::new(w, h))
+}
+
+/// A colour image from packed core pixels.
+pub fn rgb_from(px: &[Rgb8], width: usize, height: usize) -> RgbImage {
+    let (w, h) = dims(width, height);
+    let raw = px.iter().flat_map(|p| [p.r, p.g, p.b]).collect();
+    RgbImage::from_raw(w, h, raw).unwrap_or_else(|| RgbImage::new(w, h))
+}
+
+fn to_u8(v: f32) -> u8 {
+    (v.clamp(0.0, 255.0) + 0.5) as u8
+}
+
+/// L* (0..100) as grey 0..255.
+pub fn lightness(luv: &[Luv], width: usize, height: usize) -> GrayImage {
+    grey_from(luv, width, height, |p| to_u8(p.l.to_num::<f32>() * 2.55))
+}
+
+/// C~ scaled so that `max` is white (all black when `max` is 0).
+pub fn conspicuity(map: &[EdgeCell], max: f32, width: usize, height: usize) -> GrayImage {
+    let scale = if max > 0.0 { 255.0 / max } else { 0.0 };
+    grey_from(map, width, height, |c| {
+        c.get().map_or(0, |v| to_u8(v.to_num::<f32>() * scale))
+    })
+}
+
+/// ON cells white, OFF cells black.
+pub fn edges(map: &[EdgeCell], width: usize, height: usize) -> GrayImage {
+    grey_from(map, width, height, |c| if c.is_on() { 255 } else { 0 })
+}
+
+/// A disparity map through the turbo colour map, 0 to `max(d)` (at least 1).
+pub fn disparity(d: &[u8], width: usize, height: usize) -> RgbImage {
+    let (w, h) = dims(width, height);
+    let max = f64::from(d.iter().copied().max().unwrap_or(0).max(1));
+    let raw = d
+        .iter()
+        .flat_map(|&v| {
+            let c = colorous::TURBO.eval_continuous(f64::from(v) / max);
+            [c.r, c.g, c.b]
+        })
+        .collect();
+    RgbImage::from_raw(w, h, raw).unwrap_or_else(|| RgbImage::new(w, h))
+}
+
+/// The smoothed CIELUV map back in sRGB, for display.
+pub fn luv_image(luv: &[Luv], width: usize, height: usize) -> RgbImage {
+    let inv = xyz_to_srgb_matrix();
+    let px: Vec<Rgb8> = luv.iter().map(|&p| luv_to_srgb(p, &inv)).collect();
+    rgb_from(&px, width, height)
+}
+
+/// The inverse of [`SRGB_TO_XYZ`] (computed in f64, used in f32).
+pub fn xyz_to_srgb_matrix() -> [[f32; 3]; 3] {
+    let m = SRGB_TO_XYZ;
+    let cof = |r: usize, c: usize| {
+        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+        let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+        m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1]
+    };
+    let det = m[0][0] * cof(0, 0) + m[0][1] * cof(0, 1) + m[0][2] * cof(0, 2);
+    // inverse[i][j] = cofactor(j, i) / det
+    core::array::from_fn(|i| core::array::from_fn(|j| (cof(j, i) / det) as f32))
+}
+
+/// CIELUV (D65) to 8-bit sRGB, clipping out-of-gamut colours.
+pub fn luv_to_srgb(p: Luv, xyz_to_rgb: &[[f32; 3]; 3]) -> Rgb8 {
+    let (l, u, v) = (
+        p.l.to_num::<f32>(),
+        p.u.to_num::<f32>(),
+        p.v.to_num::<f32>(),
+    );
+    if l <= 0.0 {
+        return Rgb8::new(0, 0, 0);
+    }
+    let up = u / (13.0 * l) + WHITE_U as f32;
+    let vp = v / (13.0 * l) + WHITE_V as f32;
+    let y = if l > 8.0 {
+        ((l + 16.0) / 116.0).powi(3)
+    } else {
+        l / protogist::conspicuity::CIE_KAPPA as f32
+    };
+    let vp = vp.max(1e-6);
+    let x = y * 9.0 * up / (4.0 * vp);
+    let z = y * (12.0 - 3.0 * up - 20.0 * vp) / (4.0 * vp);
+    let enc = |row: &[f32; 3]| {
+        let lin = (row[0] * x + row[1] * y + row[2] * z).clamp(0.0, 1.0);
+        let s = if lin <= 0.003_130_8 {
+            12.92 * lin
+        } else {
+            1.055 * lin.powf(1.0 / 2.4) - 0.055
+        };
+        to_u8(s * 255.0)
+    };
+    let [r, g, b] = xyz_to_rgb;
+    Rgb8::new(enc(r), enc(g), enc(b))
+}
+
+/// Gap between montage tiles and around the border, px.
+pub const GAP: u32 = 4;
+/// Montage background.
+const BACKGROUND: Rgb<u8> = Rgb([32, 32, 32]);
+
+/// All panels tiled left to right, top to bottom, `columns` per row, with
+/// [`GAP`]-pixel gaps. Tiles in a row share the row's tallest height.
+pub fn montage(panels: &[Panel], columns: usize) -> RgbImage {
+    let columns = columns.max(1);
+    let rows: Vec<&[Panel]> = panels.chunks(columns).collect();
+    let row_h: Vec<u32> = rows
+        .iter()
+        .map(|r| r.iter().map(|p| p.image.height()).max().unwrap_or(0))
+        .collect();
+    let row_w = |r: &[Panel]| r.iter().map(|p| p.image.width() + GAP).sum::<u32>() + GAP;
+    let width = rows.iter().map(|r| row_w(r)).max().unwrap_or(GAP).max(1);
+    let height = row_h.iter().map(|h| h + GAP).sum::<u32>() + GAP;
+    let mut out = RgbImage::from_pixel(width, height, BACKGROUND);
+    let mut y = GAP;
+    for (row, h) in rows.iter().zip(&row_h) {
+        let mut x = GAP;
+        for p in row.iter() {
+            image::imageops::replace(&mut out, &p.image.to_rgb8(), x.into(), y.into());
+            x += p.image.width() + GAP;
+        }
+        y += h + GAP;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use protogist::conspicuity::LuvTables;
+
+    #[test]
+    fn luv_round_trips_to_srgb_within_one_level() {
+        let tables = LuvTables::new();
+        let inv = xyz_to_srgb_matrix();
+        for &(r, g, b) in &[
+            (0, 0, 0),
+            (255, 255, 255),
+            (196, 64, 48),
+            (10, 200, 90),
+            (3, 4, 250),
+        ] {
+            let back = luv_to_srgb(tables.convert(Rgb8::new(r, g, b)), &inv);
+            for (a, e) in [(back.r, r), (back.g, g), (back.b, b)] {
+                assert!(a.abs_diff(e) <= 1, "{r},{g},{b} -> {back:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn montage_holds_every_tile_with_gaps() {
+        let tile = |v| Panel::new("t", GrayImage::from_pixel(10, 5, image::Luma([v])));
+        let m = montage(&[tile(100), tile(200), tile(250)], 2);
+        assert_eq!(m.dimensions(), (4 + 2 * 14, 4 + 2 * 9));
+        assert_eq!(m.get_pixel(4, 4).0, [100; 3]);
+        assert_eq!(m.get_pixel(18, 4).0, [200; 3]);
+        assert_eq!(m.get_pixel(4, 13).0, [250; 3]);
+        assert_eq!(m.get_pixel(2, 2).0, BACKGROUND.0);
+    }
+}

@@ -1,0 +1,291 @@
+//! The core stages run step by step on owned buffers, so every intermediate
+//! map can be shown, plus their panels and summary lines.
+//!
+//! A later stage (disparity, segmentation, ...) adds a `run_*` function, a
+//! result struct with `panels` and `summarise`, and is called from
+//! [`crate::demo`].
+
+use crate::error::Result;
+use crate::panels::{self, Panel};
+use crate::summary::{percent, Summary};
+use protogist::conspicuity::{
+    conspicuity, rgb_to_luv, row_scratch_len, scratch_bytes, smooth, threshold, Conspicuity,
+    EdgeCell, EdgeParams, Luv, LuvTables,
+};
+use protogist::image::{ImageView, ImageViewMut, Rgb8};
+use std::time::{Duration, Instant};
+
+/// Every map of one run of the conspicuity stage, packed row-major.
+#[derive(Clone, Debug)]
+pub struct ConspicuityMaps {
+    /// Frame width.
+    pub width: usize,
+    /// Frame height.
+    pub height: usize,
+    /// CIELUV of the input.
+    pub luv: Vec<Luv>,
+    /// After smoothing.
+    pub smoothed: Vec<Luv>,
+    /// C~, before the threshold (every cell ON).
+    pub raw: Vec<EdgeCell>,
+    /// C: C~ above the threshold, else OFF.
+    pub edges: Vec<EdgeCell>,
+    /// max C~.
+    pub max: Conspicuity,
+    /// ON cells of `edges`.
+    pub on_count: u32,
+    /// Time spent in the core calls.
+    pub elapsed: Duration,
+}
+
+/// Runs the conspicuity stage on a packed `width` x `height` frame, one core
+/// step at a time: `rgb_to_luv`, copy, `smooth`, `conspicuity`, `threshold`.
+/// The result is the same as `edge_conspicuity` on the same input.
+///
+/// # Errors
+/// The core's [`ImageError`](protogist::image::ImageError) for a bad frame
+/// size, or its [`ConspicuityError`](protogist::conspicuity::ConspicuityError).
+pub fn run_conspicuity(
+    tables: &LuvTables,
+    params: &EdgeParams,
+    rgb: &[Rgb8],
+    width: usize,
+    height: usize,
+) -> Result<ConspicuityMaps> {
+    let input = ImageView::packed(rgb, width, height)?;
+    let n = width * height;
+    let mut luv = vec![Luv::default(); n];
+    let mut smoothed = vec![Luv::default(); n];
+    let mut rows = vec![Luv::default(); row_scratch_len(width)];
+    let mut raw = vec![EdgeCell::OFF; n];
+
+    let start = Instant::now();
+    rgb_to_luv(
+        tables,
+        &input,
+        &mut ImageViewMut::packed(&mut luv, width, height)?,
+    )?;
+    let mut sm = ImageViewMut::packed(&mut smoothed, width, height)?;
+    sm.copy_from(&ImageView::packed(&luv, width, height)?)?;
+    smooth(&params.smooth, &mut sm, &mut rows)?;
+    let max = conspicuity(
+        &sm.as_view(),
+        &mut ImageViewMut::packed(&mut raw, width, height)?,
+        &mut rows,
+    )?;
+    let mut edges = raw.clone();
+    let on_count = threshold(
+        &mut ImageViewMut::packed(&mut edges, width, height)?,
+        max,
+        params.threshold_percent,
+    )?;
+    let elapsed = start.elapsed();
+
+    Ok(ConspicuityMaps {
+        width,
+        height,
+        luv,
+        smoothed,
+        raw,
+        edges,
+        max,
+        on_count,
+        elapsed,
+    })
+}
+
+impl ConspicuityMaps {
+    /// The panels of the stage: `lightness`, `smoothed`, `conspicuity`, `edges`.
+    pub fn panels(&self) -> Vec<Panel> {
+        let (w, h) = (self.width, self.height);
+        vec![
+            Panel::new("lightness", panels::lightness(&self.luv, w, h)),
+            Panel::new("smoothed", panels::luv_image(&self.smoothed, w, h)),
+            Panel::new(
+                "conspicuity",
+                panels::conspicuity(&self.raw, self.max.to_num::<f32>(), w, h),
+            ),
+            Panel::new("edges", panels::edges(&self.edges, w, h)),
+        ]
+    }
+
+    /// Appends the stage's summary lines.
+    pub fn summarise(&self, s: &mut Summary) {
+        let n = self.width * self.height;
+        s.push("max C~", format!("{:.2}", self.max.to_num::<f32>()));
+        s.push(
+            "edge pixels",
+            format!(
+                "{} ({} %)",
+                self.on_count,
+                percent(self.on_count as usize, n)
+            ),
+        );
+        s.push(
+            "core scratch",
+            format!("{} bytes", scratch_bytes(self.width, self.height)),
+        );
+        s.push(
+            "conspicuity time",
+            format!("{:.2} ms", self.elapsed.as_secs_f64() * 1e3),
+        );
+    }
+
+    /// Edge pixels within 1 px of the boundary of a 0/255 object mask
+    /// ([`BoundaryScore`]).
+    pub fn boundary_score(&self, mask: &[u8]) -> BoundaryScore {
+        BoundaryScore::new(&self.edges, mask, self.width, self.height)
+    }
+}
+
+/// How edges relate to a ground-truth object boundary.
+///
+/// A pixel is *near the boundary* when its 3x3 neighbourhood holds both
+/// object and non-object pixels, i.e. it is within 1 px of the outline.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BoundaryScore {
+    /// ON edge cells near the boundary.
+    pub on_boundary: usize,
+    /// ON edge cells elsewhere (texture, noise).
+    pub elsewhere: usize,
+    /// Object pixels with a non-object 4-neighbour (the outline).
+    pub outline: usize,
+    /// Outline pixels with an ON edge cell within 1 px.
+    pub outline_hit: usize,
+}
+
+impl BoundaryScore {
+    /// Scores `edges` against `mask` (non-zero = object), both packed.
+    pub fn new(edges: &[EdgeCell], mask: &[u8], width: usize, height: usize) -> Self {
+        let at = |m: &[u8], x: isize, y: isize| -> Option<bool> {
+            let (x, y) = (usize::try_from(x).ok()?, usize::try_from(y).ok()?);
+            (x < width && y < height).then(|| m.get(y * width + x).is_some_and(|&v| v != 0))
+        };
+        let on = |x: isize, y: isize| {
+            let (Ok(x), Ok(y)) = (usize::try_from(x), usize::try_from(y)) else {
+                return false;
+            };
+            x < width && y < height && edges.get(y * width + x).is_some_and(|c| c.is_on())
+        };
+        let window = |x: isize, y: isize| {
+            (-1..=1).flat_map(move |dy| (-1..=1).map(move |dx| (x + dx, y + dy)))
+        };
+        let mut score = Self {
+            on_boundary: 0,
+            elsewhere: 0,
+            outline: 0,
+            outline_hit: 0,
+        };
+        for y in 0..height as isize {
+            for x in 0..width as isize {
+                if on(x, y) {
+                    let vals: Vec<bool> =
+                        window(x, y).filter_map(|(a, b)| at(mask, a, b)).collect();
+                    if vals.iter().any(|&v| v) && vals.iter().any(|&v| !v) {
+                        score.on_boundary += 1;
+                    } else {
+                        score.elsewhere += 1;
+                    }
+                }
+                let inside = at(mask, x, y) == Some(true);
+                let outline = inside
+                    && [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                        .iter()
+                        .any(|(dx, dy)| at(mask, x + dx, y + dy) == Some(false));
+                if outline {
+                    score.outline += 1;
+                    if window(x, y).any(|(a, b)| on(a, b)) {
+                        score.outline_hit += 1;
+                    }
+                }
+            }
+        }
+        score
+    }
+
+    /// Appends the score's summary lines.
+    pub fn summarise(&self, s: &mut Summary) {
+        let total = self.on_boundary + self.elsewhere;
+        s.push(
+            "edges on GT boundary (±1 px)",
+            format!(
+                "{} ({} % of edges)",
+                self.on_boundary,
+                percent(self.on_boundary, total)
+            ),
+        );
+        s.push(
+            "edges elsewhere",
+            format!(
+                "{} ({} % of edges)",
+                self.elsewhere,
+                percent(self.elsewhere, total)
+            ),
+        );
+        s.push(
+            "GT outline found (±1 px)",
+            format!(
+                "{} of {} px ({} %)",
+                self.outline_hit,
+                self.outline,
+                percent(self.outline_hit, self.outline)
+            ),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use protogist::conspicuity::{edge_conspicuity, EdgeBuffers};
+    use protogist::synth::{render_left, SceneSpec};
+
+    #[test]
+    fn step_by_step_equals_the_whole_stage() {
+        let (w, h) = (48, 36);
+        let mut px = vec![Rgb8::default(); w * h];
+        render_left(
+            &SceneSpec::demo(w, h),
+            &mut ImageViewMut::packed(&mut px, w, h).unwrap(),
+        )
+        .unwrap();
+        let (tables, params) = (LuvTables::new(), EdgeParams::default());
+        let maps = run_conspicuity(&tables, &params, &px, w, h).unwrap();
+
+        let (mut a, mut b, mut r, mut c) = (
+            vec![Luv::default(); w * h],
+            vec![Luv::default(); w * h],
+            vec![Luv::default(); row_scratch_len(w)],
+            vec![EdgeCell::OFF; w * h],
+        );
+        let report = {
+            let mut bufs = EdgeBuffers::new(w, h, &mut a, &mut b, &mut r, &mut c).unwrap();
+            let input = ImageView::packed(&px, w, h).unwrap();
+            edge_conspicuity(&tables, &params, &input, &mut bufs).unwrap()
+        };
+        assert_eq!((report.max, report.on_count), (maps.max, maps.on_count));
+        assert_eq!((a, b, c), (maps.luv, maps.smoothed, maps.edges));
+    }
+
+    #[test]
+    fn boundary_score_counts_edges_beside_the_outline() {
+        // 6x6, object = the right half; edges on column 3 and at (0, 0).
+        let (w, h) = (6, 6);
+        let mask: Vec<u8> = (0..w * h)
+            .map(|i| if i % w >= 3 { 255 } else { 0 })
+            .collect();
+        let on = EdgeCell::on(Conspicuity::from_num(5)).unwrap();
+        let edges: Vec<EdgeCell> = (0..w * h)
+            .map(|i| {
+                if i % w == 3 || i == 0 {
+                    on
+                } else {
+                    EdgeCell::OFF
+                }
+            })
+            .collect();
+        let s = BoundaryScore::new(&edges, &mask, w, h);
+        assert_eq!((s.on_boundary, s.elsewhere), (6, 1));
+        assert_eq!((s.outline, s.outline_hit), (6, 6));
+    }
+}
