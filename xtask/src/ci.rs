@@ -1,0 +1,84 @@
+//! `ci`: every check, in order, stopping at the first failure.
+
+use crate::firmware::{build_and_run, build_thumb, compare, host_output, size_report};
+use crate::util::{self, host_cargo, step, Result};
+use crate::{data, setup};
+
+pub fn run_ci() -> Result<Vec<(&'static str, f64)>> {
+    let mut times = Vec::new();
+    let mut timed = |name: &'static str, secs: f64| times.push((name, secs));
+
+    let (_, t) = step(
+        "setup: system packages and rustup components",
+        setup::ensure_all,
+    )?;
+    timed("setup", t);
+    let (_, t) = step("fmt: cargo fmt --all -- --check", || {
+        util::run(host_cargo().args(["fmt", "--all", "--", "--check"]))
+    })?;
+    timed("fmt", t);
+    let (_, t) = step(
+        "clippy: cargo clippy --workspace --all-targets -- -D warnings",
+        || {
+            util::run(host_cargo().args([
+                "clippy",
+                "--locked",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ]))
+        },
+    )?;
+    timed("clippy", t);
+    let (_, t) = step("fetch-data: aloe stereo pair", data::fetch)?;
+    timed("fetch-data", t);
+    let (_, t) = step("test: cargo test --workspace", || {
+        util::run(host_cargo().args(["test", "--locked", "--workspace"]))
+    })?;
+    timed("test", t);
+    let (_, t) = step(
+        "no_std: build core (protogist) for thumbv7em-none-eabihf",
+        || build_thumb("protogist"),
+    )?;
+    timed("no_std core", t);
+    let ((qemu, lines), t) = step("firmware: QEMU mps2-an386 vs host, bit for bit", || {
+        let qemu = build_and_run()?;
+        println!("-- host run of firmware-sim:");
+        let host = host_output()?;
+        let lines = compare(&host, &qemu.stdout)?;
+        println!("-- firmware ELF against memory.x:\n{}", size_report()?);
+        Ok((qemu, lines))
+    })?;
+    timed("firmware", t);
+    let (_, t) = step("instructions per pixel (QEMU -icount, SysTick)", || {
+        println!(
+            "{lines} checksum/edges lines equal on host and QEMU (QEMU run {:.1} s)",
+            qemu.secs
+        );
+        for l in qemu
+            .stdout
+            .lines()
+            .filter(|l| l.starts_with("ipp ") || l.starts_with("calib "))
+        {
+            println!("{l}");
+        }
+        Ok(())
+    })?;
+    timed("ipp", t);
+    Ok(times)
+}
+
+pub fn run() -> Result<()> {
+    let start = std::time::Instant::now();
+    let times = run_ci()?;
+    println!(
+        "\nci: all steps passed in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+    for (name, secs) in times {
+        println!("  {name:<12} {secs:>7.1} s");
+    }
+    Ok(())
+}
