@@ -16,7 +16,7 @@ use cortex_m_semihosting::{debug, hio};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use firmware_sim::app::write_ipp;
-use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, Conspicuity, Luv};
+use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, scratch_bytes, Conspicuity, Luv};
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::{App, Buffers, SimCamera, Ticks, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
 
@@ -147,7 +147,8 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
             h,
             to_instructions(r.ticks.conspicuity),
         )?;
-        write_ipp(out, "checksum", w, h, to_instructions(r.ticks.checksum))
+        write_ipp(out, "checksum", w, h, to_instructions(r.ticks.checksum))?;
+        writeln!(out, "scratch conspicuity {w}x{h} {}", scratch_bytes(w, h))
     })
     .map_err(|_| "firmware app failed")
 }
