@@ -4,7 +4,10 @@ use crate::firmware::{build_and_run, build_thumb, compare, host_output, size_rep
 use crate::util::{self, host_cargo, step, Result};
 use crate::{data, setup};
 
-pub fn run_ci() -> Result<Vec<(&'static str, f64)>> {
+/// Wall time per step, and (passed, failed, ignored) test counts.
+type CiSummary = (Vec<(&'static str, f64)>, (u64, u64, u64));
+
+pub fn run_ci() -> Result<CiSummary> {
     let mut times = Vec::new();
     let mut timed = |name: &'static str, secs: f64| times.push((name, secs));
 
@@ -34,8 +37,9 @@ pub fn run_ci() -> Result<Vec<(&'static str, f64)>> {
     timed("clippy", t);
     let (_, t) = step("fetch-data: aloe stereo pair", data::fetch)?;
     timed("fetch-data", t);
-    let (_, t) = step("test: cargo test --workspace", || {
-        util::run(host_cargo().args(["test", "--locked", "--workspace"]))
+    let (totals, t) = step("test: cargo test --workspace", || {
+        let out = util::run_tee(host_cargo().args(["test", "--locked", "--workspace"]))?;
+        Ok(util::test_totals(&out))
     })?;
     timed("test", t);
     let (_, t) = step(
@@ -67,12 +71,12 @@ pub fn run_ci() -> Result<Vec<(&'static str, f64)>> {
         Ok(())
     })?;
     timed("ipp", t);
-    Ok(times)
+    Ok((times, totals))
 }
 
 pub fn run() -> Result<()> {
     let start = std::time::Instant::now();
-    let times = run_ci()?;
+    let (times, (passed, failed, ignored)) = run_ci()?;
     println!(
         "\nci: all steps passed in {:.1} s",
         start.elapsed().as_secs_f64()
@@ -80,5 +84,6 @@ pub fn run() -> Result<()> {
     for (name, secs) in times {
         println!("  {name:<12} {secs:>7.1} s");
     }
+    println!("tests: {passed} passed, {failed} failed, {ignored} skipped");
     Ok(())
 }

@@ -77,3 +77,55 @@ pub fn step<T>(name: &str, f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
     println!("<== {name}: ok in {secs:.1} s");
     Ok((value, secs))
 }
+
+/// Runs `cmd`, echoing its stdout line by line and returning it; fails on non-zero exit.
+pub fn run_tee(cmd: &mut Command) -> Result<String> {
+    use std::io::BufRead;
+    let what = describe(cmd);
+    println!("$ {what}");
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("cannot start `{what}`: {e}"))?;
+    let mut text = String::new();
+    if let Some(out) = child.stdout.take() {
+        for line in std::io::BufReader::new(out).lines() {
+            let line = line.map_err(|e| format!("reading output of `{what}`: {e}"))?;
+            println!("{line}");
+            text.push_str(&line);
+            text.push('\n');
+        }
+    }
+    let status = child
+        .wait()
+        .map_err(|e| format!("waiting for `{what}`: {e}"))?;
+    if status.success() {
+        Ok(text)
+    } else {
+        Err(format!("`{what}` failed ({status})"))
+    }
+}
+
+/// Sums `test result: ok. N passed; M failed; K ignored` lines of cargo test.
+pub fn test_totals(text: &str) -> (u64, u64, u64) {
+    let mut totals = (0, 0, 0);
+    for line in text.lines().filter_map(|l| l.strip_prefix("test result: ")) {
+        for part in line.split(';') {
+            let mut words = part.split_whitespace().rev();
+            let (Some(kind), Some(n)) = (
+                words.next(),
+                words.next().and_then(|n| n.parse::<u64>().ok()),
+            ) else {
+                continue;
+            };
+            match kind {
+                "passed" => totals.0 += n,
+                "failed" => totals.1 += n,
+                "ignored" => totals.2 += n,
+                _ => {}
+            }
+        }
+    }
+    totals
+}
