@@ -90,6 +90,31 @@ impl DelayNs for CycleDelay {
     }
 }
 
+/// Deepest stack use so far: cortex-m-rt (`paint-stack`) fills the stack region
+/// with 0xCCCC_CCCC at reset; count the words from the top that were overwritten.
+#[allow(unsafe_code)]
+fn stack_peak_bytes() -> usize {
+    extern "C" {
+        static _stack_start: u32;
+        static _stack_end: u32;
+    }
+    // SAFETY: only the addresses of the linker symbols are taken here.
+    let (top, bottom) = unsafe {
+        (
+            core::ptr::addr_of!(_stack_start) as usize,
+            core::ptr::addr_of!(_stack_end) as usize,
+        )
+    };
+    let mut addr = bottom;
+    // SAFETY: [_stack_end, _stack_start) is RAM reserved for the stack; reads are aligned words.
+    while addr < top
+        && unsafe { core::ptr::read_volatile(addr as *const u32) } == cortex_m_rt::STACK_PAINT_VALUE
+    {
+        addr += 4;
+    }
+    top - addr
+}
+
 fn start_systick(syst: &mut SYST) {
     syst.set_clock_source(SystClkSource::Core);
     syst.set_reload(RELOAD);
@@ -150,7 +175,8 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
         write_ipp(out, "checksum", w, h, to_instructions(r.ticks.checksum))?;
         writeln!(out, "scratch conspicuity {w}x{h} {}", scratch_bytes(w, h))
     })
-    .map_err(|_| "firmware app failed")
+    .map_err(|_| "firmware app failed")?;
+    writeln!(out, "stack peak {} bytes", stack_peak_bytes()).map_err(|_| "semihosting write failed")
 }
 
 #[entry]

@@ -61,11 +61,11 @@ pub fn run_ci() -> Result<CiSummary> {
             "{lines} checksum/edges lines equal on host and QEMU (QEMU run {:.1} s)",
             qemu.secs
         );
-        for l in qemu
-            .stdout
-            .lines()
-            .filter(|l| l.starts_with("ipp ") || l.starts_with("calib "))
-        {
+        for l in qemu.stdout.lines().filter(|l| {
+            ["ipp ", "calib ", "stack "]
+                .iter()
+                .any(|p| l.starts_with(p))
+        }) {
             println!("{l}");
         }
         Ok(())
