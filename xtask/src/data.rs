@@ -51,7 +51,17 @@ pub fn fetch() -> Result<PathBuf> {
 
 fn fetch_into(dir: &Path, work: &Path) -> Result<()> {
     fs::create_dir_all(work).map_err(|e| format!("creating {}: {e}", work.display()))?;
-    let deb = download_deb(work)?;
+    let deb = match download_deb(work) {
+        Err(e) if crate::setup::is_root() => {
+            // Fresh machines may have empty apt lists: refresh once and retry.
+            println!("{e}; running apt-get update and retrying");
+            run(Command::new("apt-get")
+                .arg("update")
+                .env("DEBIAN_FRONTEND", "noninteractive"))?;
+            download_deb(work)?
+        }
+        other => other?,
+    };
     let tree = work.join("x");
     run(Command::new("dpkg-deb").arg("-x").arg(&deb).arg(&tree))?;
     for (name, magic) in FILES {

@@ -24,7 +24,7 @@ fn dpkg_installed(pkg: &str) -> bool {
     output(&mut cmd).is_ok_and(|s| s.trim() == "install ok installed")
 }
 
-fn is_root() -> bool {
+pub fn is_root() -> bool {
     output(Command::new("id").arg("-u")).is_ok_and(|s| s.trim() == "0")
 }
 
