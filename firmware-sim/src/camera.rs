@@ -67,8 +67,9 @@ pub struct SimCamera {
     frames: u32,
 }
 
-/// Errors from [`SimCamera`].
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+/// Errors from [`SimCamera`]. Only `Debug` is derived, so the core's error types
+/// need nothing more.
+#[derive(Debug)]
 pub enum SimCameraError {
     /// The buffer does not describe a valid image of the requested size.
     Buffer(ImageError),
