@@ -7,7 +7,7 @@ use embedded_hal::digital::{self, OutputPin};
 
 use crate::camera::Camera;
 use crate::pg::conspicuity::{
-    self, edge_conspicuity, Conspicuity, ConspicuityError, EdgeBuffers, EdgeParams, Luv, LuvTables,
+    self, edge_conspicuity, ConspicuityError, EdgeBuffers, EdgeCell, EdgeParams, Luv, LuvTables,
 };
 use crate::pg::image::{ImageError, ImageView, Rgb8};
 
@@ -64,7 +64,7 @@ pub struct Buffers<'a> {
     /// Row scratch, at least `row_scratch_len(width)`.
     pub rows: &'a mut [Luv],
     /// Conspicuity map, at least `luv_len(width, height)`.
-    pub conspicuity: &'a mut [Conspicuity],
+    pub conspicuity: &'a mut [EdgeCell],
 }
 
 /// Why a frame could not be processed.

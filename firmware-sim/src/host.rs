@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
-use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, Conspicuity, Luv};
+use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, EdgeCell, Luv};
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::{App, Buffers, SimCamera, Ticks, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
 
@@ -55,7 +55,7 @@ pub fn run() -> ExitCode {
     let mut luv = vec![Luv::default(); luv_len(w, h)];
     let mut smoothed = vec![Luv::default(); luv_len(w, h)];
     let mut rows = vec![Luv::default(); row_scratch_len(w)];
-    let mut conspicuity = vec![Conspicuity::default(); luv_len(w, h)];
+    let mut conspicuity = vec![EdgeCell::default(); luv_len(w, h)];
     let mut bufs = Buffers {
         rgb: &mut rgb,
         luv: &mut luv,

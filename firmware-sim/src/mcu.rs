@@ -16,7 +16,7 @@ use cortex_m_semihosting::{debug, hio};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use firmware_sim::app::write_ipp;
-use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, scratch_bytes, Conspicuity, Luv};
+use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, scratch_bytes, EdgeCell, Luv};
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::{App, Buffers, SimCamera, Ticks, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
 
@@ -150,7 +150,7 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
         singleton!(: [Luv; LUV_LEN] = [Luv::default(); LUV_LEN]).ok_or("smoothed buffer taken")?;
     let rows =
         singleton!(: [Luv; ROWS_LEN] = [Luv::default(); ROWS_LEN]).ok_or("row buffer taken")?;
-    let conspicuity = singleton!(: [Conspicuity; LUV_LEN] = [Conspicuity::default(); LUV_LEN])
+    let conspicuity = singleton!(: [EdgeCell; LUV_LEN] = [EdgeCell::default(); LUV_LEN])
         .ok_or("conspicuity buffer taken")?;
     let mut bufs = Buffers {
         rgb,

@@ -236,6 +236,9 @@ pub mod conspicuity {
     #[derive(Clone, Copy, PartialEq, Eq, Default, Debug, PartialOrd, Ord)]
     pub struct Conspicuity(pub u16);
 
+    /// One cell of a conspicuity map (the core's is `MaybeOff<Conspicuity>`).
+    pub type EdgeCell = Conspicuity;
+
     #[derive(Clone, Copy, Debug)]
     pub struct EdgeParams {
         pub threshold: u16,
@@ -263,7 +266,7 @@ pub mod conspicuity {
         luv: &'a mut [Luv],
         smoothed: &'a mut [Luv],
         rows: &'a mut [Luv],
-        conspicuity: &'a mut [Conspicuity],
+        conspicuity: &'a mut [EdgeCell],
     }
 
     fn fnv(h: u32, bytes: &[u8]) -> u32 {
@@ -279,7 +282,7 @@ pub mod conspicuity {
             luv: &'a mut [Luv],
             smoothed: &'a mut [Luv],
             rows: &'a mut [Luv],
-            conspicuity: &'a mut [Conspicuity],
+            conspicuity: &'a mut [EdgeCell],
         ) -> Result<Self, ConspicuityError> {
             let n = luv_len(width, height);
             if luv.len() < n

@@ -5,7 +5,7 @@ use std::convert::Infallible;
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use firmware_sim::app::write_ipp;
-use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, Conspicuity, Luv};
+use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, EdgeCell, Luv};
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::{
     App, AppError, Buffers, Camera, CameraError, CameraErrorKind, NoTicks, SimCamera,
@@ -52,7 +52,7 @@ struct Storage {
     luv: Vec<Luv>,
     smoothed: Vec<Luv>,
     rows: Vec<Luv>,
-    conspicuity: Vec<Conspicuity>,
+    conspicuity: Vec<EdgeCell>,
 }
 
 impl Storage {
@@ -62,7 +62,7 @@ impl Storage {
             luv: vec![Luv::default(); luv_len(w, h)],
             smoothed: vec![Luv::default(); luv_len(w, h)],
             rows: vec![Luv::default(); row_scratch_len(w)],
-            conspicuity: vec![Conspicuity::default(); luv_len(w, h)],
+            conspicuity: vec![EdgeCell::default(); luv_len(w, h)],
         }
     }
     fn bufs(&mut self) -> Buffers<'_> {
