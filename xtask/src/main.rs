@@ -1,1 +1,43 @@
-fn main() {}
+//! Project automation: `cargo xtask <command>` (std only).
+
+mod bench;
+mod ci;
+mod data;
+mod firmware;
+mod setup;
+mod util;
+
+use std::process::ExitCode;
+
+const USAGE: &str = "usage: cargo xtask <command>
+
+commands:
+  ci          fmt, clippy, fetch-data, tests, no_std core build, firmware under QEMU vs host
+  fetch-data  download the aloe stereo pair (Debian opencv-doc) into the data cache
+  firmware    build the Cortex-M firmware and run it under QEMU mps2-an386
+  bench       measure and write docs/BENCHMARKS.md
+  setup       install missing system packages / rustup components";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("ci") => ci::run(),
+        Some("fetch-data") => data::fetch().map(|_| ()),
+        Some("firmware") => firmware::build_and_run().map(|_| ()),
+        Some("bench") => bench::run(),
+        Some("setup") => setup::ensure_all(),
+        Some("-h" | "--help" | "help") => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        Some(other) => Err(format!("unknown command '{other}'\n{USAGE}")),
+        None => Err(format!("no command given\n{USAGE}")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

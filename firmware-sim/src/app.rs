@@ -1,0 +1,238 @@
+//! The firmware application: capture, conspicuity, checksum, report.
+
+use core::fmt::{self, Write};
+
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::{self, OutputPin};
+
+use crate::camera::Camera;
+use crate::pg::conspicuity::{
+    self, edge_conspicuity, ConspicuityError, EdgeBuffers, EdgeCell, EdgeParams, Luv, LuvTables,
+};
+use crate::pg::image::{ImageError, ImageView, Rgb8};
+
+/// A monotonic counter read around each step (SysTick on the MCU, nothing on the host).
+pub trait Ticks {
+    /// Current count; only differences are meaningful.
+    fn now(&mut self) -> u64;
+}
+
+/// A [`Ticks`] that always reads 0 (no timing).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoTicks;
+
+impl Ticks for NoTicks {
+    fn now(&mut self) -> u64 {
+        0
+    }
+}
+
+/// Ticks spent in each step of one frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepTicks {
+    /// Camera capture (scene rendering for [`crate::SimCamera`]).
+    pub capture: u64,
+    /// The core's edge-conspicuity stage.
+    pub conspicuity: u64,
+    /// FNV-1a checksum over the output maps.
+    pub checksum: u64,
+}
+
+/// Outcome of one processed frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameResult {
+    /// Frame width in pixels.
+    pub width: usize,
+    /// Frame height in pixels.
+    pub height: usize,
+    /// FNV-1a 32 over the luv, smoothed and conspicuity maps.
+    pub checksum: u32,
+    /// Pixels at or above the edge threshold.
+    pub on_count: u32,
+    /// Ticks per step.
+    pub ticks: StepTicks,
+}
+
+/// Caller-owned working memory, sized for the largest frame to be processed.
+pub struct Buffers<'a> {
+    /// RGB frame, at least width * height pixels.
+    pub rgb: &'a mut [Rgb8],
+    /// Luv map, at least `luv_len(width, height)`.
+    pub luv: &'a mut [Luv],
+    /// Smoothed Luv map, at least `luv_len(width, height)`.
+    pub smoothed: &'a mut [Luv],
+    /// Row scratch, at least `row_scratch_len(width)`.
+    pub rows: &'a mut [Luv],
+    /// Conspicuity map, at least `luv_len(width, height)`.
+    pub conspicuity: &'a mut [EdgeCell],
+}
+
+/// Why a frame could not be processed.
+#[derive(Debug)]
+pub enum AppError<E> {
+    /// The camera failed.
+    Camera(E),
+    /// A buffer in [`Buffers`] is too small for the requested frame.
+    BufferTooSmall,
+    /// The frame buffer does not form a valid image.
+    Image(ImageError),
+    /// The conspicuity stage rejected its inputs.
+    Conspicuity(ConspicuityError),
+    /// The status LED pin failed.
+    Pin(digital::ErrorKind),
+    /// The report sink failed.
+    Report,
+}
+
+impl<E: crate::CameraError> fmt::Display for AppError<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Camera(e) => write!(f, "camera: {} ({:?})", e.kind(), e),
+            Self::BufferTooSmall => f.write_str("working buffers too small for the frame size"),
+            Self::Image(e) => write!(f, "invalid frame buffer: {e:?}"),
+            Self::Conspicuity(e) => write!(f, "conspicuity stage: {e:?}"),
+            Self::Pin(e) => write!(f, "status LED pin: {e:?}"),
+            Self::Report => f.write_str("report sink failed"),
+        }
+    }
+}
+
+impl<E> From<fmt::Error> for AppError<E> {
+    fn from(_: fmt::Error) -> Self {
+        Self::Report
+    }
+}
+
+/// LED on-time per frame and pause between frames, in milliseconds.
+pub const BLINK_MS: u32 = 1;
+
+/// The firmware application, generic over camera, status LED and delay.
+pub struct App<C, P, D> {
+    camera: C,
+    led: P,
+    delay: D,
+    tables: LuvTables,
+    params: EdgeParams,
+}
+
+fn pin_err<E>(e: impl digital::Error) -> AppError<E> {
+    AppError::Pin(e.kind())
+}
+
+fn prefix<T>(buf: &mut [T], len: usize) -> Result<&mut [T], ()> {
+    buf.get_mut(..len).ok_or(())
+}
+
+impl<C: Camera, P: OutputPin, D: DelayNs> App<C, P, D> {
+    /// Builds the one-time tables (LUV) with default edge parameters.
+    pub fn new(camera: C, led: P, delay: D) -> Self {
+        Self {
+            camera,
+            led,
+            delay,
+            tables: LuvTables::new(),
+            params: EdgeParams::default(),
+        }
+    }
+
+    /// Captures and processes one `width` x `height` frame; the LED is on meanwhile.
+    pub fn process<T: Ticks>(
+        &mut self,
+        width: usize,
+        height: usize,
+        bufs: &mut Buffers<'_>,
+        ticks: &mut T,
+    ) -> Result<FrameResult, AppError<C::Error>> {
+        let n = conspicuity::luv_len(width, height);
+        let too_small = |_| AppError::BufferTooSmall;
+        let rgb = prefix(
+            bufs.rgb,
+            width.checked_mul(height).ok_or(AppError::BufferTooSmall)?,
+        )
+        .map_err(too_small)?;
+        let luv = prefix(bufs.luv, n).map_err(too_small)?;
+        let smoothed = prefix(bufs.smoothed, n).map_err(too_small)?;
+        let rows = prefix(bufs.rows, conspicuity::row_scratch_len(width)).map_err(too_small)?;
+        let cmap = prefix(bufs.conspicuity, n).map_err(too_small)?;
+
+        self.led.set_high().map_err(pin_err)?;
+        let t0 = ticks.now();
+        self.camera
+            .capture(rgb, width, height)
+            .map_err(AppError::Camera)?;
+        let t1 = ticks.now();
+        let view = ImageView::new(rgb, width, height, width).map_err(AppError::Image)?;
+        let mut edge = EdgeBuffers::new(width, height, luv, smoothed, rows, cmap)
+            .map_err(AppError::Conspicuity)?;
+        let report = edge_conspicuity(&self.tables, &self.params, &view, &mut edge)
+            .map_err(AppError::Conspicuity)?;
+        let t2 = ticks.now();
+        let checksum = edge.checksum();
+        let t3 = ticks.now();
+        self.led.set_low().map_err(pin_err)?;
+
+        let ticks = StepTicks {
+            capture: t1 - t0,
+            conspicuity: t2 - t1,
+            checksum: t3 - t2,
+        };
+        Ok(FrameResult {
+            width,
+            height,
+            checksum,
+            on_count: report.on_count,
+            ticks,
+        })
+    }
+
+    /// Processes every size in `sizes`, writing the checksum lines to `out`.
+    pub fn run<T: Ticks, W: Write>(
+        &mut self,
+        sizes: &[(usize, usize)],
+        bufs: &mut Buffers<'_>,
+        ticks: &mut T,
+        out: &mut W,
+        mut each: impl FnMut(&FrameResult, &mut W) -> fmt::Result,
+    ) -> Result<(), AppError<C::Error>> {
+        for &(w, h) in sizes {
+            let r = self.process(w, h, bufs, ticks)?;
+            write_checksum(out, &r)?;
+            each(&r, out)?;
+            self.delay.delay_ms(BLINK_MS);
+        }
+        Ok(())
+    }
+
+    /// Gives back the camera, LED pin and delay.
+    pub fn release(self) -> (C, P, D) {
+        (self.camera, self.led, self.delay)
+    }
+
+    /// The camera, e.g. to read its frame counter.
+    pub fn camera(&self) -> &C {
+        &self.camera
+    }
+}
+
+/// `checksum WxH 0x........` and `edges WxH on=N`: the lines compared host vs QEMU.
+pub fn write_checksum(out: &mut impl Write, r: &FrameResult) -> fmt::Result {
+    writeln!(
+        out,
+        "checksum {}x{} 0x{:08x}",
+        r.width, r.height, r.checksum
+    )?;
+    writeln!(out, "edges {}x{} on={}", r.width, r.height, r.on_count)
+}
+
+/// `ipp STEP WxH X.Y`: instructions per pixel with one decimal, without float formatting.
+pub fn write_ipp(
+    out: &mut impl Write,
+    step: &str,
+    w: usize,
+    h: usize,
+    instructions: u64,
+) -> fmt::Result {
+    let pixels = (w as u64 * h as u64).max(1);
+    let tenths = (instructions * 10 + pixels / 2) / pixels;
+    writeln!(out, "ipp {step} {w}x{h} {}.{}", tenths / 10, tenths % 10)
+}

@@ -1,0 +1,93 @@
+//! Desktop run: SimCamera, a logging LED, `std::thread::sleep` delays, wall-clock ticks.
+
+use std::convert::Infallible;
+use std::fmt::Write as _;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::{ErrorType, OutputPin};
+use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, EdgeCell, Luv};
+use firmware_sim::pg::image::Rgb8;
+use firmware_sim::{App, Buffers, SimCamera, Ticks, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
+
+/// Counts LED toggles instead of driving hardware.
+#[derive(Default)]
+struct CountingLed {
+    toggles: u32,
+}
+
+impl ErrorType for CountingLed {
+    type Error = Infallible;
+}
+
+impl OutputPin for CountingLed {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.toggles += 1;
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.toggles += 1;
+        Ok(())
+    }
+}
+
+struct SleepDelay;
+
+impl DelayNs for SleepDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        std::thread::sleep(std::time::Duration::from_nanos(ns.into()));
+    }
+}
+
+/// Nanoseconds since start.
+struct WallTicks(Instant);
+
+impl Ticks for WallTicks {
+    fn now(&mut self) -> u64 {
+        self.0.elapsed().as_nanos().try_into().unwrap_or(u64::MAX)
+    }
+}
+
+pub fn run() -> ExitCode {
+    let (w, h) = (MAX_WIDTH, MAX_HEIGHT);
+    let mut rgb = vec![Rgb8::default(); w * h];
+    let mut luv = vec![Luv::default(); luv_len(w, h)];
+    let mut smoothed = vec![Luv::default(); luv_len(w, h)];
+    let mut rows = vec![Luv::default(); row_scratch_len(w)];
+    let mut conspicuity = vec![EdgeCell::default(); luv_len(w, h)];
+    let mut bufs = Buffers {
+        rgb: &mut rgb,
+        luv: &mut luv,
+        smoothed: &mut smoothed,
+        rows: &mut rows,
+        conspicuity: &mut conspicuity,
+    };
+
+    let mut app = App::new(SimCamera::new(), CountingLed::default(), SleepDelay);
+    let mut out = String::new();
+    let result = app.run(
+        &FRAME_SIZES,
+        &mut bufs,
+        &mut WallTicks(Instant::now()),
+        &mut out,
+        |r, out| {
+            let px = (r.width * r.height) as f64;
+            writeln!(
+                out,
+                "host-ns-per-pixel conspicuity {}x{} {:.1}",
+                r.width,
+                r.height,
+                r.ticks.conspicuity as f64 / px
+            )
+        },
+    );
+    print!("{out}");
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("firmware-sim: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,89 @@
+//! `ci`: every check, in order, stopping at the first failure.
+
+use crate::firmware::{build_and_run, build_thumb, compare, host_output, size_report};
+use crate::util::{self, host_cargo, step, Result};
+use crate::{data, setup};
+
+/// Wall time per step, and (passed, failed, ignored) test counts.
+type CiSummary = (Vec<(&'static str, f64)>, (u64, u64, u64));
+
+pub fn run_ci() -> Result<CiSummary> {
+    let mut times = Vec::new();
+    let mut timed = |name: &'static str, secs: f64| times.push((name, secs));
+
+    let (_, t) = step(
+        "setup: system packages and rustup components",
+        setup::ensure_all,
+    )?;
+    timed("setup", t);
+    let (_, t) = step("fmt: cargo fmt --all -- --check", || {
+        util::run(host_cargo().args(["fmt", "--all", "--", "--check"]))
+    })?;
+    timed("fmt", t);
+    let (_, t) = step(
+        "clippy: cargo clippy --workspace --all-targets -- -D warnings",
+        || {
+            util::run(host_cargo().args([
+                "clippy",
+                "--locked",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ]))
+        },
+    )?;
+    timed("clippy", t);
+    let (_, t) = step("fetch-data: aloe stereo pair", data::fetch)?;
+    timed("fetch-data", t);
+    let (totals, t) = step("test: cargo test --workspace", || {
+        let out = util::run_tee(host_cargo().args(["test", "--locked", "--workspace"]))?;
+        Ok(util::test_totals(&out))
+    })?;
+    timed("test", t);
+    let (_, t) = step(
+        "no_std: build core (protogist) for thumbv7em-none-eabihf",
+        || build_thumb("protogist"),
+    )?;
+    timed("no_std core", t);
+    let ((qemu, lines), t) = step("firmware: QEMU mps2-an386 vs host, bit for bit", || {
+        let qemu = build_and_run()?;
+        println!("-- host run of firmware-sim:");
+        let host = host_output()?;
+        let lines = compare(&host, &qemu.stdout)?;
+        println!("-- firmware ELF against memory.x:\n{}", size_report()?);
+        Ok((qemu, lines))
+    })?;
+    timed("firmware", t);
+    let (_, t) = step("instructions per pixel (QEMU -icount, SysTick)", || {
+        println!(
+            "{lines} checksum/edges lines equal on host and QEMU (QEMU run {:.1} s)",
+            qemu.secs
+        );
+        for l in qemu.stdout.lines().filter(|l| {
+            ["ipp ", "calib ", "stack "]
+                .iter()
+                .any(|p| l.starts_with(p))
+        }) {
+            println!("{l}");
+        }
+        Ok(())
+    })?;
+    timed("ipp", t);
+    Ok((times, totals))
+}
+
+pub fn run() -> Result<()> {
+    let start = std::time::Instant::now();
+    let (times, (passed, failed, ignored)) = run_ci()?;
+    println!(
+        "\nci: all steps passed in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+    for (name, secs) in times {
+        println!("  {name:<12} {secs:>7.1} s");
+    }
+    println!("tests: {passed} passed, {failed} failed, {ignored} skipped");
+    Ok(())
+}

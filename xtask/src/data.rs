@@ -1,0 +1,118 @@
+//! `fetch-data`: the aloe stereo pair from Debian's opencv-doc package.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::util::{output, root, run, Result};
+
+const PACKAGE: &str = "opencv-doc";
+const SRC_DIR: &str = "usr/share/doc/opencv-doc/examples/data";
+const JPEG: &[u8] = &[0xFF, 0xD8, 0xFF];
+const PNG: &[u8] = &[0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
+const FILES: [(&str, &[u8]); 3] = [
+    ("aloeL.jpg", JPEG),
+    ("aloeR.jpg", JPEG),
+    ("aloeGT.png", PNG),
+];
+
+/// `$PROTOGIST_DATA`, else `<workspace>/.cache/data/aloe`.
+pub fn data_dir() -> PathBuf {
+    std::env::var_os("PROTOGIST_DATA")
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join(".cache/data/aloe"))
+}
+
+fn valid(path: &Path, magic: &[u8]) -> bool {
+    fs::read(path).is_ok_and(|b| b.len() > magic.len() && b.starts_with(magic))
+}
+
+/// Ensures the files are in the cache; returns the directory.
+pub fn fetch() -> Result<PathBuf> {
+    let dir = data_dir();
+    if FILES
+        .iter()
+        .all(|(name, magic)| valid(&dir.join(name), magic))
+    {
+        println!("aloe data already present in {}", dir.display());
+        return Ok(dir);
+    }
+    fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
+    let work = dir.join(format!(".fetch-{}", std::process::id()));
+    let result = fetch_into(&dir, &work);
+    let _ = fs::remove_dir_all(&work);
+    result?;
+    for (name, _) in FILES {
+        println!("  {}", dir.join(name).display());
+    }
+    Ok(dir)
+}
+
+fn fetch_into(dir: &Path, work: &Path) -> Result<()> {
+    fs::create_dir_all(work).map_err(|e| format!("creating {}: {e}", work.display()))?;
+    let deb = match download_deb(work) {
+        Err(e) if crate::setup::is_root() => {
+            // Fresh machines may have empty apt lists: refresh once and retry.
+            println!("{e}; running apt-get update and retrying");
+            run(Command::new("apt-get")
+                .arg("update")
+                .env("DEBIAN_FRONTEND", "noninteractive"))?;
+            download_deb(work)?
+        }
+        other => other?,
+    };
+    let tree = work.join("x");
+    run(Command::new("dpkg-deb").arg("-x").arg(&deb).arg(&tree))?;
+    for (name, magic) in FILES {
+        let src = tree.join(SRC_DIR).join(name);
+        let tmp = dir.join(format!(".{name}.part"));
+        fs::copy(&src, &tmp).map_err(|e| format!("copying {}: {e}", src.display()))?;
+        if !valid(&tmp, magic) {
+            let _ = fs::remove_file(&tmp);
+            return Err(format!(
+                "{name} from {PACKAGE} is empty or not the expected image type"
+            ));
+        }
+        fs::rename(&tmp, dir.join(name)).map_err(|e| format!("renaming {}: {e}", tmp.display()))?;
+    }
+    Ok(())
+}
+
+fn find_deb(work: &Path) -> Option<PathBuf> {
+    fs::read_dir(work)
+        .ok()?
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|x| x == "deb"))
+}
+
+/// `apt-get download`, else the URL from `--print-uris` with curl.
+fn download_deb(work: &Path) -> Result<PathBuf> {
+    let first = run(Command::new("apt-get")
+        .args(["download", PACKAGE])
+        .current_dir(work));
+    if let Some(deb) = first.is_ok().then(|| find_deb(work)).flatten() {
+        return Ok(deb);
+    }
+    println!("apt-get download failed; trying the package URL with curl");
+    let uris = output(
+        Command::new("apt-get")
+            .args(["download", "--print-uris", PACKAGE])
+            .current_dir(work),
+    )?;
+    let url = uris
+        .split_whitespace()
+        .next()
+        .map(|u| u.trim_matches('\''))
+        .filter(|u| u.starts_with("http"))
+        .ok_or_else(|| {
+            format!("apt knows no download URL for {PACKAGE} (run `apt-get update` as root first)")
+        })?;
+    let deb = work.join(format!("{PACKAGE}.deb"));
+    run(Command::new("curl")
+        .args(["-fsSL", "--retry", "3", "-o"])
+        .arg(&deb)
+        .arg(url))?;
+    Ok(deb)
+}

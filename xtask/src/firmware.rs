@@ -1,0 +1,229 @@
+//! Cortex-M builds (thumbv7em), QEMU runs and the memory budget.
+
+use std::io::Read;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::setup::{rustup_has_thumb, THUMB};
+use crate::util::{host_cargo, output, root, run, Result};
+
+const QEMU_TIMEOUT: Duration = Duration::from_secs(300);
+/// Lines that must be bit-identical between the host and the QEMU run.
+const COMPARED_PREFIXES: [&str; 2] = ["checksum ", "edges "];
+
+pub fn elf() -> PathBuf {
+    root()
+        .join("target/thumb")
+        .join(THUMB)
+        .join("firmware/firmware-sim")
+}
+
+/// `cargo build --profile firmware` for thumbv7em: rustup's prebuilt target if it
+/// is installed, else Debian's toolchain with `-Zbuild-std=core`.
+pub fn build_thumb(package: &str) -> Result<()> {
+    let common = [
+        "build",
+        "--locked",
+        "-p",
+        package,
+        "--profile",
+        "firmware",
+        "--target",
+        THUMB,
+        "--target-dir",
+    ];
+    let target_dir = root().join("target/thumb");
+    if rustup_has_thumb() {
+        println!("using rustup's {THUMB} target");
+        return run(host_cargo().args(common).arg(&target_dir));
+    }
+    println!("rustup has no {THUMB} target: using Debian's cargo with -Zbuild-std=core");
+    let mut cmd = Command::new("/usr/bin/cargo");
+    cmd.current_dir(root())
+        .args(common)
+        .arg(&target_dir)
+        .arg("-Zbuild-std=core")
+        .env("RUSTC_BOOTSTRAP", "1")
+        .env("RUSTC", "/usr/bin/rustc")
+        .env("RUSTDOC", "/usr/bin/rustdoc")
+        .env_remove("RUSTUP_TOOLCHAIN")
+        .env_remove("RUSTC_WRAPPER")
+        .env_remove("CARGO_TARGET_DIR");
+    run(&mut cmd)
+}
+
+pub struct QemuRun {
+    pub stdout: String,
+    pub secs: f64,
+}
+
+/// Runs an ELF on mps2-an386 with semihosting; fails unless it exits with success.
+pub fn run_qemu(elf: &std::path::Path) -> Result<QemuRun> {
+    let mut cmd = Command::new("qemu-system-arm");
+    cmd.args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
+        .args([
+            "-semihosting-config",
+            "enable=on,target=native",
+            "-icount",
+            "shift=0",
+            "-kernel",
+        ])
+        .arg(elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit());
+    println!("$ qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic -semihosting-config enable=on,target=native -icount shift=0 -kernel {}", elf.display());
+    let start = Instant::now();
+    let mut child = cmd
+        .spawn()
+        .map_err(|e| format!("cannot start qemu-system-arm: {e}"))?;
+    let mut pipe = child.stdout.take().ok_or("no stdout pipe from qemu")?;
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        pipe.read_to_string(&mut s).map(|_| s)
+    });
+    let status = loop {
+        if let Some(status) = child
+            .try_wait()
+            .map_err(|e| format!("waiting for qemu: {e}"))?
+        {
+            break status;
+        }
+        if start.elapsed() > QEMU_TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!(
+                "qemu did not exit within {} s",
+                QEMU_TIMEOUT.as_secs()
+            ));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let stdout = reader
+        .join()
+        .map_err(|_| "qemu output reader panicked")?
+        .map_err(|e| format!("reading qemu output: {e}"))?;
+    print!("{stdout}");
+    if !status.success() {
+        return Err(format!(
+            "firmware under QEMU did not exit with semihosting success ({status})"
+        ));
+    }
+    Ok(QemuRun {
+        stdout,
+        secs: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Builds firmware-sim for thumbv7em and runs it under QEMU.
+pub fn build_and_run() -> Result<QemuRun> {
+    build_thumb("firmware-sim")?;
+    run_qemu(&elf())
+}
+
+/// Output of the host build of firmware-sim.
+pub fn host_output() -> Result<String> {
+    let out = output(host_cargo().args([
+        "run",
+        "--locked",
+        "--quiet",
+        "-p",
+        "firmware-sim",
+        "--release",
+    ]))?;
+    print!("{out}");
+    Ok(out)
+}
+
+pub fn compared_lines(out: &str) -> Vec<&str> {
+    out.lines()
+        .filter(|l| COMPARED_PREFIXES.iter().any(|p| l.starts_with(p)))
+        .collect()
+}
+
+/// Requires the host and QEMU checksum lines to be equal and non-empty.
+pub fn compare(host: &str, qemu: &str) -> Result<usize> {
+    let (h, q) = (compared_lines(host), compared_lines(qemu));
+    if h.is_empty() {
+        return Err("host run printed no checksum lines".into());
+    }
+    if h != q {
+        let mut msg = String::from("host and QEMU outputs differ:");
+        for i in 0..h.len().max(q.len()) {
+            let (a, b) = (
+                h.get(i).copied().unwrap_or("<none>"),
+                q.get(i).copied().unwrap_or("<none>"),
+            );
+            if a != b {
+                msg.push_str(&format!("\n  host: {a}\n  qemu: {b}"));
+            }
+        }
+        return Err(msg);
+    }
+    Ok(h.len())
+}
+
+/// Parses `LENGTH = 2M` style values for FLASH and RAM from memory.x.
+fn budget() -> Result<(u64, u64)> {
+    let path = root().join("firmware-sim/memory.x");
+    let text =
+        std::fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
+    let length = |region: &str| -> Result<u64> {
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with(region) && l.contains("LENGTH"))
+            .ok_or(format!("memory.x has no {region} region"))?;
+        let v = line
+            .split("LENGTH")
+            .nth(1)
+            .unwrap_or("")
+            .trim_start_matches([' ', '='])
+            .trim();
+        let (num, mult) = match v.chars().last() {
+            Some('K') => (&v[..v.len() - 1], 1024),
+            Some('M') => (&v[..v.len() - 1], 1024 * 1024),
+            _ => (v, 1),
+        };
+        num.parse::<u64>()
+            .map(|n| n * mult)
+            .map_err(|_| format!("memory.x: cannot parse LENGTH '{v}'"))
+    };
+    Ok((length("FLASH")?, length("RAM")?))
+}
+
+/// Section sizes from `arm-none-eabi-size -A`, summed against memory.x.
+pub fn size_report() -> Result<String> {
+    let elf = elf();
+    let text = output(Command::new("arm-none-eabi-size").arg("-A").arg(&elf))?;
+    let (flash_budget, ram_budget) = budget()?;
+    let (mut flash, mut ram, mut rows) = (0u64, 0u64, String::new());
+    for line in text.lines() {
+        let mut it = line.split_whitespace();
+        let (Some(name), Some(size)) = (it.next(), it.next().and_then(|s| s.parse::<u64>().ok()))
+        else {
+            continue;
+        };
+        let in_flash = matches!(
+            name,
+            ".vector_table" | ".text" | ".rodata" | ".data" | ".gnu.sgstubs"
+        );
+        let in_ram = matches!(name, ".data" | ".bss" | ".uninit");
+        if in_flash || in_ram {
+            rows.push_str(&format!("  {name:<14} {size:>8} B\n"));
+        }
+        flash += if in_flash { size } else { 0 };
+        ram += if in_ram { size } else { 0 };
+    }
+    let pct = |a: u64, b: u64| a as f64 * 100.0 / b as f64;
+    let report = format!(
+        "{rows}  flash: {flash} / {flash_budget} B ({:.1}%)\n  RAM (static): {ram} / {ram_budget} B ({:.1}%), {} B left for the stack\n",
+        pct(flash, flash_budget),
+        pct(ram, ram_budget),
+        ram_budget.saturating_sub(ram)
+    );
+    if flash > flash_budget || ram > ram_budget {
+        return Err(format!("firmware exceeds the memory.x budget:\n{report}"));
+    }
+    Ok(report)
+}
