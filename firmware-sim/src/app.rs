@@ -7,9 +7,9 @@ use embedded_hal::digital::{self, OutputPin};
 
 use crate::camera::Camera;
 use crate::pg::conspicuity::{
-    self, edge_conspicuity, ConspicuityError, EdgeBuffers, EdgeCell, EdgeParams, Luv, LuvTables,
+    self, ConspicuityError, EdgeBuffers, EdgeCell, EdgeParams, Luv, LuvTables,
 };
-use crate::pg::image::{ImageError, ImageView, Rgb8};
+use crate::pg::image::{ImageError, ImageView, ImageViewMut, Rgb8};
 
 /// A monotonic counter read around each step (SysTick on the MCU, nothing on the host).
 pub trait Ticks {
@@ -32,8 +32,16 @@ impl Ticks for NoTicks {
 pub struct StepTicks {
     /// Camera capture (scene rendering for [`crate::SimCamera`]).
     pub capture: u64,
-    /// The core's edge-conspicuity stage.
+    /// The core's edge-conspicuity stage: the sum of the four steps below.
     pub conspicuity: u64,
+    /// sRGB to CIELUV.
+    pub luv: u64,
+    /// Copy plus the smoothing passes.
+    pub smooth: u64,
+    /// C~ and its maximum.
+    pub cmap: u64,
+    /// The 10 % threshold.
+    pub threshold: u64,
     /// FNV-1a checksum over the output maps.
     pub checksum: u64,
 }
@@ -162,11 +170,25 @@ impl<C: Camera, P: OutputPin, D: DelayNs> App<C, P, D> {
             .map_err(AppError::Camera)?;
         let t1 = ticks.now();
         let view = ImageView::new(rgb, width, height, width).map_err(AppError::Image)?;
-        let mut edge = EdgeBuffers::new(width, height, luv, smoothed, rows, cmap)
-            .map_err(AppError::Conspicuity)?;
-        let report = edge_conspicuity(&self.tables, &self.params, &view, &mut edge)
-            .map_err(AppError::Conspicuity)?;
+        // The stage's four steps, timed one by one (`edge_conspicuity` runs
+        // the same calls; a core test checks they agree).
+        let image_err = AppError::Image;
+        let stage_err = AppError::Conspicuity;
+        let mut luv_v = ImageViewMut::packed(luv, width, height).map_err(image_err)?;
+        conspicuity::rgb_to_luv(&self.tables, &view, &mut luv_v).map_err(stage_err)?;
+        let t_luv = ticks.now();
+        let mut sm_v = ImageViewMut::packed(smoothed, width, height).map_err(image_err)?;
+        sm_v.copy_from(&luv_v.as_view()).map_err(image_err)?;
+        conspicuity::smooth(&self.params.smooth, &mut sm_v, rows).map_err(stage_err)?;
+        let t_smooth = ticks.now();
+        let mut c_v = ImageViewMut::packed(cmap, width, height).map_err(image_err)?;
+        let max = conspicuity::conspicuity(&sm_v.as_view(), &mut c_v, rows).map_err(stage_err)?;
+        let t_cmap = ticks.now();
+        let on_count = conspicuity::threshold(&mut c_v, max, self.params.threshold_percent)
+            .map_err(stage_err)?;
         let t2 = ticks.now();
+        let edge = EdgeBuffers::new(width, height, luv, smoothed, rows, cmap)
+            .map_err(AppError::Conspicuity)?;
         let checksum = edge.checksum();
         let t3 = ticks.now();
         self.led.set_low().map_err(pin_err)?;
@@ -174,13 +196,17 @@ impl<C: Camera, P: OutputPin, D: DelayNs> App<C, P, D> {
         let ticks = StepTicks {
             capture: t1 - t0,
             conspicuity: t2 - t1,
+            luv: t_luv - t1,
+            smooth: t_smooth - t_luv,
+            cmap: t_cmap - t_smooth,
+            threshold: t2 - t_cmap,
             checksum: t3 - t2,
         };
         Ok(FrameResult {
             width,
             height,
             checksum,
-            on_count: report.on_count,
+            on_count,
             ticks,
         })
     }

@@ -172,7 +172,15 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
             h,
             to_instructions(r.ticks.conspicuity),
         )?;
-        write_ipp(out, "checksum", w, h, to_instructions(r.ticks.checksum))?;
+        for (step, t) in [
+            ("luv", r.ticks.luv),
+            ("smooth", r.ticks.smooth),
+            ("cmap", r.ticks.cmap),
+            ("threshold", r.ticks.threshold),
+            ("checksum", r.ticks.checksum),
+        ] {
+            write_ipp(out, step, w, h, to_instructions(t))?;
+        }
         writeln!(out, "scratch conspicuity {w}x{h} {}", scratch_bytes(w, h))
     })
     .map_err(|_| "firmware app failed")?;
