@@ -29,18 +29,46 @@ pub const fn div_round(x: i32, d: i32) -> i32 {
     (2 * x + d).div_euclid(2 * d)
 }
 
+/// `floor(16 · sqrt(t))` for `t` in 0..256: the first guess of [`isqrt_round`].
+const SQRT_SEED: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut i = 0;
+    while i < 256 {
+        // floor(sqrt(256 i)), by counting up: at most 255 steps, const only.
+        let mut r = 0u32;
+        while (r + 1) * (r + 1) <= 256 * i as u32 {
+            r += 1;
+        }
+        t[i] = if r > 255 { 255 } else { r as u8 };
+        i += 1;
+    }
+    t
+};
+
 /// `round(sqrt(x))` exactly, ties (never reached for integers) toward +∞.
 ///
-/// Integer only: an initial guess from the bit length, then Newton steps from
-/// above, which decrease monotonically to `floor(sqrt(x))`.
+/// Integer only: an 8-bit first guess from a table of the top bits, one
+/// Newton step (which lands at or above the root), then Newton steps from
+/// above, which decrease monotonically to `floor(sqrt(x))`; usually one.
 #[inline]
-pub const fn isqrt_round(x: u32) -> u32 {
+pub fn isqrt_round(x: u32) -> u32 {
     if x == 0 {
         return 0;
     }
+    // Scale x by an even power of 4^k into t in [64, 256), so that
+    // sqrt(x) = sqrt(t) * 2^k with sqrt(t) in [8, 16).
     let bits = 32 - x.leading_zeros();
-    // 2^ceil(bits/2) >= sqrt(x).
-    let mut y = 1u32 << bits.div_ceil(2);
+    let k = (bits as i32 - 7) / 2;
+    let t = if k >= 0 { x >> (2 * k) } else { x << (-2 * k) };
+    let seed = u32::from(*SQRT_SEED.get(t as usize & 0xff).unwrap_or(&255));
+    // seed / 16 * 2^k, rounded up to at least 1.
+    let mut y = if k >= 4 {
+        seed << (k - 4)
+    } else {
+        (seed >> (4 - k)).max(1)
+    };
+    // One step from anywhere lands at or above the root (AM-GM).
+    y = (y + x / y).div_ceil(2);
     loop {
         let next = (y + x / y) / 2;
         if next >= y {

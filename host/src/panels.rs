@@ -72,7 +72,7 @@ fn to_u8(v: f32) -> u8 {
 
 /// L* (0..100) as grey 0..255.
 pub fn lightness(luv: &[Luv], width: usize, height: usize) -> GrayImage {
-    grey_from(luv, width, height, |p| to_u8(p.l.to_num::<f32>() * 2.55))
+    grey_from(luv, width, height, |p| to_u8(p.l().to_num::<f32>() * 2.55))
 }
 
 /// C~ scaled so that `max` is white (all black when `max` is 0).
@@ -125,9 +125,9 @@ pub fn xyz_to_srgb_matrix() -> [[f32; 3]; 3] {
 /// CIELUV (D65) to 8-bit sRGB, clipping out-of-gamut colours.
 pub fn luv_to_srgb(p: Luv, xyz_to_rgb: &[[f32; 3]; 3]) -> Rgb8 {
     let (l, u, v) = (
-        p.l.to_num::<f32>(),
-        p.u.to_num::<f32>(),
-        p.v.to_num::<f32>(),
+        p.l().to_num::<f32>(),
+        p.u().to_num::<f32>(),
+        p.v().to_num::<f32>(),
     );
     if l <= 0.0 {
         return Rgb8::new(0, 0, 0);

@@ -47,21 +47,31 @@ const L_TABLE_FRAC: u32 = 9;
 const L_INDEX_SHIFT: u32 = XYZ_FRAC - 10;
 const UV_FRAC: u32 = 18;
 
-/// A CIELUV pixel, each channel in [`I10F6`].
+/// Largest |raw Q6 value| a [`Luv`] channel holds: ±255.98 CIELUV units.
+/// Real CIELUV of sRGB stays within L* 0..100, u* −83..175, v* −134..107
+/// (±11 200 LSB), so conversion never reaches it. The bound keeps every
+/// channel difference below 2^15, so squared distances are exact in `u32`.
+pub const LUV_LIMIT_BITS: i16 = 16_383;
+
+/// A CIELUV pixel, each channel in [`I10F6`] within ±[`LUV_LIMIT_BITS`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[repr(C)]
 pub struct Luv {
-    /// Lightness L*, 0..100.
-    pub l: I10F6,
-    /// Red–green u*.
-    pub u: I10F6,
-    /// Yellow–blue v*.
-    pub v: I10F6,
+    l: I10F6,
+    u: I10F6,
+    v: I10F6,
 }
 
 impl Luv {
-    /// A pixel from the raw Q6 bits of its channels.
+    /// A pixel from raw Q6 bits, each clamped to ±[`LUV_LIMIT_BITS`].
     pub const fn from_bits(l: i16, u: i16, v: i16) -> Self {
+        Self::in_range(clamp_bits(l), clamp_bits(u), clamp_bits(v))
+    }
+
+    /// A pixel from bits the caller has proven to lie within the limit
+    /// (conversion output, means of valid pixels).
+    #[inline(always)]
+    pub(crate) const fn in_range(l: i16, u: i16, v: i16) -> Self {
         Self {
             l: I10F6::from_bits(l),
             u: I10F6::from_bits(u),
@@ -72,6 +82,31 @@ impl Luv {
     /// The raw Q6 bits `[l, u, v]`.
     pub const fn to_bits(self) -> [i16; 3] {
         [self.l.to_bits(), self.u.to_bits(), self.v.to_bits()]
+    }
+
+    /// Lightness L*, 0..100.
+    pub const fn l(self) -> I10F6 {
+        self.l
+    }
+
+    /// Red–green u*.
+    pub const fn u(self) -> I10F6 {
+        self.u
+    }
+
+    /// Yellow–blue v*.
+    pub const fn v(self) -> I10F6 {
+        self.v
+    }
+}
+
+const fn clamp_bits(x: i16) -> i16 {
+    if x > LUV_LIMIT_BITS {
+        LUV_LIMIT_BITS
+    } else if x < -LUV_LIMIT_BITS {
+        -LUV_LIMIT_BITS
+    } else {
+        x
     }
 }
 
@@ -163,17 +198,19 @@ impl LuvTables {
 
         let denom = x + 15 * y + 3 * z;
         if denom == 0 {
-            return Luv::from_bits(l_bits, 0, 0);
+            return Luv::in_range(l_bits, 0, 0);
         }
         let (d, nu, nv) = normalise(denom, 4 * x, 9 * y);
         let [wu, wv] = self.white;
         let chroma = |n: u32, white: i32| {
-            let diff = div_q18(n, d) as i32 - white;
-            // 13 * L(Q23) * diff(Q18) < 2^52; back to Q6.
-            let q = 13 * i64::from(l_q23) * i64::from(diff);
+            // |13 * diff| < 2^24 fits i32, so the product is one 32x32->64
+            // multiply: L(Q23) * 13 diff(Q18) < 2^54; back to Q6.
+            let diff13 = 13 * (div_q18(n, d) as i32 - white);
+            let q = i64::from(l_q23) * i64::from(diff13);
             round_shift(q, L_TABLE_FRAC + L_INDEX_SHIFT + UV_FRAC - 6) as i16
         };
-        Luv::from_bits(l_bits, chroma(nu, wu), chroma(nv, wv))
+        // In range: |L*| <= 100, |u*|, |v*| <= 175 units (module docs).
+        Luv::in_range(l_bits, chroma(nu, wu), chroma(nv, wv))
     }
 }
 

@@ -41,8 +41,8 @@ mod ring;
 mod smooth;
 
 pub use luv::{
-    lightness, srgb_to_linear, Luv, LuvTables, CIE_EPSILON, CIE_KAPPA, MAX_ERR_L, MAX_ERR_U,
-    MAX_ERR_V, SRGB_TO_XYZ, WHITE_U, WHITE_V,
+    lightness, srgb_to_linear, Luv, LuvTables, CIE_EPSILON, CIE_KAPPA, LUV_LIMIT_BITS, MAX_ERR_L,
+    MAX_ERR_U, MAX_ERR_V, SRGB_TO_XYZ, WHITE_U, WHITE_V,
 };
 pub use ring::row_scratch_len;
 pub use smooth::{smooth, smooth_step, SmoothParams, MAX_ERR_SMOOTH_STEP_LSB};
@@ -182,9 +182,8 @@ fn conspicuity_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [EdgeCell]
             .max(dist2(bits(a0), bits(c2)))
             .max(dist2(bits(a1), bits(c1)))
             .max(dist2(bits(a2), bits(c0)));
-        // Q12 squared distance -> Q6 distance, saturating below OFF.
-        let c =
-            isqrt_round(u32::try_from(d).unwrap_or(u32::MAX)).min(u32::from(u16::MAX - 1)) as u16;
+        // Q12 squared distance -> Q6 distance; below 2^16 - 1 = OFF.
+        let c = isqrt_round(d).min(u32::from(u16::MAX - 1)) as u16;
         *o = MaybeOff::from_raw(U10F6::from_bits(c));
         max = max.max(c);
     }

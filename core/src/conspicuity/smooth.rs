@@ -4,7 +4,7 @@
 //! pairs, offsets (1,0), (1,1), (0,1), (-1,1)), the cell keeps the member
 //! nearer to the centre in CIELUV distance (the `p - δ` member on a tie). The
 //! output is the mean of the centre and the 4 kept pixels, rounded by
-//! [`div_round`]. Across an edge the kept members lie on the centre's side,
+//! `div5_round`. Across an edge the kept members lie on the centre's side,
 //! so the edge is not blurred; inside a region the cell averages, like the
 //! centre of a difference-of-Gaussians. [`SmoothParams::iterations`] repeats
 //! it; each repetition widens the smoothing while edges stay put.
@@ -12,7 +12,6 @@
 
 use super::ring::Ring;
 use super::{ConspicuityError, Luv};
-use crate::fixed::div_round;
 use crate::image::ImageViewMut;
 
 /// Largest error of one [`smooth_step`] against its f32 reference given the
@@ -77,26 +76,35 @@ pub(crate) fn bits(p: Luv) -> [i32; 3] {
     p.to_bits().map(i32::from)
 }
 
-/// Squared CIELUV distance in Q12. `u64` because arbitrary `i16` inputs can
-/// exceed `u32`; the CIELUV of real sRGB stays below 2^30.
+/// Squared CIELUV distance in Q12, exact: [`Luv`] channels lie within
+/// ±16 383, so each difference is below 2^15, each square below 2^30 and
+/// the sum below 3 · 2^30 < 2^32.
 #[inline(always)]
-pub(crate) fn dist2(a: [i32; 3], b: [i32; 3]) -> u64 {
+pub(crate) fn dist2(a: [i32; 3], b: [i32; 3]) -> u32 {
     let sq = |x: i32, y: i32| {
-        let d = u64::from((x - y).unsigned_abs());
-        d * d
+        let d = x - y;
+        (d * d) as u32
     };
     sq(a[0], b[0]) + sq(a[1], b[1]) + sq(a[2], b[2])
 }
 
 /// The pair member nearer to `c`; `minus` on a tie.
 #[inline(always)]
-fn nearer(c: [i32; 3], minus: Luv, plus: Luv) -> [i32; 3] {
-    let (m, p) = (bits(minus), bits(plus));
-    if dist2(c, m) <= dist2(c, p) {
-        m
+fn nearer(c: [i32; 3], minus: [i32; 3], plus: [i32; 3]) -> [i32; 3] {
+    if dist2(c, minus) <= dist2(c, plus) {
+        minus
     } else {
-        p
+        plus
     }
+}
+
+/// `round(s / 5)`, ties toward +∞, for `|s| <= 5 · 2^15`: a bias makes the
+/// dividend non-negative so the division is an unsigned multiply-shift.
+#[inline(always)]
+fn div5_round(s: i32) -> i16 {
+    // floor((2s + 5) / 10) = floor((2s + 5 + 327 680) / 10) - 32 768.
+    let biased = (2 * s + 5 + 327_680) as u32;
+    ((biased / 10) as i32 - 32_768) as i16
 }
 
 fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) {
@@ -107,10 +115,10 @@ fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) {
         };
         let c = bits(b1);
         let kept = [
-            nearer(c, b0, b2), // (1, 0)
-            nearer(c, a0, c2), // (1, 1)
-            nearer(c, a1, c1), // (0, 1)
-            nearer(c, a2, c0), // (-1, 1)
+            nearer(c, bits(b0), bits(b2)), // (1, 0)
+            nearer(c, bits(a0), bits(c2)), // (1, 1)
+            nearer(c, bits(a1), bits(c1)), // (0, 1)
+            nearer(c, bits(a2), bits(c0)), // (-1, 1)
         ];
         let mut sum = c;
         for k in kept {
@@ -118,9 +126,9 @@ fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) {
             sum[1] += k[1];
             sum[2] += k[2];
         }
-        // The mean of 5 values in the I10F6 range stays in range.
-        let [l, u, v] = sum.map(|s| div_round(s, 5) as i16);
-        *o = Luv::from_bits(l, u, v);
+        // The mean of 5 in-range values is in range.
+        let [l, u, v] = sum.map(div5_round);
+        *o = Luv::in_range(l, u, v);
     }
 }
 
@@ -153,14 +161,14 @@ mod tests {
         let mut step = lum(&[0, 0, 0, 0, 640, 640, 640, 640]);
         run(&mut step, 8, 1, 3);
         assert_eq!(
-            step.map(|p| p.l.to_bits()),
+            step.map(|p| p.l().to_bits()),
             [0, 0, 0, 0, 640, 640, 640, 640]
         );
         let mut spike = lum(&[100, 100, 100, 160, 100, 100, 100, 100]);
         run(&mut spike, 8, 1, 1);
         // Three pairs keep a 100; the vertical pair replicates the centre
         // in a one-row image: (160 + 100 + 100 + 160 + 100) / 5.
-        assert_eq!(spike[3].l.to_bits(), 124);
+        assert_eq!(spike[3].l().to_bits(), 124);
     }
 
     #[test]

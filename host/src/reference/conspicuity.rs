@@ -19,7 +19,7 @@ pub type EdgeCellF = Option<f32>;
 
 /// The f32 value of a fixed-point CIELUV pixel (exact).
 pub fn luv_to_f32(p: Luv) -> LuvF {
-    [p.l.to_num(), p.u.to_num(), p.v.to_num()]
+    [p.l().to_num(), p.u().to_num(), p.v().to_num()]
 }
 
 fn check_size(expected: (usize, usize), got: (usize, usize)) -> Result<(), ConspicuityError> {
