@@ -30,6 +30,8 @@ pub const fn div_round(x: i32, d: i32) -> i32 {
 }
 
 /// `floor(16 · sqrt(t))` for `t` in 0..256: the first guess of [`isqrt_round`].
+// Evaluated at compile time: an index out of bounds would fail the build.
+#[allow(clippy::indexing_slicing)]
 const SQRT_SEED: [u8; 256] = {
     let mut t = [0u8; 256];
     let mut i = 0;
