@@ -98,13 +98,11 @@ fn stack_peak_bytes() -> usize {
         static _stack_start: u32;
         static _stack_end: u32;
     }
-    // SAFETY: only the addresses of the linker symbols are taken here.
-    let (top, bottom) = unsafe {
-        (
-            core::ptr::addr_of!(_stack_start) as usize,
-            core::ptr::addr_of!(_stack_end) as usize,
-        )
-    };
+    // Taking the address of an extern static needs no `unsafe`.
+    let (top, bottom) = (
+        core::ptr::addr_of!(_stack_start) as usize,
+        core::ptr::addr_of!(_stack_end) as usize,
+    );
     let mut addr = bottom;
     // SAFETY: [_stack_end, _stack_start) is RAM reserved for the stack; reads are aligned words.
     while addr < top

@@ -55,6 +55,9 @@ pub enum Command {
         #[arg(long, default_value_t = 160)]
         width: u32,
     },
+    /// Print the core's working memory per stage and frame size, from its
+    /// `const fn`s (`scratch <stage> <W>x<H> <bytes>` lines).
+    Scratch,
 }
 
 /// Runs the parsed command line; returns the summary to print.
@@ -68,6 +71,7 @@ pub fn run(cli: Cli) -> Result<Summary> {
         Some(Command::Conspicuity { image, out, width }) => {
             run_image(&ImageOptions { image, out, width })
         }
+        Some(Command::Scratch) => Ok(scratch_summary()),
     }
 }
 
@@ -117,4 +121,19 @@ pub fn run_image(opts: &ImageOptions) -> Result<Summary> {
 
     finish(&opts.out, out, &mut summary, start)?;
     Ok(summary)
+}
+
+/// Frame sizes the `scratch` command reports.
+pub const SCRATCH_SIZES: [(usize, usize); 2] = [(160, 120), (320, 240)];
+
+/// `protogist scratch`: core working memory from the stages' `const fn`s.
+pub fn scratch_summary() -> Summary {
+    let mut s = Summary::new("protogist scratch: core working memory, bytes");
+    for (w, h) in SCRATCH_SIZES {
+        s.push(
+            format!("scratch conspicuity {w}x{h}"),
+            protogist::conspicuity::scratch_bytes(w, h),
+        );
+    }
+    s
 }
