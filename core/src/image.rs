@@ -100,6 +100,22 @@ pub const fn buffer_len(width: usize, height: usize, stride: usize) -> Result<us
     Ok((height - 1) * stride + width)
 }
 
+/// Checks that two images have the same size: a stereo pair, or an image
+/// and a map computed from it.
+///
+/// # Errors
+/// [`ImageError::SizeMismatch`] with `a`'s size as the expected one.
+pub fn check_same_size<A, B>(a: &ImageView<'_, A>, b: &ImageView<'_, B>) -> Result<(), ImageError> {
+    if a.size() == b.size() {
+        Ok(())
+    } else {
+        Err(ImageError::SizeMismatch {
+            expected: a.size(),
+            got: b.size(),
+        })
+    }
+}
+
 /// An 8-bit grey pixel.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[repr(transparent)]
@@ -476,6 +492,21 @@ mod tests {
         assert!(img.sub_view(2, 0, 2, 1).is_none());
         assert!(img.sub_view(0, 0, 0, 1).is_none());
         assert!(img.sub_view(3, 0, 1, 1).is_none());
+    }
+
+    #[test]
+    fn a_pair_of_different_sizes_is_a_typed_error() {
+        let (l, r) = ([Rgb8::default(); 12], [Rgb8::default(); 12]);
+        let left = ImageView::packed(&l, 4, 3).unwrap();
+        let right = ImageView::packed(&r, 3, 4).unwrap();
+        assert_eq!(check_same_size(&left, &left), Ok(()));
+        assert_eq!(
+            check_same_size(&left, &right),
+            Err(ImageError::SizeMismatch {
+                expected: (4, 3),
+                got: (3, 4)
+            })
+        );
     }
 
     #[test]

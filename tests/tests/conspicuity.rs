@@ -245,3 +245,36 @@ fn whole_stage_matches_its_steps() {
     assert!(report.on_count > 0 && (report.on_count as usize) < w * h / 2);
     assert_ne!(checksum, 0);
 }
+
+/// Degenerate shapes through the whole default stage, fixed against float:
+/// 1x1, a single row and a single column (every neighbour is replicated).
+#[test]
+fn one_pixel_rows_and_columns_run_and_agree() {
+    for (w, h) in [(1, 1), (7, 1), (1, 7), (2, 2)] {
+        let px: Vec<protogist::image::Rgb8> = (0..w * h)
+            .map(|i| protogist::image::Rgb8::new((i * 37) as u8, (200 - i * 25) as u8, 90))
+            .collect();
+        let rgb = ImageView::packed(&px, w, h).unwrap();
+        let (mut luv, mut sm, mut rows, mut c) = (
+            vec![Luv::default(); w * h],
+            vec![Luv::default(); w * h],
+            vec![Luv::default(); fx::row_scratch_len(w)],
+            vec![EdgeCell::OFF; w * h],
+        );
+        let params = fx::EdgeParams::default();
+        let mut bufs = fx::EdgeBuffers::new(w, h, &mut luv, &mut sm, &mut rows, &mut c).unwrap();
+        let report = fx::edge_conspicuity(&TABLES, &params, &rgb, &mut bufs).unwrap();
+        let float = fl::edge_conspicuity(&params, &rgb).unwrap();
+        if w * h == 1 {
+            // A lone pixel has no pair to differ from.
+            assert_eq!((report.max.to_bits(), report.on_count), (0, 0));
+        }
+        for (a, b) in bufs.conspicuity().pixels().zip(&float.conspicuity) {
+            assert_eq!(a.is_on(), b.is_some(), "{w}x{h}");
+        }
+        assert!(
+            (report.max.to_num::<f32>() - float.max).abs() < 1.0,
+            "{w}x{h}"
+        );
+    }
+}

@@ -38,7 +38,11 @@ pub fn run_ci() -> Result<CiSummary> {
     let (_, t) = step("fetch-data: aloe stereo pair", data::fetch)?;
     timed("fetch-data", t);
     let (totals, t) = step("test: cargo test --workspace", || {
-        let out = util::run_tee(host_cargo().args(["test", "--locked", "--workspace"]))?;
+        // The real-data tests must not skip in CI: a missing file fails them.
+        let mut cmd = host_cargo();
+        cmd.args(["test", "--locked", "--workspace"])
+            .env("PROTOGIST_REQUIRE_DATA", "1");
+        let out = util::run_tee(&mut cmd)?;
         Ok(util::test_totals(&out))
     })?;
     timed("test", t);

@@ -16,12 +16,14 @@ const FILES: [(&str, &[u8]); 3] = [
     ("aloeGT.png", PNG),
 ];
 
-/// `$PROTOGIST_DATA`, else `<workspace>/.cache/data/aloe`.
+/// `<data root>/aloe`, where the data root is `$PROTOGIST_DATA`, else
+/// `<workspace>/.cache/data` (the same rule as the tests' `data_dir`).
 pub fn data_dir() -> PathBuf {
     std::env::var_os("PROTOGIST_DATA")
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)
-        .unwrap_or_else(|| root().join(".cache/data/aloe"))
+        .unwrap_or_else(|| root().join(".cache/data"))
+        .join("aloe")
 }
 
 fn valid(path: &Path, magic: &[u8]) -> bool {

@@ -353,3 +353,102 @@ pub fn edge_conspicuity(
     let on_count = threshold(&mut bufs.conspicuity, max, params.threshold_percent)?;
     Ok(EdgeReport { max, on_count })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const W: usize = 5;
+    const H: usize = 4;
+
+    fn grey(v: u8) -> [Rgb8; W * H] {
+        [Rgb8::new(v, v, v); W * H]
+    }
+
+    #[test]
+    fn buffers_of_the_wrong_size_are_typed_errors() {
+        let (mut a, mut b, mut r, mut c) = (
+            [Luv::default(); W * H],
+            [Luv::default(); W * H],
+            [Luv::default(); row_scratch_len(W)],
+            [EdgeCell::OFF; W * H],
+        );
+        let short = EdgeBuffers::new(W, H + 1, &mut a, &mut b, &mut r, &mut c).err();
+        assert_eq!(
+            short,
+            Some(ConspicuityError::Image(ImageError::BufferTooSmall {
+                needed: 25,
+                got: 20
+            }))
+        );
+        let zero = EdgeBuffers::new(0, H, &mut a, &mut b, &mut r, &mut c).err();
+        assert_eq!(zero, Some(ConspicuityError::Image(ImageError::ZeroSize)));
+        let rows = EdgeBuffers::new(W, H, &mut a, &mut b, &mut r[..10], &mut c).err();
+        assert_eq!(
+            rows,
+            Some(ConspicuityError::ScratchTooSmall {
+                needed: 21,
+                got: 10
+            })
+        );
+    }
+
+    #[test]
+    fn input_of_another_size_and_bad_threshold_are_typed_errors() {
+        let (mut a, mut b, mut r, mut c) = (
+            [Luv::default(); W * H],
+            [Luv::default(); W * H],
+            [Luv::default(); row_scratch_len(W)],
+            [EdgeCell::OFF; W * H],
+        );
+        let mut bufs = EdgeBuffers::new(W, H, &mut a, &mut b, &mut r, &mut c).unwrap();
+        let px = grey(9);
+        let rgb = ImageView::packed(&px, H, W).unwrap();
+        let t = LuvTables::new();
+        assert_eq!(
+            edge_conspicuity(&t, &EdgeParams::default(), &rgb, &mut bufs),
+            Err(ConspicuityError::SizeMismatch {
+                expected: (W, H),
+                got: (H, W)
+            })
+        );
+        let rgb = ImageView::packed(&px, W, H).unwrap();
+        let params = EdgeParams {
+            threshold_percent: 101,
+            ..EdgeParams::default()
+        };
+        assert_eq!(
+            edge_conspicuity(&t, &params, &rgb, &mut bufs),
+            Err(ConspicuityError::BadThreshold(101))
+        );
+    }
+
+    #[test]
+    fn a_flat_image_has_no_edges() {
+        let (mut a, mut b, mut r, mut c) = (
+            [Luv::default(); W * H],
+            [Luv::default(); W * H],
+            [Luv::default(); row_scratch_len(W)],
+            [EdgeCell::OFF; W * H],
+        );
+        let mut bufs = EdgeBuffers::new(W, H, &mut a, &mut b, &mut r, &mut c).unwrap();
+        let px = grey(200);
+        let rgb = ImageView::packed(&px, W, H).unwrap();
+        let report =
+            edge_conspicuity(&LuvTables::new(), &EdgeParams::default(), &rgb, &mut bufs).unwrap();
+        assert_eq!(
+            report,
+            EdgeReport {
+                max: U10F6::ZERO,
+                on_count: 0
+            }
+        );
+        assert!(bufs.conspicuity().pixels().all(EdgeCell::is_off));
+    }
+
+    #[test]
+    fn out_of_range_luv_is_clamped_at_construction() {
+        let p = Luv::from_bits(i16::MAX, i16::MIN, 5);
+        assert_eq!(p.to_bits(), [LUV_LIMIT_BITS, -LUV_LIMIT_BITS, 5]);
+    }
+}
