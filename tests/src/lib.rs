@@ -84,3 +84,47 @@ pub fn data_file(rel: &str) -> Option<PathBuf> {
     );
     None
 }
+
+/// Owned storage for [`protogist::conspicuity::EdgeBuffers`] at one size.
+pub struct EdgeStorage {
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+    /// CIELUV map.
+    pub luv: Vec<protogist::conspicuity::Luv>,
+    /// Smoothed map.
+    pub smoothed: Vec<protogist::conspicuity::Luv>,
+    /// Row scratch.
+    pub rows: Vec<protogist::conspicuity::Luv>,
+    /// Conspicuity map.
+    pub cmap: Vec<protogist::conspicuity::EdgeCell>,
+}
+
+impl EdgeStorage {
+    /// Storage sized by the stage's `const fn`s.
+    pub fn new(width: usize, height: usize) -> Self {
+        use protogist::conspicuity::{luv_len, row_scratch_len, EdgeCell, Luv};
+        Self {
+            width,
+            height,
+            luv: vec![Luv::default(); luv_len(width, height)],
+            smoothed: vec![Luv::default(); luv_len(width, height)],
+            rows: vec![Luv::default(); row_scratch_len(width)],
+            cmap: vec![EdgeCell::OFF; luv_len(width, height)],
+        }
+    }
+
+    /// The stage's view of the storage.
+    pub fn buffers(&mut self) -> protogist::conspicuity::EdgeBuffers<'_> {
+        protogist::conspicuity::EdgeBuffers::new(
+            self.width,
+            self.height,
+            &mut self.luv,
+            &mut self.smoothed,
+            &mut self.rows,
+            &mut self.cmap,
+        )
+        .expect("storage is sized by the stage's const fns")
+    }
+}

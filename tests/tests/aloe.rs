@@ -5,23 +5,27 @@
 //! `PROTOGIST_REQUIRE_DATA=1`, so there it cannot be skipped.
 
 use protogist::conspicuity::{self as fx, EdgeParams, LuvTables};
-use protogist::image::{ImageView, ImageViewMut};
+use protogist::image::{ImageView, ImageViewMut, Rgb8};
 use protogist_host::io::{area_downscale, load_rgb, to_core_rgb, working_size};
 use protogist_host::reference::conspicuity::{self as fl, luv_to_f32, LuvF};
 use protogist_host::stages::run_conspicuity;
 use protogist_tests::data_file;
 
+/// Aloe's left view area-downscaled to 160 px wide, or `None` when the data
+/// is missing and not required.
+fn aloe_left_160() -> Option<(Vec<Rgb8>, usize, usize)> {
+    let img = load_rgb(&data_file("aloe/aloeL.jpg")?).unwrap();
+    let (w, h) = working_size(img.width(), img.height(), 160).unwrap();
+    let rgb = to_core_rgb(&area_downscale(&img, w, h));
+    assert_eq!(w, 160);
+    Some((rgb, w as usize, h as usize))
+}
+
 #[test]
 fn aloe_160_fixed_against_float() {
-    let Some(path) = data_file("aloe/aloeL.jpg") else {
+    let Some((rgb, w, h)) = aloe_left_160() else {
         return;
     };
-    let img = load_rgb(&path).unwrap();
-    let (w, h) = working_size(img.width(), img.height(), 160).unwrap();
-    let small = area_downscale(&img, w, h);
-    let (w, h) = (w as usize, h as usize);
-    assert_eq!(w, 160);
-    let rgb = to_core_rgb(&small);
     let view = ImageView::packed(&rgb, w, h).unwrap();
     let params = EdgeParams::default();
     let fixed = run_conspicuity(&LuvTables::new(), &params, &rgb, w, h).unwrap();
@@ -117,13 +121,9 @@ fn neighbourhood_max(img: &ImageView<'_, f32>, x: usize, y: usize) -> f32 {
 /// bound E of docs/ERROR_BOUNDS.md section 4.
 #[test]
 fn aloe_160_without_smoothing_within_chain_bound_everywhere() {
-    let Some(path) = data_file("aloe/aloeL.jpg") else {
+    let Some((rgb, w, h)) = aloe_left_160() else {
         return;
     };
-    let img = load_rgb(&path).unwrap();
-    let (w, h) = working_size(img.width(), img.height(), 160).unwrap();
-    let rgb = to_core_rgb(&area_downscale(&img, w, h));
-    let (w, h) = (w as usize, h as usize);
     let mut params = EdgeParams::default();
     params.smooth.iterations = 0;
     let fixed = run_conspicuity(&LuvTables::new(), &params, &rgb, w, h).unwrap();

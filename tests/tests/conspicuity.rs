@@ -7,7 +7,7 @@ use proptest::prelude::*;
 use protogist::conspicuity::{self as fx, EdgeCell, Luv, LuvTables};
 use protogist::image::{ImageView, ImageViewMut};
 use protogist_host::reference::conspicuity::{self as fl, luv_to_f32, LuvF};
-use protogist_tests::{rgb_image, RgbCase};
+use protogist_tests::{rgb_image, EdgeStorage, RgbCase};
 use std::sync::LazyLock;
 
 static TABLES: LazyLock<LuvTables> = LazyLock::new(LuvTables::new);
@@ -205,16 +205,17 @@ fn whole_stage_matches_its_steps() {
     )
     .unwrap();
     let rgb = ImageView::packed(&px, w, h).unwrap();
-    let (mut luv, mut sm, mut rows, mut c) = (
-        vec![Luv::default(); w * h],
-        vec![Luv::default(); w * h],
-        vec![Luv::default(); fx::row_scratch_len(w)],
-        vec![EdgeCell::OFF; w * h],
-    );
+    let mut store = EdgeStorage::new(w, h);
     let params = fx::EdgeParams::default();
-    let mut bufs = fx::EdgeBuffers::new(w, h, &mut luv, &mut sm, &mut rows, &mut c).unwrap();
+    let mut bufs = store.buffers();
     let report = fx::edge_conspicuity(&TABLES, &params, &rgb, &mut bufs).unwrap();
     let checksum = bufs.checksum();
+    let EdgeStorage {
+        luv,
+        smoothed: sm,
+        cmap: c,
+        ..
+    } = store;
 
     let case = RgbCase {
         data: px.clone(),
@@ -255,14 +256,9 @@ fn one_pixel_rows_and_columns_run_and_agree() {
             .map(|i| protogist::image::Rgb8::new((i * 37) as u8, (200 - i * 25) as u8, 90))
             .collect();
         let rgb = ImageView::packed(&px, w, h).unwrap();
-        let (mut luv, mut sm, mut rows, mut c) = (
-            vec![Luv::default(); w * h],
-            vec![Luv::default(); w * h],
-            vec![Luv::default(); fx::row_scratch_len(w)],
-            vec![EdgeCell::OFF; w * h],
-        );
+        let mut store = EdgeStorage::new(w, h);
         let params = fx::EdgeParams::default();
-        let mut bufs = fx::EdgeBuffers::new(w, h, &mut luv, &mut sm, &mut rows, &mut c).unwrap();
+        let mut bufs = store.buffers();
         let report = fx::edge_conspicuity(&TABLES, &params, &rgb, &mut bufs).unwrap();
         let float = fl::edge_conspicuity(&params, &rgb).unwrap();
         if w * h == 1 {

@@ -31,13 +31,8 @@ fn score(k: u8) -> Score {
             })
         })
     };
-    let (mut luv, mut sm, mut rows, mut c) = (
-        vec![Luv::default(); w * h],
-        vec![Luv::default(); w * h],
-        vec![Luv::default(); row_scratch_len(w)],
-        vec![EdgeCell::OFF; w * h],
-    );
-    let mut bufs = EdgeBuffers::new(w, h, &mut luv, &mut sm, &mut rows, &mut c).unwrap();
+    let mut store = protogist_tests::EdgeStorage::new(w, h);
+    let mut bufs = store.buffers();
     let params = EdgeParams {
         smooth: SmoothParams { iterations: k },
         threshold_percent: 10,

@@ -361,18 +361,29 @@ mod tests {
     const W: usize = 5;
     const H: usize = 4;
 
+    type Storage = (
+        [Luv; W * H],
+        [Luv; W * H],
+        [Luv; row_scratch_len(W)],
+        [EdgeCell; W * H],
+    );
+
+    fn storage() -> Storage {
+        (
+            [Luv::default(); W * H],
+            [Luv::default(); W * H],
+            [Luv::default(); row_scratch_len(W)],
+            [EdgeCell::OFF; W * H],
+        )
+    }
+
     fn grey(v: u8) -> [Rgb8; W * H] {
         [Rgb8::new(v, v, v); W * H]
     }
 
     #[test]
     fn buffers_of_the_wrong_size_are_typed_errors() {
-        let (mut a, mut b, mut r, mut c) = (
-            [Luv::default(); W * H],
-            [Luv::default(); W * H],
-            [Luv::default(); row_scratch_len(W)],
-            [EdgeCell::OFF; W * H],
-        );
+        let (mut a, mut b, mut r, mut c) = storage();
         let short = EdgeBuffers::new(W, H + 1, &mut a, &mut b, &mut r, &mut c).err();
         assert_eq!(
             short,
@@ -395,12 +406,7 @@ mod tests {
 
     #[test]
     fn input_of_another_size_and_bad_threshold_are_typed_errors() {
-        let (mut a, mut b, mut r, mut c) = (
-            [Luv::default(); W * H],
-            [Luv::default(); W * H],
-            [Luv::default(); row_scratch_len(W)],
-            [EdgeCell::OFF; W * H],
-        );
+        let (mut a, mut b, mut r, mut c) = storage();
         let mut bufs = EdgeBuffers::new(W, H, &mut a, &mut b, &mut r, &mut c).unwrap();
         let px = grey(9);
         let rgb = ImageView::packed(&px, H, W).unwrap();
@@ -425,12 +431,7 @@ mod tests {
 
     #[test]
     fn a_flat_image_has_no_edges() {
-        let (mut a, mut b, mut r, mut c) = (
-            [Luv::default(); W * H],
-            [Luv::default(); W * H],
-            [Luv::default(); row_scratch_len(W)],
-            [EdgeCell::OFF; W * H],
-        );
+        let (mut a, mut b, mut r, mut c) = storage();
         let mut bufs = EdgeBuffers::new(W, H, &mut a, &mut b, &mut r, &mut c).unwrap();
         let px = grey(200);
         let rgb = ImageView::packed(&px, W, H).unwrap();
