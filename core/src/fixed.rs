@@ -9,13 +9,14 @@
 //! |---|---|---|---|
 //! | CIELUV L*, u*, v* | [`I10F6`] | 1/64 | ±512 |
 //! | conspicuity C~ (CIELUV distance) | [`U10F6`] | 1/64 | 0..1024 |
+//! | disparity, px | [`U8F8`] | 1/256 | 0..256 |
 //!
 //! **Rounding rule.** Every requantisation in core rounds to nearest, ties
 //! toward +∞: add half an LSB of the target, then shift or divide with floor
 //! ([`round_shift`], [`div_round`]). The float references do not round; the
 //! half-LSB this costs is part of every stage's error bound.
 
-pub use fixed::types::{I10F6, U10F6};
+pub use fixed::types::{I10F6, U10F6, U8F8};
 
 /// `x / 2^n` rounded to nearest, ties toward +∞. `n` must be in `1..=62`.
 #[inline(always)]

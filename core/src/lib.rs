@@ -35,6 +35,7 @@
 
 pub mod checksum;
 pub mod conspicuity;
+pub mod disparity;
 pub mod fixed;
 pub mod image;
 pub mod off;
