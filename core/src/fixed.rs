@@ -30,6 +30,48 @@ pub const fn div_round(x: i32, d: i32) -> i32 {
     (2 * x + d).div_euclid(2 * d)
 }
 
+/// `x / d` rounded to nearest, ties toward +∞, for `d > 0`: [`div_round`]
+/// in `i64`.
+#[inline(always)]
+pub const fn div_round_i64(x: i64, d: i64) -> i64 {
+    (2 * x + d).div_euclid(2 * d)
+}
+
+/// `floor(sqrt(x))` for `u64`, digit by digit (no division, 32 steps).
+pub const fn isqrt_floor_u64(x: u64) -> u64 {
+    let mut rem = x;
+    let mut root = 0u64;
+    let mut bit = 1u64 << 62;
+    while bit > x {
+        bit >>= 2;
+    }
+    while bit != 0 {
+        if rem >= root + bit {
+            rem -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    root
+}
+
+/// `round(sqrt(x))` for `u64`; [`isqrt_round`] when `x` fits in `u32`.
+#[inline]
+pub fn isqrt_round_u64(x: u64) -> u64 {
+    if let Ok(small) = u32::try_from(x) {
+        return u64::from(isqrt_round(small));
+    }
+    let y = isqrt_floor_u64(x);
+    // x >= (y + 1/2)^2 = y^2 + y + 1/4 rounds up.
+    if x - y * y > y {
+        y + 1
+    } else {
+        y
+    }
+}
+
 /// `floor(16 · sqrt(t))` for `t` in 0..256: the first guess of [`isqrt_round`].
 // Evaluated at compile time: an index out of bounds would fail the build.
 #[allow(clippy::indexing_slicing)]
@@ -104,7 +146,32 @@ mod tests {
     }
 
     #[test]
+    fn isqrt_u64_is_exact() {
+        let xs = (0u64..5000)
+            .chain((0..5000).map(|k| u64::MAX - k * 1_000_003))
+            .chain((1u64..2_000_000).map(|r| r * r))
+            .chain((1u64..2_000_000).map(|r| r * r + r))
+            .chain((1u64..2_000_000).map(|r| r * r + r + 1));
+        for x in xs {
+            let f = isqrt_floor_u64(x);
+            assert!(u128::from(f) * u128::from(f) <= u128::from(x), "x={x}");
+            assert!(
+                u128::from(f + 1) * u128::from(f + 1) > u128::from(x),
+                "x={x}"
+            );
+            let r = isqrt_round_u64(x);
+            // (r - 1/2)^2 <= x < (r + 1/2)^2, times 4.
+            let (x4, r) = (4 * u128::from(x), u128::from(r));
+            assert!(r == 0 || (2 * r - 1) * (2 * r - 1) <= x4, "x={x}");
+            assert!(x4 < (2 * r + 1) * (2 * r + 1), "x={x}");
+        }
+    }
+
+    #[test]
     fn rounding_ties_go_up() {
+        assert_eq!(div_round_i64(5, 2), 3);
+        assert_eq!(div_round_i64(-5, 2), -2);
+        assert_eq!(div_round_i64(-8, 5), -2);
         assert_eq!(round_shift(3, 1), 2); // 1.5 -> 2
         assert_eq!(round_shift(-3, 1), -1); // -1.5 -> -1
         assert_eq!(round_shift(5, 2), 1); // 1.25 -> 1

@@ -1,0 +1,760 @@
+//! Shape feature vectors (paper section 3.5): the 720-element centroidal
+//! profile of a binary object mask.
+//!
+//! The stage is three steps, each callable alone:
+//!
+//! 1. [`centroid`]: the mean pixel position, from exact integer sums,
+//!    rounded to Q8 (1/256 px). Pixel `(x, y)` sits at the point `(x, y)`.
+//! 2. [`radial_profile`]: every contour pixel (see below) in polar
+//!    coordinates about the centroid; per 1° bin the largest and the smallest
+//!    radius (Q8 px); empty bins filled by circular linear interpolation.
+//! 3. [`normalise`]: the 720-vector (360 max radii, then 360 min radii),
+//!    z-normalised into [`ShapeElem`] (`I4F12`).
+//!
+//! [`shape_vector`] runs all three.
+//!
+//! **Contour pixels.** An object pixel (non-zero) is a contour pixel when one
+//! of its 4-neighbours is background (zero) or outside the image; an object
+//! touching the border is closed by the border. The paper follows the
+//! perimeter; we scan. The result is the same because the profile keeps only
+//! the largest and smallest radius per bin, which depend on the *set* of
+//! contour pixels, not on their order, and this set is exactly the union of
+//! the pixels that 8-connected boundary following (Moore tracing, or Suzuki
+//! and Abe's border following) visits on the outer border and on every hole
+//! border: those are the object pixels 4-adjacent to a background pixel,
+//! with the outside of the image counted as background. A mask with several
+//! components contributes every component's contours (the segment stage
+//! hands over one object).
+//!
+//! **Angles.** Images have y growing downwards. The angle of a pixel at
+//! `(dx, dy)` from the centroid is `atan2(-dy, dx)`: counter-clockwise as
+//! seen on screen, 0° pointing right, 90° up, -90° down, ±180° left. Bin `b`
+//! (0..360) holds angles in `[b - 180°, b - 179°)`, so bin 0 is
+//! `[-180°, -179°)` and a pixel straight left of the centroid (180° = -180°)
+//! falls into bin 0. The bin is decided in integers by [`angle_bin`]:
+//! quarter turns, an octant reflection, and a binary search in a table of
+//! `tan(k°)` in Q32. A contour pixel exactly at the centroid has no angle
+//! and is skipped.
+//!
+//! **Empty bins.** A bin without contour pixels (small objects, thin parts)
+//! takes, for the max and the min profile separately, the linear
+//! interpolation between the nearest non-empty bins before and after it,
+//! circularly, rounded to Q8. With one non-empty bin every bin takes its
+//! value. With none (a one-pixel object, whose only pixel is the centroid)
+//! the profile is all zero.
+//!
+//! **Normalisation.** `s^N = (s - mean) / σ` with the population standard
+//! deviation (divide by 720), computed from exact integer sums; each element
+//! is rounded once to `I4F12` (LSB 1/4096) and saturates to
+//! `[-8, 8 - 1/4096]`. A profile with zero variance (every element equal:
+//! a one-, two- or 2x2-pixel object, for instance) has no normalised form and
+//! returns [`ShapeError::ZeroVariance`].
+//!
+//! ```
+//! use protogist::image::ImageView;
+//! use protogist::shape::*;
+//! // A 7x5 mask holding a 5x3 rectangle.
+//! let mut px = [0u8; 35];
+//! for y in 1..4 { for x in 1..6 { px[y * 7 + x] = 1; } }
+//! let mask = ImageView::packed(&px, 7, 5).unwrap();
+//! let mut profile = RadialProfile::new();
+//! let mut v: ShapeVector = [ShapeElem::ZERO; SHAPE_LEN];
+//! let report = shape_vector(&mask, &mut profile, &mut v).unwrap();
+//! assert_eq!((report.centroid.x_q8, report.centroid.y_q8), (3 * 256, 2 * 256));
+//! // Straight right (0°, bin 180) the outline is 2 px away, straight up
+//! // (90°, bin 270) 1 px: the first is above the mean, the second below.
+//! assert_eq!(profile.max()[180], 2 * 256);
+//! assert_eq!(profile.max()[270], 256);
+//! assert!(v[180] > ShapeElem::ZERO && v[270] < ShapeElem::ZERO);
+//! ```
+
+use crate::fixed::{div_round_i64, isqrt_floor_u64, isqrt_round_u64};
+use crate::image::{ImageError, ImageView};
+use core::fmt;
+
+pub use fixed::types::I4F12;
+
+/// Angle bins: 1° each, from -180° to 179°.
+pub const BINS: usize = 360;
+
+/// Elements of a shape vector: [`BINS`] max radii, then [`BINS`] min radii.
+pub const SHAPE_LEN: usize = 2 * BINS;
+
+/// One element of a normalised shape vector: `I4F12`, LSB 1/4096, range
+/// `[-8, 8)`; values beyond saturate.
+pub type ShapeElem = I4F12;
+
+/// A normalised shape vector (1440 bytes).
+pub type ShapeVector = [ShapeElem; SHAPE_LEN];
+
+/// Fraction bits of the centroid and of radii (Q8: 1/256 px).
+pub const FRAC_BITS: u32 = 8;
+
+/// Largest error of a profile element (a max or min radius, interpolated or
+/// not) of [`radial_profile`] against the exact value on the same contour
+/// pixels in the same bins, px: the centroid rounded to Q8 moves every radius
+/// by at most `√2/512`, the radius is rounded once (`1/512`), an interpolated
+/// bin is rounded once more (`1/512`). Derived in `docs/ERROR_BOUNDS.md`,
+/// section 6.
+pub const MAX_ERR_PROFILE_PX: f32 = 0.0067;
+
+/// Relative error of the f32 reference's radii (difference, squares, sum,
+/// square root, interpolation: 6 roundings of 2^-24), to add as
+/// `MAX_ERR_PROFILE_REL_F32 · r_max` to [`MAX_ERR_PROFILE_PX`] when comparing
+/// against it.
+pub const MAX_ERR_PROFILE_REL_F32: f32 = 3.6e-7;
+
+/// Largest error of [`normalise`] against the exact z-score of the same
+/// profile, in output LSBs: one rounding (0.5), plus the floor of the
+/// standard deviation in Q16, which makes every |z| at most 5.7e-7 relative
+/// too large (0.019 LSB at |z| = 8).
+pub const MAX_ERR_NORM_LSB: f32 = 0.52;
+
+/// Errors of the shape stage.
+///
+/// Buffer sizes are carried by the types ([`RadialProfile`],
+/// [`ShapeVector`]); a mask buffer that cannot be viewed as an image is an
+/// [`ImageError`], wrapped here so a caller can build the view with `?`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ShapeError {
+    /// The mask buffer cannot be viewed as an image.
+    Image(ImageError),
+    /// The mask has no object pixel.
+    EmptyMask,
+    /// Every element of the profile is the same (for instance a one-pixel,
+    /// two-pixel or 2x2 object): no standard deviation to divide by.
+    ZeroVariance,
+}
+
+impl fmt::Display for ShapeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Image(e) => write!(f, "shape mask: {e}"),
+            Self::EmptyMask => write!(f, "the mask has no object pixel"),
+            Self::ZeroVariance => write!(
+                f,
+                "the shape profile has zero variance and cannot be normalised"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ShapeError {}
+
+impl From<ImageError> for ShapeError {
+    fn from(e: ImageError) -> Self {
+        Self::Image(e)
+    }
+}
+
+/// The centroid of a mask in Q8 pixel coordinates, and its area.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Centroid {
+    /// Column, Q8 (1/256 px), rounded.
+    pub x_q8: i32,
+    /// Row, Q8, rounded.
+    pub y_q8: i32,
+    /// Object pixels.
+    pub area: u32,
+}
+
+/// The mean position of the object (non-zero) pixels, rounded to Q8.
+///
+/// Sums are exact (`u64`); the division rounds to nearest, ties toward +∞.
+/// Translating the mask by whole pixels translates the result exactly.
+///
+/// # Errors
+/// [`ShapeError::EmptyMask`] when no pixel is set.
+pub fn centroid(mask: &ImageView<'_, u8>) -> Result<Centroid, ShapeError> {
+    let (mut n, mut sx, mut sy) = (0u64, 0u64, 0u64);
+    for (y, row) in mask.rows().enumerate() {
+        let (mut rn, mut rsx) = (0u64, 0u64);
+        for (x, _) in row.iter().enumerate().filter(|(_, &p)| p != 0) {
+            rn += 1;
+            rsx += x as u64;
+        }
+        n += rn;
+        sx += rsx;
+        sy += rn * y as u64;
+    }
+    if n == 0 {
+        return Err(ShapeError::EmptyMask);
+    }
+    // At most 2^26 pixels and coordinates below 2^13: 2^48 after the shift.
+    let q8 = |s: u64| ((2 * (s << FRAC_BITS) + n) / (2 * n)) as i32;
+    Ok(Centroid {
+        x_q8: q8(sx),
+        y_q8: q8(sy),
+        area: n as u32,
+    })
+}
+
+/// Calls `f(x, y)` for every contour pixel, row by row: an object pixel with
+/// a 4-neighbour that is background or outside the image.
+pub fn for_each_contour_pixel(mask: &ImageView<'_, u8>, mut f: impl FnMut(usize, usize)) {
+    let bg = |r: Option<&[u8]>, i: usize| !matches!(r.and_then(|r| r.get(i)), Some(&v) if v != 0);
+    for (y, row) in mask.rows().enumerate() {
+        let up = y.checked_sub(1).and_then(|u| mask.row(u));
+        let down = mask.row(y + 1);
+        for (x, _) in row.iter().enumerate().filter(|(_, &p)| p != 0) {
+            let edge = bg(Some(row), x.wrapping_sub(1))
+                || bg(Some(row), x + 1)
+                || bg(up, x)
+                || bg(down, x);
+            if edge {
+                f(x, y);
+            }
+        }
+    }
+}
+
+/// `round(tan(k°) · 2^32)` for k in 0..45 (from mpmath at 120 bits; a unit
+/// test checks them against `libm`).
+const TAN_Q32: [u64; 45] = [
+    0, 74968933, 149983563, 225089698, 300333370, 375760949, 451419253, 527355674, 603618289,
+    680255991, 757318616, 834857071, 912923481, 991571331, 1070855618, 1150833018, 1231562054,
+    1313103278, 1395519469, 1478875838, 1563240253, 1648683477, 1735279427, 1823105454, 1912242643,
+    2002776142, 2094795517, 2188395142, 2283674620, 2380739248, 2479700525, 2580676708, 2683793431,
+    2789184375, 2896992021, 3007368477, 3120476397, 3236490001, 3355596215, 3477995939, 3603905474,
+    3733558110, 3867205923, 4005121798, 4147601706,
+];
+
+/// `floor(atan(b / a))` in degrees for `0 <= b < a < 2^30`: the largest k
+/// with `tan(k°) <= b / a`, by the table.
+fn octant_floor(a: u64, b: u64) -> usize {
+    // TAN_Q32 < 2^32 and a < 2^30: no product overflows.
+    let count = TAN_Q32.partition_point(|&t| t * a <= b << 32);
+    count.saturating_sub(1)
+}
+
+/// The 1° bin (0..360) of the direction `(dx, dy)` in image coordinates (y
+/// down), at any common scale: the bin of `atan2(-dy, dx)` in degrees, bin
+/// `b` holding `[b - 180°, b - 179°)`. `None` for `(0, 0)`.
+///
+/// Integer only. The decision is exact on the axes and diagonals; elsewhere
+/// it can differ from the real-number bin only when `tan` of the angle's
+/// octant part is within the Q32 table's rounding (2^-33) of `tan(k°)`.
+pub fn angle_bin(dx: i32, dy: i32) -> Option<usize> {
+    let (mut x, mut y) = (i64::from(dx), -i64::from(dy));
+    if x == 0 && y == 0 {
+        return None;
+    }
+    // Turn clockwise by quarter turns into Q0 = {x > 0, y >= 0}, the
+    // half-open quadrant [0°, 90°); each half-open quadrant maps onto the
+    // next exactly, so floor(angle) = floor(angle in Q0) + 90 q.
+    let mut q = 0;
+    while !(x > 0 && y >= 0) {
+        (x, y) = (y, -x);
+        q += 1;
+    }
+    let (x, y) = (x.unsigned_abs(), y.unsigned_abs());
+    let deg = match y.cmp(&x) {
+        core::cmp::Ordering::Equal => 45,
+        core::cmp::Ordering::Less => octant_floor(x, y),
+        // 90° - atan(x / y), and atan(x / y) in (0°, 45°) is never a whole
+        // degree (tan k° is irrational for 0 < k < 45).
+        core::cmp::Ordering::Greater => 89 - octant_floor(y, x),
+    };
+    Some((deg + 90 * q + 180) % BINS)
+}
+
+/// Marks an empty bin while the profile is collected.
+const EMPTY: u32 = u32::MAX;
+
+/// Per-bin max and min radius, Q8 px: the scratch of the stage (2880 bytes,
+/// [`scratch_bytes`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RadialProfile {
+    max: [u32; BINS],
+    min: [u32; BINS],
+}
+
+impl Default for RadialProfile {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RadialProfile {
+    /// An empty profile.
+    pub const fn new() -> Self {
+        Self {
+            max: [0; BINS],
+            min: [EMPTY; BINS],
+        }
+    }
+
+    /// Largest radius per bin, Q8 px (bin `b` is `[b - 180°, b - 179°)`).
+    pub const fn max(&self) -> &[u32; BINS] {
+        &self.max
+    }
+
+    /// Smallest radius per bin, Q8 px.
+    pub const fn min(&self) -> &[u32; BINS] {
+        &self.min
+    }
+
+    /// The 720 profile values: max radii, then min radii.
+    pub fn values(&self) -> impl Iterator<Item = u32> + '_ {
+        self.max.iter().chain(self.min.iter()).copied()
+    }
+}
+
+/// Bytes of the stage's scratch ([`RadialProfile`]).
+pub const fn scratch_bytes() -> usize {
+    core::mem::size_of::<RadialProfile>()
+}
+
+/// What [`radial_profile`] found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ProfileReport {
+    /// Contour pixels binned (the one at the centroid, if any, excluded).
+    pub contour_pixels: u32,
+    /// Bins that had no contour pixel and were interpolated.
+    pub empty_bins: u16,
+}
+
+/// Radius of `(dx, dy)` given in Q8, rounded to Q8.
+fn radius_q8(dx: i32, dy: i32) -> u32 {
+    let (x, y) = (i64::from(dx), i64::from(dy));
+    // |dx|, |dy| < 2^22: the sum is below 2^45, the root below 2^23.
+    isqrt_round_u64((x * x + y * y).unsigned_abs()) as u32
+}
+
+/// Fills the max and min radius of every bin from the contour pixels of
+/// `mask` about `c`, then interpolates the empty bins (module docs).
+pub fn radial_profile(
+    mask: &ImageView<'_, u8>,
+    c: &Centroid,
+    profile: &mut RadialProfile,
+) -> ProfileReport {
+    *profile = RadialProfile::new();
+    let mut contour_pixels = 0u32;
+    for_each_contour_pixel(mask, |x, y| {
+        // x, y < 2^13: Q8 fits i32.
+        let dx = ((x as i32) << FRAC_BITS) - c.x_q8;
+        let dy = ((y as i32) << FRAC_BITS) - c.y_q8;
+        let Some(b) = angle_bin(dx, dy) else {
+            return;
+        };
+        let r = radius_q8(dx, dy);
+        if let (Some(hi), Some(lo)) = (profile.max.get_mut(b), profile.min.get_mut(b)) {
+            *hi = (*hi).max(r);
+            *lo = (*lo).min(r);
+            contour_pixels += 1;
+        }
+    });
+    let empty = profile.min.iter().filter(|&&v| v == EMPTY).count();
+    if empty == BINS {
+        profile.max = [0; BINS];
+        profile.min = [0; BINS];
+    } else {
+        let filled = profile.min.map(|v| v != EMPTY);
+        interpolate(&mut profile.max, &filled);
+        interpolate(&mut profile.min, &filled);
+    }
+    ProfileReport {
+        contour_pixels,
+        empty_bins: empty as u16,
+    }
+}
+
+/// Circular linear interpolation of the bins not `filled`; at least one is.
+fn interpolate(v: &mut [u32; BINS], filled: &[bool; BINS]) {
+    let Some(first) = filled.iter().position(|&f| f) else {
+        return;
+    };
+    let at = |v: &[u32; BINS], i: usize| v.get(i % BINS).copied().unwrap_or(0);
+    let mut last = first;
+    // Walk one full turn from `first`, back to it.
+    for step in 1..=BINS {
+        let i = first + step;
+        if !filled.get(i % BINS).copied().unwrap_or(true) {
+            continue;
+        }
+        let gap = i - last;
+        let (a, b) = (i64::from(at(v, last)), i64::from(at(v, i)));
+        for t in 1..gap {
+            let value = a + div_round_i64((b - a) * t as i64, gap as i64);
+            if let Some(cell) = v.get_mut((last + t) % BINS) {
+                // Between two u32 values: fits.
+                *cell = value as u32;
+            }
+        }
+        last = i;
+    }
+}
+
+/// Fraction bits of the scaled standard deviation in [`normalise`].
+const SIGMA_FRAC_BITS: u32 = 16;
+
+/// `floor(sqrt(x))` for `u128`, digit by digit.
+fn isqrt_floor_u128(x: u128) -> u128 {
+    if let Ok(small) = u64::try_from(x) {
+        return u128::from(isqrt_floor_u64(small));
+    }
+    let mut rem = x;
+    let mut root = 0u128;
+    let mut bit = 1u128 << 126;
+    while bit > x {
+        bit >>= 2;
+    }
+    while bit != 0 {
+        if rem >= root + bit {
+            rem -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    root
+}
+
+/// z-normalises the profile into `out` (max radii, then min radii) and
+/// returns how many elements saturated.
+///
+/// With `d_i = 720 s_i - Σs` (exact) and `S = Σ d_i²` (exact, `u128`),
+/// `z_i = d_i / sqrt(S / 720)`; the root is taken in Q16, then each element
+/// is divided and rounded once.
+///
+/// # Errors
+/// [`ShapeError::ZeroVariance`] when all 720 values are equal.
+pub fn normalise(profile: &RadialProfile, out: &mut ShapeVector) -> Result<u16, ShapeError> {
+    const N: i64 = SHAPE_LEN as i64;
+    // Radii are below 2^22 (Q8 of 8192·√2): sums below 2^32.
+    let sum: i64 = profile.values().map(i64::from).sum();
+    let dev = |s: u32| N * i64::from(s) - sum;
+    let s2: u128 = profile
+        .values()
+        .map(|s| {
+            let d = dev(s).unsigned_abs();
+            u128::from(d) * u128::from(d)
+        })
+        .sum();
+    if s2 == 0 {
+        return Err(ShapeError::ZeroVariance);
+    }
+    // |d| < 720 · 2^22 < 2^32 so S < 2^74; S · 2^32 < 2^106. R = floor(2^16 sqrt(S / 720)),
+    // at least 2^16 · sqrt(719) since S >= 720 · 719 for unequal integers.
+    let r = isqrt_floor_u128((s2 << (2 * SIGMA_FRAC_BITS)) / SHAPE_LEN as u128);
+    let r = i128::try_from(r).unwrap_or(i128::MAX);
+    let (lo, hi) = (i128::from(i16::MIN), i128::from(i16::MAX));
+    let mut saturated = 0u16;
+    for (o, s) in out.iter_mut().zip(profile.values()) {
+        // z in Q12: d · 2^(12 + 16) / R, rounded; |d · 2^28| < 2^60.
+        let num = i128::from(dev(s)) << (ShapeElem::FRAC_NBITS + SIGMA_FRAC_BITS);
+        let z = (2 * num + r).div_euclid(2 * r);
+        if z < lo || z > hi {
+            saturated += 1;
+        }
+        *o = ShapeElem::from_bits(z.clamp(lo, hi) as i16);
+    }
+    Ok(saturated)
+}
+
+/// What [`shape_vector`] found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShapeReport {
+    /// The centroid.
+    pub centroid: Centroid,
+    /// Contour pixels and empty bins.
+    pub profile: ProfileReport,
+    /// Elements that saturated at ±8.
+    pub saturated: u16,
+}
+
+/// Runs the stage: [`centroid`], [`radial_profile`] into `profile`, and
+/// [`normalise`] into `out`.
+///
+/// # Errors
+/// [`ShapeError::EmptyMask`] or [`ShapeError::ZeroVariance`].
+pub fn shape_vector(
+    mask: &ImageView<'_, u8>,
+    profile: &mut RadialProfile,
+    out: &mut ShapeVector,
+) -> Result<ShapeReport, ShapeError> {
+    let c = centroid(mask)?;
+    let report = radial_profile(mask, &c, profile);
+    let saturated = normalise(profile, out)?;
+    Ok(ShapeReport {
+        centroid: c,
+        profile: report,
+        saturated,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mask from ASCII art: `#` is object, anything else background.
+    fn mask(art: &[&str]) -> ([u8; 256], usize, usize) {
+        let (w, h) = (art[0].len(), art.len());
+        let mut px = [0u8; 256];
+        for (y, line) in art.iter().enumerate() {
+            for (x, c) in line.bytes().enumerate() {
+                px[y * w + x] = u8::from(c == b'#');
+            }
+        }
+        (px, w, h)
+    }
+
+    fn run(art: &[&str]) -> (Result<ShapeReport, ShapeError>, RadialProfile, ShapeVector) {
+        let (px, w, h) = mask(art);
+        let view = ImageView::packed(&px[..w * h], w, h).unwrap();
+        let mut p = RadialProfile::new();
+        let mut v = [ShapeElem::ZERO; SHAPE_LEN];
+        let r = shape_vector(&view, &mut p, &mut v);
+        (r, p, v)
+    }
+
+    fn contour(art: &[&str]) -> heapless::Vec<(usize, usize), 64> {
+        let (px, w, h) = mask(art);
+        let mut out = heapless::Vec::new();
+        for_each_contour_pixel(&ImageView::packed(&px[..w * h], w, h).unwrap(), |x, y| {
+            out.push((x, y)).unwrap()
+        });
+        out
+    }
+
+    #[allow(clippy::float_arithmetic)]
+    fn float_bin(dx: f64, dy: f64) -> usize {
+        let deg = libm::atan2(-dy, dx).to_degrees();
+        (libm::floor(deg) as i64 + 180).rem_euclid(360) as usize
+    }
+
+    #[test]
+    #[allow(clippy::float_arithmetic)]
+    fn tan_table_matches_libm() {
+        for (k, &t) in TAN_Q32.iter().enumerate() {
+            let exact = libm::tan((k as f64).to_radians()) * 4_294_967_296.0;
+            assert!(
+                (t as f64 - exact).abs() <= 0.5 + 1e-6 * exact / 4e9,
+                "k={k}"
+            );
+        }
+    }
+
+    #[test]
+    fn angle_bins_on_axes_and_diagonals() {
+        assert_eq!(angle_bin(0, 0), None);
+        assert_eq!(angle_bin(5, 0), Some(180)); // 0°, right
+        assert_eq!(angle_bin(0, -5), Some(270)); // 90°, up on screen
+        assert_eq!(angle_bin(-5, 0), Some(0)); // 180° = -180°
+        assert_eq!(angle_bin(0, 5), Some(90)); // -90°, down
+        assert_eq!(angle_bin(3, -3), Some(225)); // 45°
+        assert_eq!(angle_bin(-3, -3), Some(315)); // 135°
+        assert_eq!(angle_bin(-3, 3), Some(45)); // -135°
+        assert_eq!(angle_bin(3, 3), Some(135)); // -45°
+                                                // Just below the axes.
+        assert_eq!(angle_bin(1000, 1), Some(179)); // -0.06°
+        assert_eq!(angle_bin(-1000, 1), Some(0)); // -179.94°
+        assert_eq!(angle_bin(-1000, -1), Some(359)); // 179.94°
+    }
+
+    #[test]
+    #[allow(clippy::float_arithmetic)]
+    fn angle_bins_match_f64_atan2_away_from_edges() {
+        let mut checked = 0;
+        for dy in (-300i32..=300).step_by(7) {
+            for dx in (-300i32..=300).step_by(3) {
+                let Some(b) = angle_bin(dx, dy) else { continue };
+                let deg = libm::atan2(-f64::from(dy), f64::from(dx)).to_degrees();
+                if (deg - libm::round(deg)).abs() < 1e-9 {
+                    continue; // exactly on an edge: checked above
+                }
+                assert_eq!(b, float_bin(f64::from(dx), f64::from(dy)), "{dx} {dy}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 8000);
+        for k in -180..180 {
+            // Points just either side of each edge, radius 2^20.
+            let t = f64::from(k).to_radians();
+            for eps in [-1e-5, 1e-5] {
+                let (dx, dy) = (
+                    libm::round(1048576.0 * libm::cos(t + eps)),
+                    -libm::round(1048576.0 * libm::sin(t + eps)),
+                );
+                let b = angle_bin(dx as i32, dy as i32).unwrap();
+                assert_eq!(b, float_bin(dx, dy), "k={k} eps={eps}");
+            }
+        }
+    }
+
+    #[test]
+    fn empty_and_degenerate_masks_are_typed_errors() {
+        assert_eq!(run(&["...", "..."]).0, Err(ShapeError::EmptyMask));
+        // One pixel: it is the centroid, no direction, an all-zero profile.
+        assert_eq!(run(&["...", ".#."]).0, Err(ShapeError::ZeroVariance));
+        // Two pixels: radius 1/2 at 0° and 180° only; interpolated, flat.
+        assert_eq!(run(&["##"]).0, Err(ShapeError::ZeroVariance));
+        // 2x2: four corners at √2/2, flat.
+        assert_eq!(run(&["##", "##"]).0, Err(ShapeError::ZeroVariance));
+    }
+
+    #[test]
+    fn square_5x5_has_contour_ring_and_symmetric_profile() {
+        let art = [
+            ".......", ".#####.", ".#####.", ".#####.", ".#####.", ".#####.", ".......",
+        ];
+        assert_eq!(contour(&art).len(), 16);
+        let (r, p, v) = run(&art);
+        let r = r.unwrap();
+        assert_eq!(
+            (r.centroid.x_q8, r.centroid.y_q8, r.centroid.area),
+            (768, 768, 25)
+        );
+        assert_eq!(r.profile.contour_pixels, 16);
+        // Right, up, left, down: 2 px; the corners (±45°, ±135°): 2√2.
+        for b in [180, 270, 0, 90] {
+            assert_eq!(p.max()[b], 512, "bin {b}");
+        }
+        for b in [135, 225, 315, 45] {
+            assert_eq!(p.max()[b], 724, "bin {b}"); // 2√2 · 256 = 724.08
+        }
+        // Quarter-turn symmetry of the vector (a 90° turn is 90 bins).
+        for b in 0..BINS {
+            assert_eq!(v[b], v[(b + 90) % BINS], "bin {b}");
+        }
+        // Filled: min equals max nearly everywhere (one pixel per direction).
+        assert_eq!(p.max(), p.min());
+    }
+
+    #[test]
+    fn plus_sign_arms_are_long_and_the_gaps_short() {
+        let thin = [
+            "...#...", "...#...", "...#...", "#######", "...#...", "...#...", "...#...",
+        ];
+        let (r, p, v) = run(&thin);
+        r.unwrap();
+        // Every pixel but the centre is contour, all on the axes: only bins
+        // 0, 90, 180 and 270 are filled. Tips at 3 px, the radius-1 pixels
+        // (background above and below) give min 1 px.
+        assert_eq!(r.unwrap().profile.empty_bins, 356);
+        for b in [0, 90, 180, 270] {
+            assert_eq!((p.max()[b], p.min()[b]), (768, 256));
+        }
+        // Interpolation joins the tips: a thin plus is a flat profile, z = ±1.
+        assert!(v[..BINS].iter().all(|&z| z == ShapeElem::ONE));
+        assert!(v[BINS..].iter().all(|&z| z == -ShapeElem::ONE));
+        let thick = [
+            "...###...",
+            "...###...",
+            "...###...",
+            "#########",
+            "#########",
+            "#########",
+            "...###...",
+            "...###...",
+            "...###...",
+        ];
+        let (r, p, v) = run(&thick);
+        r.unwrap();
+        // Right: the arm's tip at 4 px. The inner corner (5, 3) at 45° has
+        // only object 4-neighbours, so it is no contour pixel: bin 225 is
+        // interpolated between (6, 3) and (5, 2), both √5 px away.
+        assert_eq!(p.max()[180], 1024);
+        assert_eq!(p.max()[225], 572);
+        assert!(v[180] > ShapeElem::ONE && v[225] < v[180]);
+        // Quarter-turn symmetric.
+        assert!((0..BINS).all(|b| v[b] == v[(b + 90) % BINS]));
+    }
+
+    #[test]
+    fn ring_min_radius_differs_from_max() {
+        let art = [
+            ".........",
+            "..#####..",
+            ".##...##.",
+            ".#.....#.",
+            ".#.....#.",
+            ".#.....#.",
+            ".##...##.",
+            "..#####..",
+            ".........",
+        ];
+        let (r, p, v) = run(&art);
+        r.unwrap();
+        // Right: outer edge pixel (7, 4) at 3 px, and it is also the inner edge.
+        assert_eq!(p.max()[180], 768);
+        // The hole keeps every contour pixel at least 2√2 px out.
+        assert!(p.min().iter().all(|&m| m >= 724));
+        let thick_ring = [
+            "...........",
+            ".#########.",
+            ".#########.",
+            ".##.....##.",
+            ".##.....##.",
+            ".##.....##.",
+            ".##.....##.",
+            ".##.....##.",
+            ".#########.",
+            ".#########.",
+            "...........",
+        ];
+        let (r2, p2, v2) = run(&thick_ring);
+        r2.unwrap();
+        // Right: outer 4 px, inner edge of the hole 3 px.
+        assert_eq!((p2.max()[180], p2.min()[180]), (1024, 768));
+        // On the axes both edges fall in the bin: min < max. Near the
+        // corners only the outer corner pixel does (the hole's corner pixels
+        // have object 4-neighbours), so there min = max.
+        for b in [0, 90, 180, 270] {
+            assert!(p2.min()[b] < p2.max()[b]);
+            assert!(v2[BINS + b] < v2[b]);
+        }
+        assert!(p2.min()[225] == p2.max()[225]);
+        let half = |h: &[ShapeElem]| h.iter().map(|z| i32::from(z.to_bits())).sum::<i32>();
+        assert!(half(&v2[BINS..]) < 0 && half(&v2[..BINS]) > 0);
+        assert_ne!(v, v2);
+    }
+
+    #[test]
+    fn objects_touching_the_border_are_closed_by_it() {
+        // A full 4x3 mask: every pixel touches the border, all are contour.
+        let art = ["####", "####", "####"];
+        assert_eq!(contour(&art).len(), 10);
+        let (r, _, _) = run(&art);
+        r.unwrap();
+        let art = ["#####", "#####", "#####"];
+        let c = contour(&art);
+        assert_eq!(c.len(), 12);
+        assert!(!c.contains(&(2, 1)));
+    }
+
+    #[test]
+    fn empty_bins_are_interpolated_circularly() {
+        let mut v = [0u32; BINS];
+        let mut filled = [false; BINS];
+        for (b, val) in [(10, 100u32), (20, 200), (350, 40)] {
+            v[b] = val;
+            filled[b] = true;
+        }
+        interpolate(&mut v, &filled);
+        assert_eq!(v[15], 150);
+        assert_eq!(v[11], 110);
+        // Wrapping gap 350 -> 10 (20 bins): 40 + 60 t / 20.
+        assert_eq!(v[355], 55);
+        assert_eq!(v[0], 70);
+        assert_eq!(v[5], 85);
+        // 20 -> 350 (330 bins): 200 - 160 t / 330, rounded.
+        assert_eq!(v[185], 120);
+        assert_eq!(v[21], 200); // 200 - 0.48 rounds to 200
+                                // One filled bin: constant.
+        let mut w = [0u32; BINS];
+        let mut f = [false; BINS];
+        w[7] = 9;
+        f[7] = true;
+        interpolate(&mut w, &f);
+        assert!(w.iter().all(|&x| x == 9));
+    }
+
+    #[test]
+    fn scratch_is_small() {
+        assert_eq!(scratch_bytes(), 2880);
+        assert_eq!(core::mem::size_of::<ShapeVector>(), 1440);
+    }
+}
