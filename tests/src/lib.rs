@@ -128,3 +128,154 @@ impl EdgeStorage {
         .expect("storage is sized by the stage's const fns")
     }
 }
+
+/// A binary mask (0 or 255), tightly packed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MaskCase {
+    /// Pixels, `width * height`.
+    pub data: Vec<u8>,
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+}
+
+impl MaskCase {
+    /// An empty mask.
+    pub fn new(width: usize, height: usize) -> Self {
+        Self {
+            data: vec![0; width * height],
+            width,
+            height,
+        }
+    }
+
+    /// The mask as a view.
+    pub fn view(&self) -> protogist::image::ImageView<'_, u8> {
+        protogist::image::ImageView::packed(&self.data, self.width, self.height)
+            .expect("mask geometry is valid")
+    }
+
+    /// Pixel at `(x, y)`; outside is background.
+    pub fn on(&self, x: isize, y: isize) -> bool {
+        x >= 0
+            && y >= 0
+            && (x as usize) < self.width
+            && (y as usize) < self.height
+            && self.data[y as usize * self.width + x as usize] != 0
+    }
+
+    /// Sets every pixel where `f(x, y)` holds.
+    pub fn paint(&mut self, f: impl Fn(i32, i32) -> bool) {
+        for y in 0..self.height {
+            for x in 0..self.width {
+                if f(x as i32, y as i32) {
+                    self.data[y * self.width + x] = 255;
+                }
+            }
+        }
+    }
+
+    /// `(x0, y0, x1, y1)` of the object pixels, inclusive, or `None`.
+    pub fn bbox(&self) -> Option<(usize, usize, usize, usize)> {
+        let mut b: Option<(usize, usize, usize, usize)> = None;
+        for y in 0..self.height {
+            for x in 0..self.width {
+                if self.data[y * self.width + x] != 0 {
+                    b = Some(match b {
+                        None => (x, y, x, y),
+                        Some((a, c, d, e)) => (a.min(x), c.min(y), d.max(x), e.max(y)),
+                    });
+                }
+            }
+        }
+        b
+    }
+
+    /// The same mask moved by `(dx, dy)` (pixels leaving the image are lost).
+    pub fn translated(&self, dx: isize, dy: isize) -> Self {
+        let mut out = Self::new(self.width, self.height);
+        out.paint(|x, y| self.on(x as isize - dx, y as isize - dy));
+        out
+    }
+
+    /// The 2x nearest-neighbour upscale.
+    pub fn upscaled2(&self) -> Self {
+        let mut out = Self::new(2 * self.width, 2 * self.height);
+        out.paint(|x, y| self.on(x as isize / 2, y as isize / 2));
+        out
+    }
+}
+
+/// One object of the synthetic scenes, any of the four shapes, half-sizes in
+/// `min_r..=max_r`, centred so that it may touch or cross the border of a
+/// `w` x `h` image only when `clip` is set.
+pub fn object_spec(
+    w: usize,
+    h: usize,
+    min_r: i32,
+    max_r: i32,
+    clip: bool,
+) -> impl Strategy<Value = protogist::synth::ObjectSpec> {
+    use protogist::synth::{ObjectSpec, Shape};
+    let shape = prop_oneof![
+        Just(Shape::Ellipse),
+        Just(Shape::Rectangle),
+        Just(Shape::Diamond),
+        Just(Shape::Triangle)
+    ];
+    (
+        shape,
+        min_r..=max_r,
+        min_r..=max_r,
+        0.0f64..1.0,
+        0.0f64..1.0,
+    )
+        .prop_map(move |(shape, rx, ry, fx, fy)| {
+            let (w, h) = (w as i32, h as i32);
+            let (x0, x1, y0, y1) = if clip {
+                (0, w - 1, 0, h - 1)
+            } else {
+                (rx, w - 1 - rx, ry, h - 1 - ry)
+            };
+            ObjectSpec {
+                shape,
+                cx: x0 + ((x1 - x0).max(0) as f64 * fx) as i32,
+                cy: y0 + ((y1 - y0).max(0) as f64 * fy) as i32,
+                rx,
+                ry,
+                disparity: 8,
+                colour: Rgb8::new(200, 60, 40),
+            }
+        })
+}
+
+/// The mask of `objects` rendered by [`protogist::synth::render_mask`] and
+/// united: object `i` is rendered as the only object of its scene.
+pub fn render_objects(w: usize, h: usize, objects: &[protogist::synth::ObjectSpec]) -> MaskCase {
+    use protogist::image::ImageViewMut;
+    use protogist::synth::{render_mask, SceneSpec};
+    let mut out = MaskCase::new(w, h);
+    for o in objects {
+        let mut spec = SceneSpec::demo(w, h);
+        spec.objects.clear();
+        spec.objects.push(*o).expect("capacity");
+        let mut m = vec![0u8; w * h];
+        render_mask(&spec, 0, &mut ImageViewMut::packed(&mut m, w, h).unwrap()).unwrap();
+        out.data.iter_mut().zip(&m).for_each(|(a, b)| *a |= b);
+    }
+    out
+}
+
+/// Masks of one or two synthetic objects (united) in a `w` x `h` image,
+/// half-sizes `min_r..=max_r`; objects may cross the border when `clip`.
+pub fn shape_mask(
+    w: usize,
+    h: usize,
+    min_r: i32,
+    max_r: i32,
+    clip: bool,
+) -> impl Strategy<Value = MaskCase> {
+    proptest::collection::vec(object_spec(w, h, min_r, max_r, clip), 1..=2)
+        .prop_map(move |objs| render_objects(w, h, &objs))
+}
