@@ -135,6 +135,12 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
     maps.summarise(&mut summary);
     maps.boundary_score(&scene.mask).summarise(&mut summary);
 
+    // Stage 2: the shape vector. Until segmentation is wired in, of the
+    // ground-truth object mask.
+    let shape = crate::stages::run_shape(&scene.mask, w, h, "GT mask")?;
+    out.extend(shape.panels(w, h));
+    shape.summarise(&mut summary);
+
     finish(&opts.out, out, &mut summary, start)?;
     Ok(summary)
 }

@@ -27,6 +27,9 @@ pub enum HostError {
     /// The synthetic scene generator failed.
     #[error("{0}")]
     Synth(#[from] SynthError),
+    /// The shape stage rejected its mask.
+    #[error("shape stage: {0}")]
+    Shape(#[from] protogist::shape::ShapeError),
     /// A file or directory could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {

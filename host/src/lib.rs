@@ -14,6 +14,7 @@ pub mod demo;
 pub mod error;
 pub mod io;
 pub mod panels;
+pub mod plot;
 pub mod reference;
 pub mod stages;
 pub mod summary;

@@ -289,3 +289,65 @@ mod tests {
         assert_eq!((s.outline, s.outline_hit), (6, 6));
     }
 }
+
+/// The shape vector of one object mask (paper section 3.5).
+#[derive(Clone, Debug)]
+pub struct ShapeResult {
+    /// The 720 z-scores (max profile, then min profile), as f32.
+    pub vector: Vec<f32>,
+    /// Centroid, contour and saturation counts.
+    pub report: protogist::shape::ShapeReport,
+    /// What the mask is, for the summary ("GT mask", "segmented mask").
+    pub source: &'static str,
+}
+
+/// Runs the core shape stage on a packed 0/non-zero mask.
+///
+/// # Errors
+/// [`ImageError`](protogist::image::ImageError) for a bad size, or the
+/// stage's [`ShapeError`](protogist::shape::ShapeError) (empty mask, zero
+/// variance).
+pub fn run_shape(
+    mask: &[u8],
+    width: usize,
+    height: usize,
+    source: &'static str,
+) -> Result<ShapeResult> {
+    use protogist::shape::{shape_vector, RadialProfile, ShapeElem, SHAPE_LEN};
+    let view = ImageView::packed(mask, width, height)?;
+    let mut profile = RadialProfile::new();
+    let mut v = [ShapeElem::ZERO; SHAPE_LEN];
+    let report = shape_vector(&view, &mut profile, &mut v)?;
+    Ok(ShapeResult {
+        vector: v.iter().map(|e| e.to_num::<f32>()).collect(),
+        report,
+        source,
+    })
+}
+
+impl ShapeResult {
+    /// The profile plot, `width` x `height`.
+    pub fn panels(&self, width: usize, height: usize) -> Vec<Panel> {
+        let (w, h) = (width as u32, height as u32);
+        vec![Panel::new(
+            "shape_vector",
+            crate::plot::shape_vector(&self.vector, w, h),
+        )]
+    }
+
+    /// Appends the stage's summary lines.
+    pub fn summarise(&self, s: &mut Summary) {
+        let c = &self.report.centroid;
+        s.push(
+            format!("shape vector ({})", self.source),
+            format!(
+                "720 values, centroid ({:.1}, {:.1}), {} contour px, {} empty bins, {} saturated",
+                c.x_q8 as f32 / 256.0,
+                c.y_q8 as f32 / 256.0,
+                self.report.profile.contour_pixels,
+                self.report.profile.empty_bins,
+                self.report.saturated
+            ),
+        );
+    }
+}
