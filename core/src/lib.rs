@@ -39,4 +39,5 @@ pub mod disparity;
 pub mod fixed;
 pub mod image;
 pub mod off;
+pub mod segment;
 pub mod synth;
