@@ -14,7 +14,8 @@
 //!    default (a linear preference for nearer planes). [`slice_range`] and
 //!    [`object_region`]: D_ObjReg keeps `δ − r ≤ D_fg ≤ δ + r`, r = σ_S/2.5.
 //! 4. [`object_conspicuity`]: ψ = C where D_ObjReg is ON; [`above_mean`]:
-//!    C_ObjReg = ψ above its mean.
+//!    C_ObjReg = ψ above its mean ψ̄ (by default over the whole object
+//!    region, inactive cells as 0; see [`PsiMean`]).
 //! 5. [`refine_border`]: the largest 8-connected component of the (ψ ≠ OFF)
 //!    map dilated 4 times by a radius-1 [`Disk`]; C_Obj = C_ObjReg inside it.
 //! 6. [`non_max_suppression`] (C_Obj^M), [`close`] (F_Obj), [`fill_holes`]
@@ -89,7 +90,7 @@ pub use pipeline::{
 pub use stats::{
     above_mean, foreground, foreground_conspicuity, in_selected_area, isqrt_round_u64,
     object_conspicuity, object_region, plane, select_slice, selected_area, selected_stats,
-    slice_cells, slice_counts, slice_radius, slice_range, thresholds, DisparityRange,
+    slice_cells, slice_counts, slice_radius, slice_range, thresholds, DisparityRange, PsiMean,
     SelectedStats, Slice, SliceCounts, Thresholds, PLANES, STAT_FRAC_BITS,
 };
 
@@ -131,6 +132,8 @@ pub struct SegmentParams {
     /// The exponent A of δ = argmax A^C(d)·d^A (undefined in the paper;
     /// default 1). At most 8.
     pub exponent: u8,
+    /// Which cells ψ̄ averages over (the paper is silent; see [`PsiMean`]).
+    pub psi_mean: PsiMean,
     /// Structuring element of every dilation and erosion.
     pub disk: Disk,
     /// Dilations before the border refinement's largest component (4).
@@ -153,6 +156,7 @@ impl Default for SegmentParams {
             fg_high: Ratio::new(2, 1),
             range: Ratio::new(2, 5),
             exponent: 1,
+            psi_mean: PsiMean::Region,
             disk: Disk::Cross,
             refine_dilations: 4,
             closing_steps: 4,

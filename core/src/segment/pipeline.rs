@@ -220,7 +220,12 @@ pub fn segment(
         let range = slice_range(params, &stats, slice.delta);
         object_region(&bufs.d_fg.as_view(), &range, &mut bufs.d_obj_reg)?;
         object_conspicuity(conspicuity, &bufs.d_obj_reg.as_view(), &mut bufs.psi)?;
-        above_mean(&bufs.psi.as_view(), &mut bufs.c_obj_reg)?;
+        above_mean(
+            params.psi_mean,
+            &bufs.psi.as_view(),
+            &bufs.d_obj_reg.as_view(),
+            &mut bufs.c_obj_reg,
+        )?;
         refine_border(
             params,
             &bufs.psi.as_view(),

@@ -370,20 +370,44 @@ pub fn object_conspicuity(
     masked(c, d_obj_reg, psi)
 }
 
-/// Writes C_ObjReg: ψ where ψ is above its mean (over ON cells, exact:
-/// `n·ψ > Σψ`). Returns the ON count.
+/// Which cells the mean ψ̄ of C_ObjReg = (ψ > ψ̄) is taken over.
+///
+/// The paper defines ψ as C inside D_ObjReg and OFF elsewhere, and keeps the
+/// "active-above-average" cells without saying whether inactive (OFF) cells
+/// inside the object region count in the average.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PsiMean {
+    /// Over every cell of the object region (D_ObjReg ON), an OFF ψ cell
+    /// counting as 0: the mean activity of the region's cell population.
+    /// The default; see `docs/SEGMENT.md` for the measurements behind it.
+    #[default]
+    Region,
+    /// Over the ON ψ cells only. On an object whose only edges are its
+    /// outline this drops about half the outline.
+    OnCells,
+}
+
+/// Writes C_ObjReg: ψ where ψ is above its mean ψ̄ (exact: `n·ψ > Σψ`,
+/// `n` and `Σψ` as `over` says). Returns the ON count.
 ///
 /// # Errors
 /// [`SegmentError::SizeMismatch`].
 pub fn above_mean(
+    over: PsiMean,
     psi: &ImageView<'_, EdgeCell>,
+    d_obj_reg: &ImageView<'_, DisparityCell>,
     c_obj_reg: &mut ImageViewMut<'_, EdgeCell>,
 ) -> Result<u32, SegmentError> {
     check_size(psi.size(), c_obj_reg.size())?;
+    check_size(psi.size(), d_obj_reg.size())?;
     let (mut n, mut sum) = (0u64, 0u64);
-    for c in psi.pixels().filter_map(EdgeCell::get) {
-        n += 1;
-        sum += u64::from(c.to_bits());
+    for (c, d) in psi.pixels().zip(d_obj_reg.pixels()) {
+        let counted = match over {
+            PsiMean::Region => d.is_on(),
+            PsiMean::OnCells => c.is_on(),
+        };
+        n += u64::from(counted);
+        sum += c.get().map_or(0, |v| u64::from(v.to_bits()));
     }
     let mut on = 0;
     for (s, o) in psi.rows().zip(c_obj_reg.rows_mut()) {
