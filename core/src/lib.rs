@@ -13,8 +13,8 @@
 //!  right RGB ─► stereo (disparity) ──────┘
 //! ```
 //!
-//! This release has [`conspicuity`]; `stereo`, `segment`, `shape` and `mlp`
-//! follow. Every stage works on [`image::ImageView`]s over caller-provided
+//! This release has [`conspicuity`] and [`segment`]; `stereo`, `shape` and
+//! `mlp` follow. Every stage works on [`image::ImageView`]s over caller-provided
 //! buffers whose sizes come from `const fn`s, returns a typed error for bad
 //! input, and has an f32 reference of the same name in `protogist-host`.
 //! Per-pixel work is integer-only ([`fixed`] names the formats); floats
