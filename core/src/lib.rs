@@ -13,7 +13,7 @@
 //!  right RGB ─► stereo (disparity) ──────┘
 //! ```
 //!
-//! This release has [`conspicuity`] and [`shape`]; `stereo`, `segment` and
+//! This release has [`conspicuity`], [`segment`] and [`shape`]; `stereo` and
 //! `mlp` follow. Every stage works on [`image::ImageView`]s over caller-provided
 //! buffers whose sizes come from `const fn`s, returns a typed error for bad
 //! input, and has an f32 reference of the same name in `protogist-host`.
@@ -39,5 +39,6 @@ pub mod disparity;
 pub mod fixed;
 pub mod image;
 pub mod off;
+pub mod segment;
 pub mod shape;
 pub mod synth;

@@ -82,6 +82,10 @@ pub struct SceneSpec {
     pub background_disparity: u8,
     /// Objects; a nearer (larger disparity) object hides a farther one.
     pub objects: heapless::Vec<ObjectSpec, MAX_OBJECTS>,
+    /// Base colour of the background plane.
+    pub background_colour: Rgb8,
+    /// Texture amplitude of the background, grey levels.
+    pub background_texture: i32,
 }
 
 /// Errors of the generator.
@@ -132,6 +136,100 @@ impl SceneSpec {
             seed: 0x5eed_0001,
             background_disparity: clamp_u8(width / 80),
             objects,
+            background_colour: Rgb8::new(120, 124, 112),
+            background_texture: 40,
+        }
+    }
+
+    /// A seeded random scene for a `width` x `height` frame, for accuracy
+    /// tests with variety: 1 object (6 seeds in 10), 2 (3 in 10) or 3; every
+    /// shape; a main object covering 22 % to 45 % of the segmentation's
+    /// selected area S (aspect ratio free) and smaller others (1/14 to 1/8
+    /// of the width by 1/10 to 1/6 of the height); disparities 5 to `width / 10` px above a
+    /// background plane of 1 to `width / 40` px, at least 3 px apart; a
+    /// background of random colour and texture amplitude (20 to 60); object
+    /// colours at least 80 RGB levels (L1) from the background's. Objects
+    /// are centred so they fit inside the segmentation's selected area
+    /// (away from the top, bottom and left strips) when the frame allows;
+    /// they may overlap one another.
+    pub fn random(seed: u64, width: usize, height: usize) -> SceneSpec {
+        let mut rng = SplitMix(seed ^ 0x0005_ce4e_5eed);
+        let (w, h) = (clamp_i32(width).max(1), clamp_i32(height).max(1));
+        let background_disparity = clamp_u8(1 + rng.below(width / 40) as usize);
+        let background_colour = Rgb8::new(
+            rng.range(40, 215) as u8,
+            rng.range(40, 215) as u8,
+            rng.range(40, 215) as u8,
+        );
+        let n = match rng.below(10) {
+            0..=5 => 1,
+            6..=8 => 2,
+            _ => 3,
+        };
+        let shapes = [
+            Shape::Ellipse,
+            Shape::Rectangle,
+            Shape::Diamond,
+            Shape::Triangle,
+        ];
+        let (x0, y0, y1) = (w / 8, h / 6, h - h / 6);
+        let mut objects: heapless::Vec<ObjectSpec, MAX_OBJECTS> = heapless::Vec::new();
+        // The selected area S of the segmentation stage and its pixels.
+        let (sw, sh) = (w - x0 - 1, y1 - y0 - 1);
+        let s_area = i64::from(sw.max(1)) * i64::from(sh.max(1));
+        for i in 0..n {
+            let shape = shapes
+                .get(rng.below(4) as usize)
+                .copied()
+                .unwrap_or(Shape::Ellipse);
+            let (rx, ry) = if i == 0 {
+                main_object_size(&mut rng, shape, (sw, sh), s_area)
+            } else {
+                (rng.range(w / 14, w / 8), rng.range(h / 10, h / 6))
+            };
+            let cx = rng.range(x0 + rx + 3, w - rx - 3);
+            let cy = rng.range(y0 + ry + 3, y1 - ry - 3);
+            // A disparity at least 3 px from every other object's.
+            let hi = (w / 10).max(6);
+            let mut disparity = i32::from(background_disparity) + rng.range(5, hi);
+            for _ in 0..16 {
+                if objects
+                    .iter()
+                    .all(|o| (i32::from(o.disparity) - disparity).abs() >= 3)
+                {
+                    break;
+                }
+                disparity = i32::from(background_disparity) + rng.range(5, hi);
+            }
+            let colour = loop {
+                let c = Rgb8::new(
+                    rng.below(256) as u8,
+                    rng.below(256) as u8,
+                    rng.below(256) as u8,
+                );
+                let dist = |a: u8, b: u8| i32::from(a.abs_diff(b));
+                let bg = background_colour;
+                if dist(c.r, bg.r) + dist(c.g, bg.g) + dist(c.b, bg.b) >= 80 {
+                    break c;
+                }
+            };
+            // Capacity MAX_OBJECTS >= 3: the push cannot fail.
+            let _ = objects.push(ObjectSpec {
+                shape,
+                cx,
+                cy,
+                rx,
+                ry,
+                disparity: clamp_u8(disparity.clamp(0, 255) as usize),
+                colour,
+            });
+        }
+        SceneSpec {
+            seed,
+            background_disparity,
+            objects,
+            background_colour,
+            background_texture: rng.range(20, 60),
         }
     }
 
@@ -148,7 +246,13 @@ impl SceneSpec {
     fn left_colour(&self, x: i32, y: i32) -> Rgb8 {
         match self.object_at(x, y) {
             Some((i, o)) => textured(o.colour, object_seed(self.seed, i), x, y, 24),
-            None => textured(Rgb8::new(120, 124, 112), self.seed, x, y, 40),
+            None => textured(
+                self.background_colour,
+                self.seed,
+                x,
+                y,
+                self.background_texture,
+            ),
         }
     }
 
@@ -168,9 +272,76 @@ impl SceneSpec {
             }
             None => {
                 let xl = x + i32::from(self.background_disparity);
-                textured(Rgb8::new(120, 124, 112), self.seed, xl, y, 40)
+                textured(
+                    self.background_colour,
+                    self.seed,
+                    xl,
+                    y,
+                    self.background_texture,
+                )
             }
         }
+    }
+}
+
+/// Half-sizes of the main object of [`SceneSpec::random`]: its area is 22 %
+/// to 45 % of the selected area `s_area` and it fits the `(sw, sh)` box of S
+/// with 4 px to spare. The paper's D_fg keeps `D < mean_S + 2σ_S`; over a
+/// flat background that drops a single object covering less than 1/5 of S
+/// (as wrong estimates), so the main object is drawn above that. Rejection
+/// sampling; the last candidate after 64 tries.
+fn main_object_size(
+    rng: &mut SplitMix,
+    shape: Shape,
+    (sw, sh): (i32, i32),
+    s_area: i64,
+) -> (i32, i32) {
+    // Area per rx·ry, in thousandths.
+    let k: i64 = match shape {
+        Shape::Ellipse => 3142,
+        Shape::Rectangle => 4000,
+        Shape::Diamond | Shape::Triangle => 2000,
+    };
+    let (rx_max, ry_max) = (((sw - 8) / 2).max(1), ((sh - 8) / 2).max(1));
+    let mut best = (rx_max, ry_max);
+    for _ in 0..64 {
+        let (rx, ry) = (rng.range(rx_max / 3, rx_max), rng.range(ry_max / 3, ry_max));
+        let area = k * i64::from(rx) * i64::from(ry);
+        best = (rx, ry);
+        if area >= 220 * s_area && area <= 450 * s_area {
+            break;
+        }
+    }
+    best
+}
+
+/// SplitMix64, the generator of [`SceneSpec::random`].
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `0..n` (0 when `n` is 0).
+    fn below(&mut self, n: usize) -> u64 {
+        match n as u64 {
+            0 => 0,
+            n => self.next() % n,
+        }
+    }
+
+    /// Uniform in `lo..=hi`; the midpoint when the range is empty.
+    fn range(&mut self, lo: i32, hi: i32) -> i32 {
+        if hi < lo {
+            return lo + (hi - lo) / 2;
+        }
+        let span = (i64::from(hi) - i64::from(lo) + 1) as u64;
+        lo + (self.next() % span) as i32
     }
 }
 

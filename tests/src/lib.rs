@@ -279,3 +279,88 @@ pub fn shape_mask(
     proptest::collection::vec(object_spec(w, h, min_r, max_r, clip), 1..=2)
         .prop_map(move |objs| render_objects(w, h, &objs))
 }
+
+/// Owned storage for [`protogist::segment::SegmentBuffers`] at one size.
+pub struct SegmentStorage {
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+    /// D_fg, D_ObjReg.
+    pub disparity: Vec<protogist::disparity::DisparityCell>,
+    /// C_fg, ψ, C_ObjReg, C_Obj.
+    pub edges: Vec<protogist::conspicuity::EdgeCell>,
+    /// Binary maps.
+    pub binary: Vec<bool>,
+    /// Label map and parent table.
+    pub labels: Vec<u16>,
+    /// Area table.
+    pub area: Vec<u32>,
+}
+
+impl SegmentStorage {
+    /// Storage sized by the stage's `const fn`s.
+    pub fn new(width: usize, height: usize) -> Self {
+        use protogist::segment as s;
+        Self {
+            width,
+            height,
+            disparity: vec![Default::default(); s::disparity_maps_len(width, height)],
+            edges: vec![Default::default(); s::edge_maps_len(width, height)],
+            binary: vec![false; s::binary_maps_len(width, height)],
+            labels: vec![0; s::label_maps_len(width, height)],
+            area: vec![0; s::label_capacity(width, height)],
+        }
+    }
+
+    /// The stage's view of the storage.
+    pub fn buffers(&mut self) -> protogist::segment::SegmentBuffers<'_> {
+        protogist::segment::SegmentBuffers::new(
+            self.width,
+            self.height,
+            &mut self.disparity,
+            &mut self.edges,
+            &mut self.binary,
+            &mut self.labels,
+            &mut self.area,
+        )
+        .expect("storage is sized by the stage's const fns")
+    }
+}
+
+/// Parses an ASCII picture, rows of `#` (ON) and `.` (OFF); blank
+/// characters are ignored. Returns `(pixels, width, height)`.
+pub fn parse_mask(rows: &[&str]) -> (Vec<bool>, usize, usize) {
+    let rows: Vec<Vec<bool>> = rows
+        .iter()
+        .map(|r| {
+            r.chars()
+                .filter(|c| !c.is_whitespace())
+                .map(|c| match c {
+                    '#' => true,
+                    '.' => false,
+                    other => panic!("mask pictures use '#' and '.', not {other:?}"),
+                })
+                .collect()
+        })
+        .collect();
+    let w = rows.first().map_or(0, Vec::len);
+    assert!(rows.iter().all(|r| r.len() == w), "ragged mask picture");
+    let h = rows.len();
+    (rows.into_iter().flatten().collect(), w, h)
+}
+
+/// Renders a binary map as rows of `#` and `.`.
+pub fn show_mask(px: &[bool], width: usize) -> Vec<String> {
+    px.chunks(width)
+        .map(|r| r.iter().map(|&b| if b { '#' } else { '.' }).collect())
+        .collect()
+}
+
+/// `mask![ "#.#", "..#" ]`: an ASCII picture as `(Vec<bool>, width, height)`.
+#[macro_export]
+macro_rules! mask {
+    ($($row:expr),* $(,)?) => {
+        $crate::parse_mask(&[$($row),*])
+    };
+}

@@ -1,4 +1,5 @@
 //! f32 references of the core stages, same names and argument order.
 
 pub mod conspicuity;
+pub mod segment;
 pub mod shape;

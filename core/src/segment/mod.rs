@@ -1,0 +1,267 @@
+//! Figure-ground segregation (paper sections 3.1, 3.3 and 3.4): from a
+//! disparity map D and a conspicuity map C to binary object masks.
+//!
+//! The steps, each callable alone so every intermediate map can be observed:
+//!
+//! 1. [`selected_stats`] (and [`selected_area`] to see S): mean_S and σ_S
+//!    over the valid disparities of S, the map without the top and bottom
+//!    sixths and the left eighth. [`thresholds`] and [`foreground`]: D_fg
+//!    keeps `mean + 0.1σ < D < mean + 2σ`.
+//! 2. [`foreground_conspicuity`]: C_fg = C where D_fg is ON.
+//! 3. [`slice_counts`], [`select_slice`]: A^C(d), the ON C_fg cells whose
+//!    D_fg rounds to `d−1..=d+1`, and δ = argmax A^C(d)·d^A. The paper
+//!    leaves the exponent A undefined; [`SegmentParams::exponent`] is 1 by
+//!    default (a linear preference for nearer planes). [`slice_range`] and
+//!    [`object_region`]: D_ObjReg keeps `δ − r ≤ D_fg ≤ δ + r`, r = σ_S/2.5.
+//! 4. [`object_conspicuity`]: ψ = C where D_ObjReg is ON; [`above_mean`]:
+//!    C_ObjReg = ψ above its mean ψ̄ (by default over the whole object
+//!    region, inactive cells as 0; see [`PsiMean`]).
+//! 5. [`refine_border`]: the largest 8-connected component of the (ψ ≠ OFF)
+//!    map dilated 4 times by a radius-1 [`Disk`]; C_Obj = C_ObjReg inside it.
+//! 6. [`non_max_suppression`] (C_Obj^M), [`close`] (F_Obj), [`fill_holes`]
+//!    and [`area_filter`]: the mask.
+//!
+//! [`segment`] runs them all on caller-provided [`SegmentBuffers`], for up to
+//! [`SegmentParams::max_objects`] objects (beyond the paper, which keeps only
+//! the most salient): after each object its cells are inhibited in D_fg and
+//! the search runs again (see [`inhibit`]).
+//!
+//! Per-pixel work is integer only: statistics use `u64`/`u128` sums and an
+//! integer square root; labelling uses `u16` labels with caller-provided
+//! tables ([`Labeller`]). Nothing allocates.
+//!
+//! ```
+//! use protogist::conspicuity::{Conspicuity, EdgeCell};
+//! use protogist::disparity::from_pixels;
+//! use protogist::image::ImageView;
+//! use protogist::segment::*;
+//! const W: usize = 32;
+//! const H: usize = 24;
+//! // Background at 2 px, a 14x10 box at 9 px; C is strong on the box's border.
+//! // (The box must cover over 1/5 of S: above mean + 2σ D counts as wrong.)
+//! let inside = |x: isize, y: isize| (10..24).contains(&x) && (7..17).contains(&y);
+//! let xy = |i: usize| ((i % W) as isize, (i / W) as isize);
+//! let d: Vec<_> = (0..W * H).map(|i| {
+//!     let (x, y) = xy(i);
+//!     from_pixels(if inside(x, y) { 9 } else { 2 })
+//! }).collect();
+//! let c: Vec<_> = (0..W * H).map(|i| {
+//!     let (x, y) = xy(i);
+//!     let ring = inside(x, y) && !(inside(x - 1, y) && inside(x + 1, y) && inside(x, y - 1) && inside(x, y + 1));
+//!     // Strong on the outline, weak texture inside (C_ObjReg keeps ψ above its mean).
+//!     let v = if ring { 40 } else if inside(x, y) { 5 } else { return EdgeCell::OFF };
+//!     EdgeCell::on(Conspicuity::from_num(v)).unwrap()
+//! }).collect();
+//! let (mut dm, mut em, mut bm, mut lm, mut area) = (
+//!     vec![Default::default(); disparity_maps_len(W, H)],
+//!     vec![Default::default(); edge_maps_len(W, H)],
+//!     vec![false; binary_maps_len(W, H)],
+//!     vec![0u16; label_maps_len(W, H)],
+//!     vec![0u32; label_capacity(W, H)],
+//! );
+//! let mut bufs = SegmentBuffers::new(W, H, &mut dm, &mut em, &mut bm, &mut lm, &mut area).unwrap();
+//! let mut masks = vec![false; W * H];
+//! let d = ImageView::packed(&d, W, H).unwrap();
+//! let c = ImageView::packed(&c, W, H).unwrap();
+//! let report = segment(&SegmentParams::default(), &d, &c, &mut bufs, &mut masks).unwrap();
+//! let obj = report.objects[0];
+//! assert_eq!(obj.delta, 9);
+//! assert_eq!(obj.area, 140);
+//! assert_eq!(obj.bbox, Some(BoundingBox { x: 10, y: 7, width: 14, height: 10 }));
+//! ```
+
+mod buffers;
+mod label;
+mod morph;
+mod pipeline;
+mod stats;
+
+pub use buffers::{
+    binary_maps_len, disparity_maps_len, edge_maps_len, label_maps_len, scratch_bytes,
+    SegmentBuffers,
+};
+pub use label::{area_filter, fill_holes, label_capacity, AreaReport, Connectivity, Labeller};
+pub use morph::{
+    close, dilate, dilate_n, erode, erode_n, non_max_suppression, Disk, NMS_DIRECTIONS,
+};
+pub use pipeline::{
+    bounding_box, inhibit, refine_border, segment, BoundingBox, Detection, SegmentReport,
+};
+pub use stats::{
+    above_mean, foreground, foreground_conspicuity, in_selected_area, isqrt_round_u64,
+    object_conspicuity, object_region, plane, select_slice, selected_area, selected_stats,
+    slice_cells, slice_counts, slice_radius, slice_range, thresholds, DisparityRange, PsiMean,
+    SelectedStats, Slice, SliceCounts, Thresholds, PLANES, STAT_FRAC_BITS,
+};
+
+use crate::image::ImageError;
+use core::fmt;
+
+/// Most objects [`segment`] reports.
+pub const MAX_OBJECTS: usize = 8;
+
+/// A non-negative rational `num / den`, for the paper's constants.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ratio {
+    /// Numerator.
+    pub num: u16,
+    /// Denominator (must not be 0).
+    pub den: u16,
+}
+
+impl Ratio {
+    /// `num / den`.
+    pub const fn new(num: u16, den: u16) -> Self {
+        Self { num, den }
+    }
+}
+
+/// Every parameter of the stage, with the paper's defaults.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SegmentParams {
+    /// Height fraction of the top and of the bottom strip left out of S (1/6).
+    pub top_bottom_strip: Ratio,
+    /// Width fraction of the left strip left out of S (1/8).
+    pub left_strip: Ratio,
+    /// D_fg lower bound, σ_S above mean_S (0.1), exclusive.
+    pub fg_low: Ratio,
+    /// D_fg upper bound, σ_S above mean_S (2), exclusive.
+    pub fg_high: Ratio,
+    /// r / σ_S (the paper's r = σ_S / 2.5, so 2/5).
+    pub range: Ratio,
+    /// The exponent A of δ = argmax A^C(d)·d^A (undefined in the paper;
+    /// default 1). At most 8.
+    pub exponent: u8,
+    /// Which cells ψ̄ averages over (the paper is silent; see [`PsiMean`]).
+    pub psi_mean: PsiMean,
+    /// Structuring element of every dilation and erosion.
+    pub disk: Disk,
+    /// Dilations before the border refinement's largest component (4).
+    pub refine_dilations: u8,
+    /// Dilations, then as many erosions, of the closing (4).
+    pub closing_steps: u8,
+    /// A filled region is kept when its area is at least this fraction of
+    /// the largest one's (1/5).
+    pub min_area: Ratio,
+    /// Objects to extract, 1 (the paper) to [`MAX_OBJECTS`].
+    pub max_objects: u8,
+}
+
+impl Default for SegmentParams {
+    fn default() -> Self {
+        Self {
+            top_bottom_strip: Ratio::new(1, 6),
+            left_strip: Ratio::new(1, 8),
+            fg_low: Ratio::new(1, 10),
+            fg_high: Ratio::new(2, 1),
+            range: Ratio::new(2, 5),
+            exponent: 1,
+            psi_mean: PsiMean::Region,
+            disk: Disk::Cross,
+            refine_dilations: 4,
+            closing_steps: 4,
+            min_area: Ratio::new(1, 5),
+            max_objects: 1,
+        }
+    }
+}
+
+impl SegmentParams {
+    /// Checks the parameters.
+    ///
+    /// # Errors
+    /// [`SegmentError::BadParams`] naming the first bad field.
+    pub fn validate(&self) -> Result<(), SegmentError> {
+        let ratios = [
+            ("top_bottom_strip", self.top_bottom_strip),
+            ("left_strip", self.left_strip),
+            ("fg_low", self.fg_low),
+            ("fg_high", self.fg_high),
+            ("range", self.range),
+            ("min_area", self.min_area),
+        ];
+        if let Some((name, _)) = ratios.iter().find(|(_, r)| r.den == 0) {
+            return Err(SegmentError::BadParams(name));
+        }
+        // Each strip at most a half, so S is not empty by construction.
+        if 2 * u32::from(self.top_bottom_strip.num) >= u32::from(self.top_bottom_strip.den) {
+            return Err(SegmentError::BadParams("top_bottom_strip"));
+        }
+        if self.left_strip.num >= self.left_strip.den {
+            return Err(SegmentError::BadParams("left_strip"));
+        }
+        if self.exponent > 8 {
+            return Err(SegmentError::BadParams("exponent"));
+        }
+        if self.max_objects == 0 || usize::from(self.max_objects) > MAX_OBJECTS {
+            return Err(SegmentError::BadParams("max_objects"));
+        }
+        Ok(())
+    }
+}
+
+/// Errors of the segmentation stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SegmentError {
+    /// A buffer cannot be viewed as an image of the working size.
+    Image(ImageError),
+    /// Two maps differ in size.
+    SizeMismatch {
+        /// The expected `(width, height)`.
+        expected: (usize, usize),
+        /// The given `(width, height)`.
+        got: (usize, usize),
+    },
+    /// A labelling needs more provisional labels than the tables hold.
+    LabelCapacity {
+        /// Table entries available (label 0 included).
+        capacity: usize,
+    },
+    /// The mask buffer cannot hold `max_objects` masks.
+    MasksTooSmall {
+        /// Elements needed.
+        needed: usize,
+        /// Elements given.
+        got: usize,
+    },
+    /// A parameter is out of range; the field's name.
+    BadParams(&'static str),
+}
+
+impl fmt::Display for SegmentError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Image(e) => write!(f, "segmentation buffer: {e}"),
+            Self::SizeMismatch { expected, got } => write!(
+                f,
+                "map is {}x{}, expected {}x{}",
+                got.0, got.1, expected.0, expected.1
+            ),
+            Self::LabelCapacity { capacity } => write!(
+                f,
+                "connected components need more than {capacity} label table entries"
+            ),
+            Self::MasksTooSmall { needed, got } => {
+                write!(f, "mask buffer holds {got} pixels, needs {needed}")
+            }
+            Self::BadParams(name) => write!(f, "segmentation parameter `{name}` is out of range"),
+        }
+    }
+}
+
+impl core::error::Error for SegmentError {}
+
+impl From<ImageError> for SegmentError {
+    fn from(e: ImageError) -> Self {
+        Self::Image(e)
+    }
+}
+
+fn check_size(expected: (usize, usize), got: (usize, usize)) -> Result<(), SegmentError> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(SegmentError::SizeMismatch { expected, got })
+    }
+}

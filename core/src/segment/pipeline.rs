@@ -1,0 +1,273 @@
+//! Border refinement, object inhibition and the whole stage.
+
+use super::buffers::SegmentBuffers;
+use super::label::{area_filter, fill_holes, AreaReport, Connectivity, Labeller};
+use super::morph::{close, dilate_n, non_max_suppression};
+use super::stats::{
+    above_mean, foreground, foreground_conspicuity, object_conspicuity, object_region, plane,
+    select_slice, selected_stats, slice_counts, slice_range, thresholds, DisparityRange,
+    SelectedStats, Thresholds,
+};
+use super::{check_size, SegmentError, SegmentParams, MAX_OBJECTS};
+use crate::conspicuity::EdgeCell;
+use crate::disparity::DisparityCell;
+use crate::image::{ImageView, ImageViewMut};
+
+/// Border refinement: `region` = the largest 8-connected component of the
+/// (ψ ≠ OFF) map dilated `params.refine_dilations` times by
+/// `params.disk`; C_Obj = C_ObjReg inside `region`. Returns the ON count of
+/// C_Obj. `scratch` is overwritten.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`] or [`SegmentError::LabelCapacity`].
+pub fn refine_border(
+    params: &SegmentParams,
+    psi: &ImageView<'_, EdgeCell>,
+    c_obj_reg: &ImageView<'_, EdgeCell>,
+    region: &mut ImageViewMut<'_, bool>,
+    scratch: &mut ImageViewMut<'_, bool>,
+    lab: &mut Labeller<'_>,
+    c_obj: &mut ImageViewMut<'_, EdgeCell>,
+) -> Result<u32, SegmentError> {
+    check_size(psi.size(), region.size())?;
+    check_size(psi.size(), c_obj_reg.size())?;
+    check_size(psi.size(), c_obj.size())?;
+    for (s, o) in psi.rows().zip(region.rows_mut()) {
+        for (c, o) in s.iter().zip(o.iter_mut()) {
+            *o = c.is_on();
+        }
+    }
+    dilate_n(params.disk, region, scratch, params.refine_dilations)?;
+    lab.label(&region.as_view(), true, Connectivity::Eight)?;
+    let best = lab.largest().map_or(0, |(l, _)| l);
+    lab.select(best, region)?;
+    let mut n = 0;
+    let region = region.as_view();
+    for ((s, r), o) in c_obj_reg.rows().zip(region.rows()).zip(c_obj.rows_mut()) {
+        for ((&c, &r), o) in s.iter().zip(r).zip(o.iter_mut()) {
+            *o = if r { c } else { EdgeCell::OFF };
+            n += u32::from(o.is_on());
+        }
+    }
+    Ok(n)
+}
+
+/// An axis-aligned box, pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BoundingBox {
+    /// Left column.
+    pub x: usize,
+    /// Top row.
+    pub y: usize,
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+}
+
+/// The bounding box of the ON pixels, `None` when there are none.
+pub fn bounding_box(mask: &ImageView<'_, bool>) -> Option<BoundingBox> {
+    let mut b: Option<(usize, usize, usize, usize)> = None;
+    for (y, row) in mask.rows().enumerate() {
+        let first = row.iter().position(|&m| m);
+        let last = row.iter().rposition(|&m| m);
+        if let (Some(x0), Some(x1)) = (first, last) {
+            b = Some(b.map_or((x0, y, x1, y), |(a, b0, c, _)| {
+                (a.min(x0), b0, c.max(x1), y)
+            }));
+        }
+    }
+    b.map(|(x0, y0, x1, y1)| BoundingBox {
+        x: x0,
+        y: y0,
+        width: x1 - x0 + 1,
+        height: y1 - y0 + 1,
+    })
+}
+
+/// One extracted object.
+///
+/// Its mask is chunk `index` (`width · height` cells) of the mask buffer
+/// given to [`segment`]. The shape vector comes from that mask: the hook
+/// for the `shape` stage is `shape(mask_k)` on that chunk, one call per
+/// detection, in this order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Detection {
+    /// Rank: 0 for the most salient (the paper's single object).
+    pub index: usize,
+    /// δ, whole px.
+    pub delta: u16,
+    /// The object slice `[δ − r, δ + r]`.
+    pub range: DisparityRange,
+    /// Saliency: A^C(δ)·δ^A.
+    pub score: u64,
+    /// Mask pixels (0 when the contour never closed).
+    pub area: u32,
+    /// Bounding box of the mask.
+    pub bbox: Option<BoundingBox>,
+    /// What the area filter saw.
+    pub regions: AreaReport,
+}
+
+/// What [`segment`] found.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SegmentReport {
+    /// mean_S and σ_S; `None` when S holds no valid disparity.
+    pub stats: Option<SelectedStats>,
+    /// The D_fg interval.
+    pub thresholds: Option<Thresholds>,
+    /// ON cells of D_fg before any inhibition.
+    pub foreground: u32,
+    /// Objects, most salient first.
+    pub objects: heapless::Vec<Detection, MAX_OBJECTS>,
+}
+
+/// Inhibits an extracted object in D_fg so the next search finds another:
+/// turns OFF the D_fg cells of the object's slice (ON in D_ObjReg) that lie
+/// in its refined region or its mask. When that turns nothing OFF (ψ was
+/// empty), it turns OFF every D_fg cell whose plane is within 1 of δ, so each
+/// search removes at least the cells that chose δ. Returns the cells
+/// turned OFF.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`].
+pub fn inhibit(
+    d_fg: &mut ImageViewMut<'_, DisparityCell>,
+    d_obj_reg: &ImageView<'_, DisparityCell>,
+    region: &ImageView<'_, bool>,
+    mask: &ImageView<'_, bool>,
+    delta: u16,
+) -> Result<u32, SegmentError> {
+    check_size(d_fg.size(), d_obj_reg.size())?;
+    check_size(d_fg.size(), region.size())?;
+    check_size(d_fg.size(), mask.size())?;
+    let mut n = 0;
+    let rows = d_fg.rows_mut().zip(d_obj_reg.rows());
+    for ((d, o), (r, m)) in rows.zip(region.rows().zip(mask.rows())) {
+        let cells = d.iter_mut().zip(o).zip(r.iter().zip(m));
+        for ((d, o), (&r, &m)) in cells {
+            if o.is_on() && (r || m) {
+                *d = DisparityCell::OFF;
+                n += 1;
+            }
+        }
+    }
+    if n == 0 {
+        for d in d_fg.rows_mut().flat_map(|r| r.iter_mut()) {
+            let near = d
+                .get()
+                .is_some_and(|v| plane(v.to_bits()).abs_diff(delta) <= 1);
+            if near {
+                *d = DisparityCell::OFF;
+                n += 1;
+            }
+        }
+    }
+    Ok(n)
+}
+
+/// Runs the whole stage for up to `params.max_objects` objects. `masks`
+/// holds one packed `width · height` mask per object; every mask is
+/// cleared first, and masks past the detections stay clear. With no valid
+/// disparity in S, no foreground or no foreground edge the report has no
+/// objects and every map is OFF (never an error).
+///
+/// # Errors
+/// [`SegmentError::BadParams`], [`SegmentError::SizeMismatch`] when a map is
+/// not the buffers' size, [`SegmentError::MasksTooSmall`], or
+/// [`SegmentError::LabelCapacity`].
+pub fn segment(
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+    conspicuity: &ImageView<'_, EdgeCell>,
+    bufs: &mut SegmentBuffers<'_>,
+    masks: &mut [bool],
+) -> Result<SegmentReport, SegmentError> {
+    params.validate()?;
+    let (w, h) = bufs.size();
+    check_size((w, h), disparity.size())?;
+    check_size((w, h), conspicuity.size())?;
+    let k = usize::from(params.max_objects);
+    let needed = k * w * h;
+    if masks.len() < needed {
+        return Err(SegmentError::MasksTooSmall {
+            needed,
+            got: masks.len(),
+        });
+    }
+    masks.fill(false);
+    bufs.clear();
+    let mut report = SegmentReport {
+        stats: None,
+        thresholds: None,
+        foreground: 0,
+        objects: heapless::Vec::new(),
+    };
+    let Some(stats) = selected_stats(params, disparity) else {
+        return Ok(report);
+    };
+    let t = thresholds(params, &stats);
+    report.stats = Some(stats);
+    report.thresholds = Some(t);
+    report.foreground = foreground(params, disparity, &t, &mut bufs.d_fg)?;
+    for (index, mask) in masks.chunks_exact_mut(w * h).take(k).enumerate() {
+        let mut mask = ImageViewMut::packed(mask, w, h)?;
+        foreground_conspicuity(conspicuity, &bufs.d_fg.as_view(), &mut bufs.c_fg)?;
+        let counts = slice_counts(&bufs.c_fg.as_view(), &bufs.d_fg.as_view())?;
+        let Some(slice) = select_slice(&counts, params.exponent) else {
+            break;
+        };
+        let range = slice_range(params, &stats, slice.delta);
+        object_region(&bufs.d_fg.as_view(), &range, &mut bufs.d_obj_reg)?;
+        object_conspicuity(conspicuity, &bufs.d_obj_reg.as_view(), &mut bufs.psi)?;
+        above_mean(
+            params.psi_mean,
+            &bufs.psi.as_view(),
+            &bufs.d_obj_reg.as_view(),
+            &mut bufs.c_obj_reg,
+        )?;
+        refine_border(
+            params,
+            &bufs.psi.as_view(),
+            &bufs.c_obj_reg.as_view(),
+            &mut bufs.region,
+            &mut bufs.scratch,
+            &mut bufs.labeller,
+            &mut bufs.c_obj,
+        )?;
+        non_max_suppression(&bufs.c_obj.as_view(), &mut bufs.nms)?;
+        bufs.closed.copy_from(&bufs.nms.as_view())?;
+        close(
+            params.disk,
+            &mut bufs.closed,
+            &mut bufs.scratch,
+            params.closing_steps,
+        )?;
+        fill_holes(&bufs.closed.as_view(), &mut bufs.filled, &mut bufs.labeller)?;
+        let regions = area_filter(
+            &bufs.filled.as_view(),
+            &mut mask,
+            &mut bufs.labeller,
+            params.min_area,
+        )?;
+        let det = Detection {
+            index,
+            delta: slice.delta,
+            range,
+            score: slice.score,
+            area: regions.area,
+            bbox: bounding_box(&mask.as_view()),
+            regions,
+        };
+        // Capacity MAX_OBJECTS >= max_objects, checked by `validate`.
+        let _ = report.objects.push(det);
+        inhibit(
+            &mut bufs.d_fg,
+            &bufs.d_obj_reg.as_view(),
+            &bufs.region.as_view(),
+            &mask.as_view(),
+            slice.delta,
+        )?;
+    }
+    Ok(report)
+}

@@ -1,0 +1,421 @@
+//! The statistics steps: S, D_fg, C_fg, A^C(d), δ, r, D_ObjReg, ψ, C_ObjReg.
+//!
+//! Integer only. Disparities are [`Disparity`] bits (1/256 px); means,
+//! standard deviations and thresholds carry [`STAT_FRAC_BITS`] fraction bits
+//! (1/4096 px), so a threshold is within 1/8192 px of the exact value.
+
+use super::{check_size, Ratio, SegmentError, SegmentParams};
+use crate::conspicuity::EdgeCell;
+use crate::disparity::DisparityCell;
+use crate::image::{ImageView, ImageViewMut};
+
+/// Fraction bits of [`SelectedStats`] and [`DisparityRange`] values.
+pub const STAT_FRAC_BITS: u32 = 12;
+
+/// Extra fraction bits over the [`Disparity`](crate::disparity::Disparity) bits.
+const EXTRA: u32 = STAT_FRAC_BITS - 8;
+
+/// Whole-pixel disparity planes of [`SliceCounts`]: `0..=256`.
+pub const PLANES: usize = 257;
+
+/// Mean and standard deviation of the valid disparities of S.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SelectedStats {
+    /// Valid (ON) pixels of S.
+    pub count: u32,
+    /// mean_S, px · 2^[`STAT_FRAC_BITS`].
+    pub mean: u32,
+    /// σ_S (population), px · 2^[`STAT_FRAC_BITS`].
+    pub sigma: u32,
+}
+
+/// The open interval of D_fg, px · 2^[`STAT_FRAC_BITS`]: `low < D < high`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Thresholds {
+    /// mean_S + 0.1 σ_S.
+    pub low: u32,
+    /// mean_S + 2 σ_S.
+    pub high: u32,
+}
+
+/// A closed disparity interval, px · 2^[`STAT_FRAC_BITS`]: `low ≤ D ≤ high`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DisparityRange {
+    /// δ − r (may be negative).
+    pub low: i64,
+    /// δ + r.
+    pub high: i64,
+}
+
+impl DisparityRange {
+    /// True when disparity bits `d` (1/256 px) lie in the range.
+    pub fn contains_bits(&self, d: u16) -> bool {
+        let q = i64::from(d) << EXTRA;
+        self.low <= q && q <= self.high
+    }
+}
+
+/// `round(x · num / den)` for `den > 0`, ties up.
+fn mul_ratio(x: u64, r: Ratio) -> u64 {
+    let den = u64::from(r.den.max(1));
+    (2 * x * u64::from(r.num) + den) / (2 * den)
+}
+
+/// `round(sqrt(x))`, exact, integer only.
+pub fn isqrt_round_u64(x: u64) -> u64 {
+    // Floor square root, digit by digit (no division, no overflow).
+    let (mut rem, mut root) = (x, 0u64);
+    let mut bit = 1u64 << 62;
+    while bit > x {
+        bit >>= 2;
+    }
+    while bit != 0 {
+        if rem >= root + bit {
+            rem -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    // rem = x − root²; round up when x ≥ root² + root + 1/4.
+    if rem > root {
+        root + 1
+    } else {
+        root
+    }
+}
+
+/// True when `(x, y)` lies in the selected area S of a `width` x `height`
+/// map: `x > w·left` and `h·top_bottom < y < h·(1 − top_bottom)`, exactly.
+pub fn in_selected_area(
+    params: &SegmentParams,
+    width: usize,
+    height: usize,
+    x: usize,
+    y: usize,
+) -> bool {
+    let (l, tb) = (params.left_strip, params.top_bottom_strip);
+    let (x, y, w, h) = (x as u64, y as u64, width as u64, height as u64);
+    let (ln, ld, tn, td) = (
+        u64::from(l.num),
+        u64::from(l.den.max(1)),
+        u64::from(tb.num),
+        u64::from(tb.den.max(1)),
+    );
+    x * ld > w * ln && y * td > h * tn && y * td < h * (td - tn.min(td))
+}
+
+/// Writes S: D inside the selected area, OFF outside. Returns its ON count.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`].
+pub fn selected_area(
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+    s: &mut ImageViewMut<'_, DisparityCell>,
+) -> Result<u32, SegmentError> {
+    check_size(disparity.size(), s.size())?;
+    let (w, h) = disparity.size();
+    let mut n = 0;
+    for (y, (src, dst)) in disparity.rows().zip(s.rows_mut()).enumerate() {
+        for (x, (&d, o)) in src.iter().zip(dst.iter_mut()).enumerate() {
+            *o = if in_selected_area(params, w, h, x, y) {
+                d
+            } else {
+                DisparityCell::OFF
+            };
+            n += u32::from(o.is_on());
+        }
+    }
+    Ok(n)
+}
+
+/// mean_S and σ_S over the ON pixels of S (read straight from D); `None`
+/// when S holds no valid disparity.
+pub fn selected_stats(
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+) -> Option<SelectedStats> {
+    let (w, h) = disparity.size();
+    let (mut n, mut sum, mut sum2) = (0u64, 0u64, 0u64);
+    for (y, row) in disparity.rows().enumerate() {
+        for (x, d) in row.iter().enumerate() {
+            if let Some(d) = d.get() {
+                if in_selected_area(params, w, h, x, y) {
+                    let b = u64::from(d.to_bits());
+                    n += 1;
+                    sum += b;
+                    sum2 += b * b;
+                }
+            }
+        }
+    }
+    if n == 0 {
+        return None;
+    }
+    let mean = ((sum << (EXTRA + 1)) + n) / (2 * n);
+    // var (bits²) = (n·Σb² − (Σb)²) / n²; in output units × 2^(2·EXTRA).
+    let num = u128::from(n) * u128::from(sum2) - u128::from(sum) * u128::from(sum);
+    let n2 = u128::from(n) * u128::from(n);
+    let var = ((num << (2 * EXTRA + 1)) + n2) / (2 * n2);
+    let sigma = isqrt_round_u64(u64::try_from(var).unwrap_or(u64::MAX));
+    Some(SelectedStats {
+        count: u32::try_from(n).unwrap_or(u32::MAX),
+        mean: u32::try_from(mean).unwrap_or(u32::MAX),
+        sigma: u32::try_from(sigma).unwrap_or(u32::MAX),
+    })
+}
+
+/// The D_fg interval: `mean + fg_low·σ < D < mean + fg_high·σ`.
+pub fn thresholds(params: &SegmentParams, stats: &SelectedStats) -> Thresholds {
+    let (m, s) = (u64::from(stats.mean), u64::from(stats.sigma));
+    let cap = |v: u64| u32::try_from(v).unwrap_or(u32::MAX);
+    Thresholds {
+        low: cap(m + mul_ratio(s, params.fg_low)),
+        high: cap(m + mul_ratio(s, params.fg_high)),
+    }
+}
+
+/// Writes D_fg: the disparities of S strictly inside `t`, else OFF. Returns
+/// the ON count.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`].
+pub fn foreground(
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+    t: &Thresholds,
+    d_fg: &mut ImageViewMut<'_, DisparityCell>,
+) -> Result<u32, SegmentError> {
+    check_size(disparity.size(), d_fg.size())?;
+    let (w, h) = disparity.size();
+    let mut n = 0;
+    for (y, (src, dst)) in disparity.rows().zip(d_fg.rows_mut()).enumerate() {
+        for (x, (&d, o)) in src.iter().zip(dst.iter_mut()).enumerate() {
+            let keep = d.get().is_some_and(|v| {
+                let q = u32::from(v.to_bits()) << EXTRA;
+                t.low < q && q < t.high
+            }) && in_selected_area(params, w, h, x, y);
+            *o = if keep { d } else { DisparityCell::OFF };
+            n += u32::from(keep);
+        }
+    }
+    Ok(n)
+}
+
+/// `dst = c` where `mask` is ON, else OFF; returns the ON count of `dst`.
+/// This is C_fg (mask D_fg) and ψ (mask D_ObjReg).
+fn masked(
+    c: &ImageView<'_, EdgeCell>,
+    mask: &ImageView<'_, DisparityCell>,
+    dst: &mut ImageViewMut<'_, EdgeCell>,
+) -> Result<u32, SegmentError> {
+    check_size(c.size(), mask.size())?;
+    check_size(c.size(), dst.size())?;
+    let mut n = 0;
+    for ((c, m), o) in c.rows().zip(mask.rows()).zip(dst.rows_mut()) {
+        for ((&c, &m), o) in c.iter().zip(m).zip(o.iter_mut()) {
+            *o = if m.is_on() { c } else { EdgeCell::OFF };
+            n += u32::from(o.is_on());
+        }
+    }
+    Ok(n)
+}
+
+/// Writes C_fg: C where D_fg is ON. Returns its ON count.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`].
+pub fn foreground_conspicuity(
+    c: &ImageView<'_, EdgeCell>,
+    d_fg: &ImageView<'_, DisparityCell>,
+    c_fg: &mut ImageViewMut<'_, EdgeCell>,
+) -> Result<u32, SegmentError> {
+    masked(c, d_fg, c_fg)
+}
+
+/// ON C_fg cells per whole-pixel plane (D_fg rounded to nearest, ties
+/// up), and the range of planes D_fg covers.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SliceCounts {
+    /// Cells per plane.
+    pub counts: [u32; PLANES],
+    /// D_fg min and max, whole px; `None` when D_fg is all OFF.
+    pub planes: Option<(u16, u16)>,
+}
+
+/// `round(d)` in whole pixels, ties up.
+pub fn plane(d: u16) -> u16 {
+    ((u32::from(d) + 128) >> 8) as u16
+}
+
+/// Counts the ON C_fg cells of every D_fg plane.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`].
+pub fn slice_counts(
+    c_fg: &ImageView<'_, EdgeCell>,
+    d_fg: &ImageView<'_, DisparityCell>,
+) -> Result<SliceCounts, SegmentError> {
+    check_size(c_fg.size(), d_fg.size())?;
+    let mut out = SliceCounts {
+        counts: [0; PLANES],
+        planes: None,
+    };
+    for (c, d) in c_fg.rows().zip(d_fg.rows()) {
+        for (c, d) in c.iter().zip(d) {
+            let Some(d) = d.get() else { continue };
+            let p = plane(d.to_bits());
+            out.planes = Some(out.planes.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
+            if c.is_on() {
+                if let Some(k) = out.counts.get_mut(usize::from(p)) {
+                    *k += 1;
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The chosen disparity slice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Slice {
+    /// δ, whole px.
+    pub delta: u16,
+    /// A^C(δ).
+    pub cells: u32,
+    /// A^C(δ) · δ^A, saturated at `u64::MAX`: the saliency score.
+    pub score: u64,
+}
+
+/// A^C(d): the counts of planes `d−1..=d+1` that lie in the D_fg range
+/// (so 2 planes at either end).
+pub fn slice_cells(counts: &SliceCounts, d: u16) -> u32 {
+    let Some((lo, hi)) = counts.planes else {
+        return 0;
+    };
+    (d.saturating_sub(1).max(lo)..=d.saturating_add(1).min(hi))
+        .filter_map(|i| counts.counts.get(usize::from(i)))
+        .sum()
+}
+
+/// δ = argmax A^C(d)·d^A over the D_fg planes; the nearest (largest d) wins
+/// ties. `None` when every score is zero (no foreground edge).
+pub fn select_slice(counts: &SliceCounts, exponent: u8) -> Option<Slice> {
+    let (lo, hi) = counts.planes?;
+    let mut best: Option<Slice> = None;
+    for d in lo..=hi {
+        let cells = slice_cells(counts, d);
+        let w = u128::from(d)
+            .checked_pow(u32::from(exponent))
+            .unwrap_or(u128::MAX);
+        let score = u64::try_from(u128::from(cells).saturating_mul(w)).unwrap_or(u64::MAX);
+        if score > 0 && best.is_none_or(|b| score >= b.score) {
+            best = Some(Slice {
+                delta: d,
+                cells,
+                score,
+            });
+        }
+    }
+    best
+}
+
+/// r = σ_S · range (the paper's σ_S / 2.5), px · 2^[`STAT_FRAC_BITS`].
+pub fn slice_radius(params: &SegmentParams, stats: &SelectedStats) -> u32 {
+    u32::try_from(mul_ratio(u64::from(stats.sigma), params.range)).unwrap_or(u32::MAX)
+}
+
+/// The object slice `[δ − r, δ + r]`.
+pub fn slice_range(params: &SegmentParams, stats: &SelectedStats, delta: u16) -> DisparityRange {
+    let c = i64::from(delta) << STAT_FRAC_BITS;
+    let r = i64::from(slice_radius(params, stats));
+    DisparityRange {
+        low: c - r,
+        high: c + r,
+    }
+}
+
+/// Writes D_ObjReg: D_fg inside `range`, else OFF. Returns the ON count.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`].
+pub fn object_region(
+    d_fg: &ImageView<'_, DisparityCell>,
+    range: &DisparityRange,
+    d_obj_reg: &mut ImageViewMut<'_, DisparityCell>,
+) -> Result<u32, SegmentError> {
+    check_size(d_fg.size(), d_obj_reg.size())?;
+    let mut n = 0;
+    for (s, o) in d_fg.rows().zip(d_obj_reg.rows_mut()) {
+        for (&d, o) in s.iter().zip(o.iter_mut()) {
+            let keep = d.get().is_some_and(|v| range.contains_bits(v.to_bits()));
+            *o = if keep { d } else { DisparityCell::OFF };
+            n += u32::from(keep);
+        }
+    }
+    Ok(n)
+}
+
+/// Writes ψ: C where D_ObjReg is ON. Returns its ON count.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`].
+pub fn object_conspicuity(
+    c: &ImageView<'_, EdgeCell>,
+    d_obj_reg: &ImageView<'_, DisparityCell>,
+    psi: &mut ImageViewMut<'_, EdgeCell>,
+) -> Result<u32, SegmentError> {
+    masked(c, d_obj_reg, psi)
+}
+
+/// Which cells the mean ψ̄ of C_ObjReg = (ψ > ψ̄) is taken over.
+///
+/// The paper defines ψ as C inside D_ObjReg and OFF elsewhere, and keeps the
+/// "active-above-average" cells without saying whether inactive (OFF) cells
+/// inside the object region count in the average.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PsiMean {
+    /// Over every cell of the object region (D_ObjReg ON), an OFF ψ cell
+    /// counting as 0: the mean activity of the region's cell population.
+    /// The default; see `docs/SEGMENT.md` for the measurements behind it.
+    #[default]
+    Region,
+    /// Over the ON ψ cells only. On an object whose only edges are its
+    /// outline this drops about half the outline.
+    OnCells,
+}
+
+/// Writes C_ObjReg: ψ where ψ is above its mean ψ̄ (exact: `n·ψ > Σψ`,
+/// `n` and `Σψ` as `over` says). Returns the ON count.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`].
+pub fn above_mean(
+    over: PsiMean,
+    psi: &ImageView<'_, EdgeCell>,
+    d_obj_reg: &ImageView<'_, DisparityCell>,
+    c_obj_reg: &mut ImageViewMut<'_, EdgeCell>,
+) -> Result<u32, SegmentError> {
+    check_size(psi.size(), c_obj_reg.size())?;
+    check_size(psi.size(), d_obj_reg.size())?;
+    let (mut n, mut sum) = (0u64, 0u64);
+    for (c, d) in psi.pixels().zip(d_obj_reg.pixels()) {
+        let counted = match over {
+            PsiMean::Region => d.is_on(),
+            PsiMean::OnCells => c.is_on(),
+        };
+        n += u64::from(counted);
+        sum += c.get().map_or(0, |v| u64::from(v.to_bits()));
+    }
+    let mut on = 0;
+    for (s, o) in psi.rows().zip(c_obj_reg.rows_mut()) {
+        for (&c, o) in s.iter().zip(o.iter_mut()) {
+            let keep = c.get().is_some_and(|v| n * u64::from(v.to_bits()) > sum);
+            *o = if keep { c } else { EdgeCell::OFF };
+            on += u32::from(keep);
+        }
+    }
+    Ok(on)
+}

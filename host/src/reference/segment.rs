@@ -1,0 +1,305 @@
+//! Reference of [`protogist::segment`], same names and argument order.
+//!
+//! The statistics steps (S, mean and σ, the D_fg thresholds, A^C(d), δ, r)
+//! are in floating point: disparity maps are `Option<f32>` px (`None` is
+//! OFF), sums in f64. The integer mask stages (dilation, erosion, closing,
+//! NMS, labelling, hole filling, the area filter, the border refinement) are
+//! written the naive way, pixel by pixel with flood fills on `Vec`s, and
+//! must agree with core bit for bit.
+
+use protogist::conspicuity::EdgeCell;
+use protogist::segment::{Connectivity, Disk, Ratio, SegmentParams, NMS_DIRECTIONS};
+use std::collections::VecDeque;
+
+/// A disparity cell in px, `None` for OFF.
+pub type DispF = Option<f32>;
+
+fn ratio(r: Ratio) -> f64 {
+    f64::from(r.num) / f64::from(r.den)
+}
+
+/// True when `(x, y)` lies in S: `x > w·left`, `h·tb < y < h·(1 − tb)`.
+pub fn in_selected_area(
+    params: &SegmentParams,
+    width: usize,
+    height: usize,
+    x: usize,
+    y: usize,
+) -> bool {
+    let (l, tb) = (ratio(params.left_strip), ratio(params.top_bottom_strip));
+    let (x, y, w, h) = (x as f64, y as f64, width as f64, height as f64);
+    x > w * l && y > h * tb && y < h * (1.0 - tb)
+}
+
+/// mean_S and σ_S, px.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SelectedStatsF {
+    /// Valid pixels of S.
+    pub count: u32,
+    /// mean_S.
+    pub mean: f32,
+    /// σ_S (population).
+    pub sigma: f32,
+}
+
+/// mean_S and σ_S over the valid disparities of S; `None` when there are none.
+pub fn selected_stats(
+    params: &SegmentParams,
+    disparity: &[DispF],
+    width: usize,
+    height: usize,
+) -> Option<SelectedStatsF> {
+    let vals: Vec<f64> = disparity
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| in_selected_area(params, width, height, i % width, i / width))
+        .filter_map(|(_, d)| d.map(f64::from))
+        .collect();
+    if vals.is_empty() {
+        return None;
+    }
+    let n = vals.len() as f64;
+    let mean = vals.iter().sum::<f64>() / n;
+    let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+    Some(SelectedStatsF {
+        count: vals.len() as u32,
+        mean: mean as f32,
+        sigma: var.sqrt() as f32,
+    })
+}
+
+/// The open D_fg interval, px.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThresholdsF {
+    /// mean + 0.1σ.
+    pub low: f32,
+    /// mean + 2σ.
+    pub high: f32,
+}
+
+/// The D_fg interval.
+pub fn thresholds(params: &SegmentParams, stats: &SelectedStatsF) -> ThresholdsF {
+    let (m, s) = (f64::from(stats.mean), f64::from(stats.sigma));
+    ThresholdsF {
+        low: (m + ratio(params.fg_low) * s) as f32,
+        high: (m + ratio(params.fg_high) * s) as f32,
+    }
+}
+
+/// D_fg: the disparities of S strictly inside `t`.
+pub fn foreground(
+    params: &SegmentParams,
+    disparity: &[DispF],
+    width: usize,
+    height: usize,
+    t: &ThresholdsF,
+) -> Vec<DispF> {
+    disparity
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            d.filter(|&v| {
+                t.low < v
+                    && v < t.high
+                    && in_selected_area(params, width, height, i % width, i / width)
+            })
+        })
+        .collect()
+}
+
+/// C_fg: C where D_fg is ON.
+pub fn foreground_conspicuity(c: &[EdgeCell], d_fg: &[DispF]) -> Vec<EdgeCell> {
+    c.iter()
+        .zip(d_fg)
+        .map(|(&c, d)| if d.is_some() { c } else { EdgeCell::OFF })
+        .collect()
+}
+
+/// ON C_fg cells per whole-px plane (rounded half up) and the D_fg plane range.
+pub fn slice_counts(c_fg: &[EdgeCell], d_fg: &[DispF]) -> (Vec<u32>, Option<(u16, u16)>) {
+    let mut counts = vec![0u32; 257];
+    let mut range: Option<(u16, u16)> = None;
+    for (c, d) in c_fg.iter().zip(d_fg) {
+        if let Some(d) = d {
+            let p = (d + 0.5).floor() as u16;
+            range = Some(range.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
+            if c.is_on() {
+                counts[usize::from(p)] += 1;
+            }
+        }
+    }
+    (counts, range)
+}
+
+/// δ, A^C(δ) and the score A^C(δ)·δ^A (f64); the nearest plane wins ties.
+pub fn select_slice(
+    counts: &(Vec<u32>, Option<(u16, u16)>),
+    exponent: u8,
+) -> Option<(u16, u32, f64)> {
+    let (c, range) = counts;
+    let (lo, hi) = (*range)?;
+    let mut best: Option<(u16, u32, f64)> = None;
+    for d in lo..=hi {
+        let cells: u32 = (d.saturating_sub(1).max(lo)..=(d + 1).min(hi))
+            .map(|i| c[usize::from(i)])
+            .sum();
+        let score = f64::from(cells) * f64::from(d).powi(i32::from(exponent));
+        if score > 0.0 && best.is_none_or(|b| score >= b.2) {
+            best = Some((d, cells, score));
+        }
+    }
+    best
+}
+
+/// r = σ_S · range (σ_S / 2.5), px.
+pub fn slice_radius(params: &SegmentParams, stats: &SelectedStatsF) -> f32 {
+    (f64::from(stats.sigma) * ratio(params.range)) as f32
+}
+
+fn offsets(disk: Disk) -> Vec<(isize, isize)> {
+    let mut v = vec![(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)];
+    if disk == Disk::Square {
+        v.extend([(-1, -1), (1, -1), (-1, 1), (1, 1)]);
+    }
+    v
+}
+
+fn at<T: Copy>(m: &[T], w: usize, h: usize, x: isize, y: isize) -> Option<T> {
+    if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
+        None
+    } else {
+        Some(m[y as usize * w + x as usize])
+    }
+}
+
+/// One dilation; outside pixels are OFF.
+pub fn dilate(disk: Disk, src: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let offs = offsets(disk);
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            offs.iter()
+                .any(|&(dx, dy)| at(src, w, h, x + dx, y + dy).unwrap_or(false))
+        })
+        .collect()
+}
+
+/// One erosion; outside pixels are ON.
+pub fn erode(disk: Disk, src: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let offs = offsets(disk);
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            offs.iter()
+                .all(|&(dx, dy)| at(src, w, h, x + dx, y + dy).unwrap_or(true))
+        })
+        .collect()
+}
+
+/// `n` dilations then `n` erosions.
+pub fn close(disk: Disk, map: &[bool], w: usize, h: usize, n: u8) -> Vec<bool> {
+    let mut m = map.to_vec();
+    for _ in 0..n {
+        m = dilate(disk, &m, w, h);
+    }
+    for _ in 0..n {
+        m = erode(disk, &m, w, h);
+    }
+    m
+}
+
+/// NMS: ON cells that are ≥ both neighbours along at least one direction.
+pub fn non_max_suppression(c_obj: &[EdgeCell], w: usize, h: usize) -> Vec<bool> {
+    let v = |x: isize, y: isize| {
+        at(c_obj, w, h, x, y)
+            .and_then(EdgeCell::get)
+            .map_or(-1, |c| i32::from(c.to_bits()))
+    };
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            let c = v(x, y);
+            c >= 0
+                && NMS_DIRECTIONS
+                    .iter()
+                    .any(|&(dx, dy)| c >= v(x - dx, y - dy) && c >= v(x + dx, y + dy))
+        })
+        .collect()
+}
+
+/// Connected components of the pixels equal to `value` by flood fill,
+/// labels `1..=n` in raster order of first pixel; returns the labels and `n`.
+pub fn label(src: &[bool], w: usize, h: usize, value: bool, conn: Connectivity) -> (Vec<u16>, u16) {
+    let mut labels = vec![0u16; w * h];
+    let mut n = 0u16;
+    let mut nbrs = vec![(-1isize, 0isize), (1, 0), (0, -1), (0, 1)];
+    if conn == Connectivity::Eight {
+        nbrs.extend([(-1, -1), (1, -1), (-1, 1), (1, 1)]);
+    }
+    for start in 0..w * h {
+        if src[start] != value || labels[start] != 0 {
+            continue;
+        }
+        n += 1;
+        labels[start] = n;
+        let mut q = VecDeque::from([start]);
+        while let Some(i) = q.pop_front() {
+            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            for &(dx, dy) in &nbrs {
+                if at(src, w, h, x + dx, y + dy) == Some(value) {
+                    let j = (y + dy) as usize * w + (x + dx) as usize;
+                    if labels[j] == 0 {
+                        labels[j] = n;
+                        q.push_back(j);
+                    }
+                }
+            }
+        }
+    }
+    (labels, n)
+}
+
+/// `closed` plus every background pixel not 4-connected to the border.
+pub fn fill_holes(closed: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let (labels, _) = label(closed, w, h, false, Connectivity::Four);
+    let outside: std::collections::HashSet<u16> = (0..w * h)
+        .filter(|i| i % w == 0 || i % w == w - 1 || i / w == 0 || i / w == h - 1)
+        .map(|i| labels[i])
+        .collect();
+    (0..w * h)
+        .map(|i| closed[i] || !outside.contains(&labels[i]))
+        .collect()
+}
+
+/// Keeps the 8-connected components of `filled` with area ≥ keep·largest.
+pub fn area_filter(filled: &[bool], w: usize, h: usize, keep: Ratio) -> Vec<bool> {
+    let (labels, n) = label(filled, w, h, true, Connectivity::Eight);
+    let mut area = vec![0u64; usize::from(n) + 1];
+    labels.iter().for_each(|&l| area[usize::from(l)] += 1);
+    let largest = area.iter().skip(1).copied().max().unwrap_or(0);
+    labels
+        .iter()
+        .map(|&l| {
+            l != 0 && area[usize::from(l)] * u64::from(keep.den) >= largest * u64::from(keep.num)
+        })
+        .collect()
+}
+
+/// The region of the border refinement: the largest (first on ties)
+/// 8-connected component of the (ψ ≠ OFF) map dilated `n` times.
+pub fn refine_region(disk: Disk, psi: &[EdgeCell], w: usize, h: usize, n: u8) -> Vec<bool> {
+    let mut m: Vec<bool> = psi.iter().map(|c| c.is_on()).collect();
+    for _ in 0..n {
+        m = dilate(disk, &m, w, h);
+    }
+    let (labels, count) = label(&m, w, h, true, Connectivity::Eight);
+    let mut area = vec![0u32; usize::from(count) + 1];
+    labels.iter().for_each(|&l| area[usize::from(l)] += 1);
+    let mut best = (0u16, 0u32);
+    for l in 1..=count {
+        if area[usize::from(l)] > best.1 {
+            best = (l, area[usize::from(l)]);
+        }
+    }
+    labels.iter().map(|&l| l != 0 && l == best.0).collect()
+}
