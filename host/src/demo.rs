@@ -8,10 +8,12 @@
 use crate::error::{HostError, Result};
 use crate::io;
 use crate::panels::{self, Panel};
-use crate::stages::run_conspicuity;
+use crate::stages::{run_conspicuity, run_segment, run_shape};
 use crate::summary::Summary;
 use protogist::conspicuity::{EdgeParams, LuvTables};
+use protogist::disparity::from_pixels;
 use protogist::image::{buffer_len, ImageViewMut, Rgb8};
+use protogist::segment::SegmentParams;
 use protogist::synth::{render_disparity, render_left, render_mask, render_right, SceneSpec};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -135,11 +137,23 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
     maps.summarise(&mut summary);
     maps.boundary_score(&scene.mask).summarise(&mut summary);
 
-    // Stage 2: the shape vector. Until segmentation is wired in, of the
-    // ground-truth object mask.
-    let shape = crate::stages::run_shape(&scene.mask, w, h, "GT mask")?;
-    out.extend(shape.panels(w, h));
-    shape.summarise(&mut summary);
+    // Stage 2: figure-ground and the object mask, from the ground-truth
+    // disparity until the disparity energy model lands.
+    let disparity: Vec<_> = scene.disparity.iter().map(|&d| from_pixels(d)).collect();
+    let seg = run_segment(&SegmentParams::default(), &disparity, &maps.edges, w, h)?;
+    out.extend(seg.panels(&scene.left));
+    summary.push(
+        "disparity input",
+        "ground truth (the DEM stage is not wired yet)",
+    );
+    seg.summarise(&mut summary, Some(&scene.mask));
+
+    // Stage 3: the shape vector of the most salient object's mask.
+    if seg.report.objects.first().is_some_and(|d| d.area > 0) {
+        let shape = run_shape(&seg.mask_u8(0), w, h, "segmented mask")?;
+        out.extend(shape.panels(w, h));
+        shape.summarise(&mut summary);
+    }
 
     finish(&opts.out, out, &mut summary, start)?;
     Ok(summary)

@@ -27,6 +27,9 @@ pub enum HostError {
     /// The synthetic scene generator failed.
     #[error("{0}")]
     Synth(#[from] SynthError),
+    /// The segmentation stage rejected its input.
+    #[error("segmentation stage: {0}")]
+    Segment(#[from] protogist::segment::SegmentError),
     /// The shape stage rejected its mask.
     #[error("shape stage: {0}")]
     Shape(#[from] protogist::shape::ShapeError),

@@ -17,4 +17,5 @@ pub mod panels;
 pub mod plot;
 pub mod reference;
 pub mod stages;
+pub mod storage;
 pub mod summary;

@@ -6,6 +6,7 @@
 use crate::error::{HostError, Result};
 use image::{DynamicImage, GrayImage, Rgb, RgbImage};
 use protogist::conspicuity::{EdgeCell, Luv, SRGB_TO_XYZ, WHITE_U, WHITE_V};
+use protogist::disparity::DisparityCell;
 use protogist::image::Rgb8;
 
 /// One named output image; it is written as `{name}.png`.
@@ -100,6 +101,34 @@ pub fn disparity(d: &[u8], width: usize, height: usize) -> RgbImage {
         })
         .collect();
     RgbImage::from_raw(w, h, raw).unwrap_or_else(|| RgbImage::new(w, h))
+}
+
+/// An OFF-capable disparity map through the turbo colour map, 0 to `max_px`;
+/// OFF cells black.
+pub fn disparity_cells(d: &[DisparityCell], max_px: f32, width: usize, height: usize) -> RgbImage {
+    let (w, h) = dims(width, height);
+    let max = f64::from(max_px.max(1.0));
+    let raw = d
+        .iter()
+        .flat_map(|cell| match cell.get() {
+            Some(v) => {
+                let c = colorous::TURBO.eval_continuous((v.to_num::<f64>() / max).min(1.0));
+                [c.r, c.g, c.b]
+            }
+            None => [0, 0, 0],
+        })
+        .collect();
+    RgbImage::from_raw(w, h, raw).unwrap_or_else(|| RgbImage::new(w, h))
+}
+
+/// The image where `mask` is set, black elsewhere (Fig. 2 j).
+pub fn masked(px: &[Rgb8], mask: &[bool], width: usize, height: usize) -> RgbImage {
+    let kept: Vec<Rgb8> = px
+        .iter()
+        .zip(mask)
+        .map(|(&p, &m)| if m { p } else { Rgb8::default() })
+        .collect();
+    rgb_from(&kept, width, height)
 }
 
 /// The smoothed CIELUV map back in sRGB, for display.

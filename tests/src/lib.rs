@@ -4,6 +4,8 @@ use proptest::prelude::*;
 use protogist::image::Rgb8;
 use std::path::PathBuf;
 
+pub use protogist_host::storage::{EdgeStorage, SegmentStorage};
+
 /// An RGB image buffer with its geometry; `stride >= width`, and the padding
 /// holds random pixels that no stage may read.
 #[derive(Clone, Debug)]
@@ -83,50 +85,6 @@ pub fn data_file(rel: &str) -> Option<PathBuf> {
         p.display()
     );
     None
-}
-
-/// Owned storage for [`protogist::conspicuity::EdgeBuffers`] at one size.
-pub struct EdgeStorage {
-    /// Width.
-    pub width: usize,
-    /// Height.
-    pub height: usize,
-    /// CIELUV map.
-    pub luv: Vec<protogist::conspicuity::Luv>,
-    /// Smoothed map.
-    pub smoothed: Vec<protogist::conspicuity::Luv>,
-    /// Row scratch.
-    pub rows: Vec<protogist::conspicuity::Luv>,
-    /// Conspicuity map.
-    pub cmap: Vec<protogist::conspicuity::EdgeCell>,
-}
-
-impl EdgeStorage {
-    /// Storage sized by the stage's `const fn`s.
-    pub fn new(width: usize, height: usize) -> Self {
-        use protogist::conspicuity::{luv_len, row_scratch_len, EdgeCell, Luv};
-        Self {
-            width,
-            height,
-            luv: vec![Luv::default(); luv_len(width, height)],
-            smoothed: vec![Luv::default(); luv_len(width, height)],
-            rows: vec![Luv::default(); row_scratch_len(width)],
-            cmap: vec![EdgeCell::OFF; luv_len(width, height)],
-        }
-    }
-
-    /// The stage's view of the storage.
-    pub fn buffers(&mut self) -> protogist::conspicuity::EdgeBuffers<'_> {
-        protogist::conspicuity::EdgeBuffers::new(
-            self.width,
-            self.height,
-            &mut self.luv,
-            &mut self.smoothed,
-            &mut self.rows,
-            &mut self.cmap,
-        )
-        .expect("storage is sized by the stage's const fns")
-    }
 }
 
 /// A binary mask (0 or 255), tightly packed.
@@ -278,54 +236,6 @@ pub fn shape_mask(
 ) -> impl Strategy<Value = MaskCase> {
     proptest::collection::vec(object_spec(w, h, min_r, max_r, clip), 1..=2)
         .prop_map(move |objs| render_objects(w, h, &objs))
-}
-
-/// Owned storage for [`protogist::segment::SegmentBuffers`] at one size.
-pub struct SegmentStorage {
-    /// Width.
-    pub width: usize,
-    /// Height.
-    pub height: usize,
-    /// D_fg, D_ObjReg.
-    pub disparity: Vec<protogist::disparity::DisparityCell>,
-    /// C_fg, ψ, C_ObjReg, C_Obj.
-    pub edges: Vec<protogist::conspicuity::EdgeCell>,
-    /// Binary maps.
-    pub binary: Vec<bool>,
-    /// Label map and parent table.
-    pub labels: Vec<u16>,
-    /// Area table.
-    pub area: Vec<u32>,
-}
-
-impl SegmentStorage {
-    /// Storage sized by the stage's `const fn`s.
-    pub fn new(width: usize, height: usize) -> Self {
-        use protogist::segment as s;
-        Self {
-            width,
-            height,
-            disparity: vec![Default::default(); s::disparity_maps_len(width, height)],
-            edges: vec![Default::default(); s::edge_maps_len(width, height)],
-            binary: vec![false; s::binary_maps_len(width, height)],
-            labels: vec![0; s::label_maps_len(width, height)],
-            area: vec![0; s::label_capacity(width, height)],
-        }
-    }
-
-    /// The stage's view of the storage.
-    pub fn buffers(&mut self) -> protogist::segment::SegmentBuffers<'_> {
-        protogist::segment::SegmentBuffers::new(
-            self.width,
-            self.height,
-            &mut self.disparity,
-            &mut self.edges,
-            &mut self.binary,
-            &mut self.labels,
-            &mut self.area,
-        )
-        .expect("storage is sized by the stage's const fns")
-    }
 }
 
 /// Parses an ASCII picture, rows of `#` (ON) and `.` (OFF); blank

@@ -207,7 +207,7 @@ fn whole_stage_matches_its_steps() {
     let rgb = ImageView::packed(&px, w, h).unwrap();
     let mut store = EdgeStorage::new(w, h);
     let params = fx::EdgeParams::default();
-    let mut bufs = store.buffers();
+    let mut bufs = store.buffers().unwrap();
     let report = fx::edge_conspicuity(&TABLES, &params, &rgb, &mut bufs).unwrap();
     let checksum = bufs.checksum();
     let EdgeStorage {
@@ -258,7 +258,7 @@ fn one_pixel_rows_and_columns_run_and_agree() {
         let rgb = ImageView::packed(&px, w, h).unwrap();
         let mut store = EdgeStorage::new(w, h);
         let params = fx::EdgeParams::default();
-        let mut bufs = store.buffers();
+        let mut bufs = store.buffers().unwrap();
         let report = fx::edge_conspicuity(&TABLES, &params, &rgb, &mut bufs).unwrap();
         let float = fl::edge_conspicuity(&params, &rgb).unwrap();
         if w * h == 1 {

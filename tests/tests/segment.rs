@@ -27,7 +27,7 @@ fn scene_iou(seed: u64, params: &SegmentParams) -> (f64, usize, String) {
     let mut rgb = vec![Rgb8::default(); W * H];
     render_left(&spec, &mut ImageViewMut::packed(&mut rgb, W, H).unwrap()).unwrap();
     let mut edges = EdgeStorage::new(W, H);
-    let mut eb = edges.buffers();
+    let mut eb = edges.buffers().unwrap();
     edge_conspicuity(
         &LuvTables::new(),
         &EdgeParams::default(),
@@ -44,7 +44,7 @@ fn scene_iou(seed: u64, params: &SegmentParams) -> (f64, usize, String) {
         params,
         &ImageView::packed(&d, W, H).unwrap(),
         &eb.conspicuity(),
-        &mut store.buffers(),
+        &mut store.buffers().unwrap(),
         &mut masks,
     )
     .unwrap();
@@ -561,7 +561,7 @@ fn run(
         params,
         &ImageView::packed(d, w, h).unwrap(),
         &ImageView::packed(c, w, h).unwrap(),
-        &mut store.buffers(),
+        &mut store.buffers().unwrap(),
         &mut masks,
     );
     (r, masks)
@@ -699,7 +699,7 @@ fn running_out_of_labels_is_a_typed_error() {
         &SegmentParams::default(),
         &ImageView::packed(&d, BW, BH).unwrap(),
         &ImageView::packed(&c, BW, BH).unwrap(),
-        &mut store.buffers(),
+        &mut store.buffers().unwrap(),
         &mut masks,
     );
     assert!(
@@ -717,7 +717,7 @@ fn bad_sizes_and_parameters_are_typed_errors() {
     let dv = ImageView::packed(&d, BW, BH).unwrap();
     let cv = ImageView::packed(&c, BW, BH).unwrap();
     assert_eq!(
-        segment(&p, &dv, &cv, &mut store.buffers(), &mut masks),
+        segment(&p, &dv, &cv, &mut store.buffers().unwrap(), &mut masks),
         Err(sg::SegmentError::MasksTooSmall {
             needed: BW * BH,
             got: BW * BH - 1
@@ -726,7 +726,7 @@ fn bad_sizes_and_parameters_are_typed_errors() {
     let mut masks = vec![false; BW * BH];
     let small = ImageView::packed(&c, BW, BH - 1).unwrap();
     assert!(matches!(
-        segment(&p, &dv, &small, &mut store.buffers(), &mut masks),
+        segment(&p, &dv, &small, &mut store.buffers().unwrap(), &mut masks),
         Err(sg::SegmentError::SizeMismatch { .. })
     ));
     for bad in [
@@ -748,7 +748,7 @@ fn bad_sizes_and_parameters_are_typed_errors() {
             ..p
         },
     ] {
-        let r = segment(&bad, &dv, &cv, &mut store.buffers(), &mut masks);
+        let r = segment(&bad, &dv, &cv, &mut store.buffers().unwrap(), &mut masks);
         assert!(matches!(r, Err(sg::SegmentError::BadParams(_))), "{bad:?}");
         assert!(!r.unwrap_err().to_string().is_empty());
     }

@@ -32,7 +32,7 @@ fn score(k: u8) -> Score {
         })
     };
     let mut store = protogist_tests::EdgeStorage::new(w, h);
-    let mut bufs = store.buffers();
+    let mut bufs = store.buffers().unwrap();
     let params = EdgeParams {
         smooth: SmoothParams { iterations: k },
         threshold_percent: 10,

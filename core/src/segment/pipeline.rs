@@ -261,13 +261,17 @@ pub fn segment(
         };
         // Capacity MAX_OBJECTS >= max_objects, checked by `validate`.
         let _ = report.objects.push(det);
-        inhibit(
-            &mut bufs.d_fg,
-            &bufs.d_obj_reg.as_view(),
-            &bufs.region.as_view(),
-            &mask.as_view(),
-            slice.delta,
-        )?;
+        // Inhibit only before another search, so that after the run every
+        // map shows what the last search saw (for K = 1, the paper's maps).
+        if index + 1 < k {
+            inhibit(
+                &mut bufs.d_fg,
+                &bufs.d_obj_reg.as_view(),
+                &bufs.region.as_view(),
+                &mask.as_view(),
+                slice.delta,
+            )?;
+        }
     }
     Ok(report)
 }
