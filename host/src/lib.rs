@@ -12,6 +12,7 @@
 pub mod cli;
 pub mod demo;
 pub mod error;
+pub mod eval;
 pub mod io;
 pub mod panels;
 pub mod plot;

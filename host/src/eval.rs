@@ -1,0 +1,72 @@
+//! Accuracy checks that both tests and `cargo xtask bench` run.
+
+use crate::error::Result;
+use crate::stages::{run_conspicuity, run_segment};
+use protogist::conspicuity::{EdgeParams, LuvTables};
+use protogist::disparity::from_pixels;
+use protogist::image::{ImageViewMut, Rgb8};
+use protogist::segment::SegmentParams;
+use protogist::synth::{render_disparity, render_left, render_mask, SceneSpec};
+
+/// The segmentation of one seeded scene against its ground truth.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneIou {
+    /// `SceneSpec::random` seed.
+    pub seed: u64,
+    /// Best mask IoU of the most salient detection against any GT object
+    /// (0 when nothing was found).
+    pub iou: f64,
+    /// The matched object, when the IoU is positive.
+    pub object: Option<usize>,
+    /// Objects in the scene.
+    pub objects: usize,
+}
+
+/// Segments `SceneSpec::random(seed, width, height)` with its ground-truth
+/// disparity and the real conspicuity stage, and scores the most salient
+/// mask against the scene's object masks.
+///
+/// # Errors
+/// A stage's typed error (sizes).
+pub fn segment_scene_iou(
+    seed: u64,
+    width: usize,
+    height: usize,
+    params: &SegmentParams,
+) -> Result<SceneIou> {
+    let (w, h) = (width, height);
+    let spec = SceneSpec::random(seed, w, h);
+    let mut rgb = vec![Rgb8::default(); w * h];
+    render_left(&spec, &mut ImageViewMut::packed(&mut rgb, w, h)?)?;
+    let edges = run_conspicuity(&LuvTables::new(), &EdgeParams::default(), &rgb, w, h)?;
+    let mut gt = vec![0u8; w * h];
+    render_disparity(&spec, &mut ImageViewMut::packed(&mut gt, w, h)?)?;
+    let d: Vec<_> = gt.iter().map(|&v| from_pixels(v)).collect();
+    let seg = run_segment(params, &d, &edges.edges, w, h)?;
+    let mut best = (0.0, None);
+    let mut m = vec![0u8; w * h];
+    for i in 0..spec.objects.len() {
+        render_mask(&spec, i, &mut ImageViewMut::packed(&mut m, w, h)?)?;
+        let v = seg.iou(0, &m);
+        if v > best.0 {
+            best = (v, Some(i));
+        }
+    }
+    Ok(SceneIou {
+        seed,
+        iou: best.0,
+        object: best.1,
+        objects: spec.objects.len(),
+    })
+}
+
+/// [`segment_scene_iou`] for seeds `0..scenes`.
+///
+/// # Errors
+/// As [`segment_scene_iou`].
+pub fn segment_eval(scenes: u64, width: usize, height: usize) -> Result<Vec<SceneIou>> {
+    let params = SegmentParams::default();
+    (0..scenes)
+        .map(|seed| segment_scene_iou(seed, width, height, &params))
+        .collect()
+}
