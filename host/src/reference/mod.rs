@@ -1,3 +1,4 @@
 //! f32 references of the core stages, same names and argument order.
 
 pub mod conspicuity;
+pub mod stereo;
