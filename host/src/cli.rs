@@ -5,7 +5,7 @@
 //! protogist demo [--out DIR] [--width W --height H]
 //! protogist conspicuity --image FILE --out DIR [--width W]
 //! protogist stereo --left L --right R [--gt GT --gt-scale S] [--width W]
-//!                  [--max-disp D] [--pool R] [--table FILE] [--json] --out DIR
+//!                  [--max-disp D] [--pool R] [--levels L] [--table FILE] [--json] --out DIR
 //! protogist train-dem --out FILE [--max-disp D]
 //! ```
 
@@ -85,6 +85,9 @@ pub enum Command {
         /// Score pooling radius, px (default: the model's, 2).
         #[arg(long)]
         pool: Option<u8>,
+        /// Pyramid levels (default: the model's, 2: λ 4 and 8).
+        #[arg(long)]
+        levels: Option<u8>,
         /// Decoder table (default: built in for max-disp 15, else trained).
         #[arg(long)]
         table: Option<PathBuf>,
@@ -129,6 +132,7 @@ pub fn run(cli: Cli) -> Result<Summary> {
             width,
             max_disp,
             pool,
+            levels,
             table,
             json,
             out,
@@ -140,6 +144,7 @@ pub fn run(cli: Cli) -> Result<Summary> {
             width,
             max_disp,
             pool,
+            levels,
             table,
             json,
             out,

@@ -31,6 +31,8 @@ pub struct StereoOptions {
     pub max_disp: u8,
     /// Pooling radius (None: the default).
     pub pool: Option<u8>,
+    /// Pyramid levels (None: the default).
+    pub levels: Option<u8>,
     /// A decoder table to use instead of the built-in or trained one.
     pub table: Option<PathBuf>,
     /// Print JSON instead of the summary.
@@ -213,6 +215,10 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     if let Some(r) = opts.pool {
         params.pool_radius = r;
     }
+    if let Some(l) = opts.levels {
+        params.levels = l;
+    }
+    params.check()?;
     // Size checks first: training for a hopeless size is wasted time.
     if usize::from(params.max_disp) >= w {
         return Err(StereoError::MaxDispTooLarge {
@@ -242,6 +248,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     s.push("working size", format!("{w}x{h}"));
     s.push("max disparity", params.max_disp);
     s.push("pool radius", params.pool_radius);
+    s.push("levels", params.levels);
     let n = (w * h) as f64;
     s.push("decoder ms", format!("{train_ms:.1}"));
     s.push("stereo ms", format!("{run_ms:.1}"));

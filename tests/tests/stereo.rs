@@ -180,6 +180,7 @@ fn the_command_rejects_bad_files_with_one_line_errors() {
         width: 160,
         max_disp,
         pool: None,
+        levels: None,
         table: None,
         json: false,
         out: d.join("out"),
