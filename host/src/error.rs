@@ -3,6 +3,8 @@
 //! Each variant's message is one line, so `main` can print
 //! `error: {err}` and exit non-zero.
 
+use crate::reference::stereo::table::TableError;
+use crate::reference::stereo::StereoError;
 use protogist::conspicuity::ConspicuityError;
 use protogist::image::ImageError;
 use protogist::synth::SynthError;
@@ -56,6 +58,35 @@ pub enum HostError {
         name: String,
         /// The encoder's error.
         source: image::ImageError,
+    },
+    /// The stereo stage rejected its input or parameters.
+    #[error("stereo: {0}")]
+    Stereo(#[from] StereoError),
+    /// A decoder table that cannot be used.
+    #[error("{}: {source}", path.display())]
+    Table {
+        /// The table file.
+        path: PathBuf,
+        /// What is wrong with it.
+        source: TableError,
+    },
+    /// A ground-truth file that cannot be used.
+    #[error("ground truth {}: {reason}", path.display())]
+    BadGroundTruth {
+        /// The GT file.
+        path: PathBuf,
+        /// What is wrong with it (one line).
+        reason: String,
+    },
+    /// Ground truth of another size than the left image.
+    #[error("ground truth {} is {}x{}, the left image {}x{}", path.display(), got.0, got.1, expected.0, expected.1)]
+    GroundTruthSize {
+        /// The GT file.
+        path: PathBuf,
+        /// The left image's size.
+        expected: (usize, usize),
+        /// The GT's size.
+        got: (usize, usize),
     },
     /// An output path exists and is not a directory.
     #[error("{} exists and is not a directory", .0.display())]

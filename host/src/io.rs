@@ -57,7 +57,7 @@ pub fn working_size(width: u32, height: u32, max_width: u32) -> Result<(u32, u32
 /// In units of `1 / dst` source pixel, output `o` covers `[o·src, (o+1)·src)`
 /// and source `i` covers `[i·dst, (i+1)·dst)`; the overlaps are integers and
 /// each output's weights sum to `src`.
-fn axis_weights(src: u32, dst: u32) -> Vec<Vec<(usize, u64)>> {
+pub(crate) fn axis_weights(src: u32, dst: u32) -> Vec<Vec<(usize, u64)>> {
     let (src, dst) = (u64::from(src), u64::from(dst));
     (0..dst)
         .map(|o| {

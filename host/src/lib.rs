@@ -8,15 +8,19 @@
 //! scene, [`stages`] runs the core stages step by step and turns their maps
 //! into [`panels`], [`io`] loads, downscales and writes images, [`summary`]
 //! is what gets printed, and [`error`] is the one error type of them all.
+//! [`stereo_cmd`] runs the DEM reference on a pair and scores it against
+//! [`ground_truth`].
 
 pub mod cli;
 pub mod demo;
 pub mod error;
 pub mod eval;
+pub mod ground_truth;
 pub mod io;
 pub mod panels;
 pub mod plot;
 pub mod reference;
 pub mod stages;
+pub mod stereo_cmd;
 pub mod storage;
 pub mod summary;

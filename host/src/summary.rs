@@ -9,6 +9,8 @@ pub struct Summary {
     pub title: String,
     /// `(key, value)` lines in order.
     pub lines: Vec<(String, String)>,
+    /// When set, printed instead of the title and lines (e.g. JSON).
+    pub raw: Option<String>,
 }
 
 impl Summary {
@@ -17,6 +19,7 @@ impl Summary {
         Self {
             title: title.into(),
             lines: Vec::new(),
+            raw: None,
         }
     }
 
@@ -36,6 +39,9 @@ impl Summary {
 
 impl fmt::Display for Summary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(raw) = &self.raw {
+            return writeln!(f, "{raw}");
+        }
         writeln!(f, "{}", self.title)?;
         let width = self.lines.iter().map(|(k, _)| k.len()).max().unwrap_or(0);
         for (k, v) in &self.lines {

@@ -3,3 +3,4 @@
 pub mod conspicuity;
 pub mod segment;
 pub mod shape;
+pub mod stereo;

@@ -1,0 +1,369 @@
+//! f32 reference of the stereo stage: the disparity energy model (DEM)
+//! with a trained decoding population (`docs`: `dem-spec.md` §2–6).
+//!
+//! ```text
+//! left, right ─► grey ─► ↓2 pyramid ─► complex Gabor bank (per eye, once)
+//!   ─► binocular energies A, X per (level, carrier, shift) ─► Poisson
+//!   log-likelihood per disparity (trained templates) ─► box pooling
+//!   ─► argmax + parabola ─► OFF tests (texture, ambiguity, left-right)
+//! ```
+//!
+//! Names and argument order are what the fixed-point `protogist::stereo`
+//! will use. Disparity is left-referenced, `d = x_L − x_R ≥ 0`, in pixels.
+
+pub mod filters;
+pub mod population;
+pub mod readout;
+pub mod table;
+pub mod train;
+
+use protogist::disparity::{Disparity, DisparityCell};
+use protogist::image::{ImageView, Rgb8};
+
+pub use train::{train, Decoder};
+
+/// Every parameter of the model, with the spec's defaults.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DemParams {
+    /// Largest disparity searched, px; candidates are `0..=max_disp`.
+    /// Default 15 (160x120 frames).
+    pub max_disp: u8,
+    /// Carrier orientations, evenly spread around horizontal: 3 gives
+    /// −45°, 0°, 45°. Default 3.
+    pub carriers: u8,
+    /// Pyramid levels; level `l` has effective wavelength `λ·2^l`.
+    /// Default 2 (λ 4 and 8).
+    pub levels: u8,
+    /// Wavelength on every level, px. Default 4.
+    pub wavelength: f32,
+    /// Envelope σ / λ (isotropic). Default 0.56 (one octave).
+    pub sigma_per_wavelength: f32,
+    /// Kernel radius, taps `−r..=r`. Default 7 (⌈3σ⌉ at λ = 4).
+    pub radius: u8,
+    /// Position-shift step in pixels of each level. Default 2 (λ/2).
+    pub shift_step: u8,
+    /// Score pooling box radius, px (0: none). Default 2 (5x5).
+    pub pool_radius: u8,
+    /// OFF below this mean cell energy (grey levels², per cell and pooled
+    /// pixel): no texture. Default 0.1.
+    pub min_energy: f32,
+    /// OFF when the best score beats the best score more than 1 px away by
+    /// less than this (normalised score units). Default 0.
+    pub min_margin: f32,
+    /// Left-right check: OFF when `|d_L(x) − d_R(x − d_L)|` exceeds this,
+    /// px; negative disables the check. Default 1.
+    pub lr_tolerance: f32,
+    /// Training: seed of the random-dot stereograms.
+    pub train_seed: u64,
+    /// Training: images per disparity. Default 4.
+    pub train_images: u8,
+    /// Training: interior width of each image, px. Default 64.
+    pub train_width: u8,
+    /// Training: interior height of each image, px. Default 48.
+    pub train_height: u8,
+}
+
+impl Default for DemParams {
+    fn default() -> Self {
+        Self {
+            max_disp: 15,
+            carriers: 3,
+            levels: 2,
+            wavelength: 4.0,
+            sigma_per_wavelength: 0.56,
+            radius: 7,
+            shift_step: 2,
+            pool_radius: 2,
+            min_energy: 0.1,
+            min_margin: 0.0,
+            lr_tolerance: 1.0,
+            train_seed: 0x0de1_5eed,
+            train_images: 4,
+            train_width: 64,
+            train_height: 48,
+        }
+    }
+}
+
+impl DemParams {
+    /// Smallest width and height the filters support: one kernel at the
+    /// coarsest level.
+    pub fn min_size(&self) -> usize {
+        (2 * usize::from(self.radius) + 1) << usize::from(self.levels.max(1) - 1)
+    }
+
+    /// Checks the parameters.
+    ///
+    /// # Errors
+    /// [`StereoError::BadParams`] naming the first bad one.
+    pub fn check(&self) -> Result<(), StereoError> {
+        let bad = |ok: bool, what| {
+            if ok {
+                Ok(())
+            } else {
+                Err(StereoError::BadParams(what))
+            }
+        };
+        bad(self.carriers >= 1, "carriers must be at least 1")?;
+        bad((1..=4).contains(&self.levels), "levels must be 1..=4")?;
+        bad(
+            self.wavelength >= 2.0 && self.wavelength <= 64.0,
+            "wavelength must be 2..=64",
+        )?;
+        bad(
+            self.sigma_per_wavelength > 0.1 && self.sigma_per_wavelength < 4.0,
+            "sigma_per_wavelength must be in (0.1, 4)",
+        )?;
+        bad(self.radius >= 1, "radius must be at least 1")?;
+        bad(self.shift_step >= 1, "shift_step must be at least 1")?;
+        bad(self.min_energy >= 0.0, "min_energy must be >= 0")?;
+        bad(self.train_images >= 1, "train_images must be at least 1")?;
+        bad(
+            self.train_width >= 1 && self.train_height >= 1,
+            "training size must be at least 1x1",
+        )
+    }
+}
+
+/// What a decoder was trained for: the parameters that shape the
+/// population, with the real ones quantised as the table stores them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DemLayout {
+    /// Largest disparity.
+    pub max_disp: u8,
+    /// Pyramid levels.
+    pub levels: u8,
+    /// Carriers.
+    pub carriers: u8,
+    /// Shift step, level px.
+    pub shift_step: u8,
+    /// Kernel radius.
+    pub radius: u8,
+    /// λ, unsigned Q8.8.
+    pub wavelength_q8: u16,
+    /// σ/λ, unsigned Q4.12.
+    pub sigma_q12: u16,
+}
+
+impl DemLayout {
+    /// The layout of `params`.
+    pub fn of(params: &DemParams) -> Self {
+        let q = |v: f32, bits: i32| (v * 2f32.powi(bits)).round().clamp(0.0, 65535.0) as u16;
+        Self {
+            max_disp: params.max_disp,
+            levels: params.levels,
+            carriers: params.carriers,
+            shift_step: params.shift_step,
+            radius: params.radius,
+            wavelength_q8: q(params.wavelength, 8),
+            sigma_q12: q(params.sigma_per_wavelength, 12),
+        }
+    }
+
+    /// Number of cell groups `(level, carrier, shift)`.
+    pub fn groups(&self) -> usize {
+        (0..usize::from(self.levels))
+            .map(|l| {
+                let step = usize::from(self.shift_step.max(1)) << l;
+                usize::from(self.carriers) * (usize::from(self.max_disp) + 1).div_ceil(step)
+            })
+            .sum()
+    }
+}
+
+/// Why the stereo stage rejected its input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StereoError {
+    /// Left and right differ in size.
+    #[error("left is {}x{} but right is {}x{}", left.0, left.1, right.0, right.1)]
+    SizeMismatch {
+        /// Left size.
+        left: (usize, usize),
+        /// Right size.
+        right: (usize, usize),
+    },
+    /// An image smaller than one filter at the coarsest level.
+    #[error("{}x{} is smaller than the filter support ({min}x{min})", got.0, got.1)]
+    TooSmall {
+        /// The smallest width and height.
+        min: usize,
+        /// The image size.
+        got: (usize, usize),
+    },
+    /// `max_disp` not below the width.
+    #[error("max disparity {max_disp} must be below the image width {width}")]
+    MaxDispTooLarge {
+        /// The maximum disparity.
+        max_disp: u8,
+        /// The width.
+        width: usize,
+    },
+    /// The decoder was trained for other parameters.
+    #[error("the decoder was trained for other parameters (max_disp {got}, expected {expected})")]
+    DecoderMismatch {
+        /// The decoder's max_disp.
+        got: u8,
+        /// The parameters' max_disp.
+        expected: u8,
+    },
+    /// A parameter out of range.
+    #[error("bad stereo parameters: {0}")]
+    BadParams(&'static str),
+}
+
+/// The outputs of the stage.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DisparityMapsF {
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+    /// The result, left-referenced, U8F8 px or OFF.
+    pub disparity: Vec<DisparityCell>,
+    /// The same in f32 (`None`: OFF).
+    pub disparity_f32: Vec<Option<f32>>,
+    /// Left-referenced argmax before the OFF tests (`None`: no energy).
+    pub left_raw: Vec<Option<f32>>,
+    /// Right-referenced argmax (`None`: no energy).
+    pub right_raw: Vec<Option<f32>>,
+    /// Pixels OFF for lack of texture.
+    pub off_texture: usize,
+    /// Pixels OFF as ambiguous.
+    pub off_ambiguous: usize,
+    /// Pixels OFF by the left-right check.
+    pub off_inconsistent: usize,
+}
+
+/// Checks the inputs of [`stereo`].
+fn check(
+    params: &DemParams,
+    decoder: &Decoder,
+    l: (usize, usize),
+    r: (usize, usize),
+) -> Result<(), StereoError> {
+    params.check()?;
+    if l != r {
+        return Err(StereoError::SizeMismatch { left: l, right: r });
+    }
+    if decoder.layout != DemLayout::of(params)
+        || decoder.weights.len() != decoder.layout.groups() * decoder.disparities()
+    {
+        return Err(StereoError::DecoderMismatch {
+            got: decoder.layout.max_disp,
+            expected: params.max_disp,
+        });
+    }
+    let min = params.min_size();
+    if l.0 < min || l.1 < min {
+        return Err(StereoError::TooSmall { min, got: l });
+    }
+    if usize::from(params.max_disp) >= l.0 {
+        return Err(StereoError::MaxDispTooLarge {
+            max_disp: params.max_disp,
+            width: l.0,
+        });
+    }
+    Ok(())
+}
+
+/// Runs the stage on an RGB pair (converted to grey).
+///
+/// # Errors
+/// [`StereoError`] for mismatched sizes, too small images, `max_disp` not
+/// below the width, a decoder of other parameters, or bad parameters.
+pub fn stereo(
+    params: &DemParams,
+    decoder: &Decoder,
+    left: &ImageView<'_, Rgb8>,
+    right: &ImageView<'_, Rgb8>,
+) -> Result<DisparityMapsF, StereoError> {
+    check(params, decoder, left.size(), right.size())?;
+    Ok(stereo_grey(
+        params,
+        decoder,
+        filters::grey(left),
+        filters::grey(right),
+    ))
+}
+
+/// Runs the stage on grey planes of equal size (sizes checked by the
+/// caller, see [`stereo`]).
+pub fn stereo_grey(
+    params: &DemParams,
+    decoder: &Decoder,
+    left: filters::Plane,
+    right: filters::Plane,
+) -> DisparityMapsF {
+    let (w, h) = (left.width, left.height);
+    let (ml, mr) = (
+        filters::monocular(params, left),
+        filters::monocular(params, right),
+    );
+    let (mut sl, mut sr) = readout::scores(params, decoder, &ml, &mr, w, h);
+    let r = usize::from(params.pool_radius);
+    let count = readout::pool(&mut sl, r);
+    readout::pool(&mut sr, r);
+    let n = decoder.disparities();
+    let cells = 4.0 * decoder.layout.groups() as f32;
+    let left_picks: Vec<_> = (0..w * h)
+        .map(|p| {
+            readout::pick(
+                &sl.raw[p * n..(p + 1) * n],
+                sl.total[p],
+                &decoder.bias,
+                p % w,
+            )
+        })
+        .collect();
+    let right_raw: Vec<Option<f32>> = (0..w * h)
+        .map(|p| {
+            readout::pick(
+                &sr.raw[p * n..(p + 1) * n],
+                sr.total[p],
+                &decoder.bias,
+                w - 1 - p % w,
+            )
+            .map(|k| k.disparity)
+        })
+        .collect();
+    let mut out = DisparityMapsF {
+        width: w,
+        height: h,
+        disparity: vec![DisparityCell::OFF; w * h],
+        disparity_f32: vec![None; w * h],
+        left_raw: left_picks.iter().map(|k| k.map(|k| k.disparity)).collect(),
+        right_raw,
+        off_texture: 0,
+        off_ambiguous: 0,
+        off_inconsistent: 0,
+    };
+    for (p, pick) in left_picks.iter().enumerate() {
+        let energy = sl.total[p] / (cells * count[p]);
+        let Some(pick) = pick.filter(|_| energy >= params.min_energy && energy > 0.0) else {
+            out.off_texture += 1;
+            continue;
+        };
+        if pick.margin < params.min_margin {
+            out.off_ambiguous += 1;
+            continue;
+        }
+        let d = pick.disparity;
+        if params.lr_tolerance >= 0.0 {
+            let xr = (p % w) as isize - d.round() as isize;
+            let back = (xr >= 0)
+                .then(|| out.right_raw[p - (p % w) + xr as usize])
+                .flatten();
+            if back.is_none_or(|b| (b - d).abs() > params.lr_tolerance) {
+                out.off_inconsistent += 1;
+                continue;
+            }
+        }
+        out.disparity_f32[p] = Some(d);
+        out.disparity[p] = DisparityCell::on(
+            Disparity::saturating_from_num(d).min(Disparity::from_bits(u16::MAX - 1)),
+        )
+        .unwrap_or(DisparityCell::OFF);
+    }
+    out
+}

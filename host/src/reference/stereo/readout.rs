@@ -1,0 +1,161 @@
+//! The read-out (spec §5, §6): Poisson log-likelihood scores, box pooling,
+//! argmax with parabola sub-pixel refinement, and the OFF tests.
+//!
+//! Per pixel and disparity the score is
+//! `Σ_j R_j ℓ_j(d) / Σ_j R_j − ΣW(d)/mean ΣW`, the spec's
+//! `k·Σ R ℓ − ΣW(d)` divided by the constant `mean_d ΣW(d)`, so that it
+//! does not depend on the scale of the energies. Both sums are linear in
+//! the responses, so pooling them over a box equals pooling the responses.
+//!
+//! A binocular cell with left receptive field at `x` and right at `x − s`
+//! votes for the left-referenced pixel `x` and for the right-referenced
+//! pixel `x − s`: the right-referenced map costs no extra cells.
+
+use super::filters::Response;
+use super::population::{energies, groups};
+use super::train::Decoder;
+use super::DemParams;
+
+/// Raw score sums of one reference eye: `Σ R ℓ(d)` per pixel and `d`
+/// (pixel-major) and `Σ R` per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scores {
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+    /// Disparities, `max_disp + 1`.
+    pub disparities: usize,
+    /// `Σ_j R_j ℓ_j(d)`, `[pixel][d]`.
+    pub raw: Vec<f32>,
+    /// `Σ_j R_j`, per pixel.
+    pub total: Vec<f32>,
+}
+
+impl Scores {
+    fn new(width: usize, height: usize, disparities: usize) -> Self {
+        Self {
+            width,
+            height,
+            disparities,
+            raw: vec![0.0; width * height * disparities],
+            total: vec![0.0; width * height],
+        }
+    }
+}
+
+/// The left- and right-referenced score sums of the whole population.
+pub fn scores(
+    params: &DemParams,
+    decoder: &Decoder,
+    left: &[Vec<Response>],
+    right: &[Vec<Response>],
+    width: usize,
+    height: usize,
+) -> (Scores, Scores) {
+    let n = decoder.disparities();
+    let (mut sl, mut sr) = (Scores::new(width, height, n), Scores::new(width, height, n));
+    let mut vote = vec![0.0f32; n];
+    for (gi, g) in groups(params).iter().enumerate() {
+        let e = energies(left, right, g, width, height);
+        let w = decoder.group(gi);
+        for y in 0..height {
+            for x in g.shift..width {
+                let [a, xr, xi] = e[y * width + x];
+                for (v, abc) in vote.iter_mut().zip(w) {
+                    *v = a * abc[0] + xr * abc[1] + xi * abc[2];
+                }
+                let (pl, pr) = (y * width + x, y * width + x - g.shift);
+                sl.total[pl] += 4.0 * a;
+                sr.total[pr] += 4.0 * a;
+                for (dst, v) in sl.raw[pl * n..(pl + 1) * n].iter_mut().zip(&vote) {
+                    *dst += v;
+                }
+                for (dst, v) in sr.raw[pr * n..(pr + 1) * n].iter_mut().zip(&vote) {
+                    *dst += v;
+                }
+            }
+        }
+    }
+    (sl, sr)
+}
+
+/// Box sums over `(2r + 1)²` windows clipped to the image, of `k`
+/// interleaved channels per pixel, in place (separable running sums).
+pub fn box_sum(data: &mut [f32], width: usize, height: usize, k: usize, r: usize) {
+    if r == 0 || width == 0 || height == 0 {
+        return;
+    }
+    let mut line = vec![0.0f32; width.max(height) * k];
+    // Rows.
+    for y in 0..height {
+        let row = &mut data[y * width * k..(y + 1) * width * k];
+        line[..width * k].copy_from_slice(row);
+        for x in 0..width {
+            let (lo, hi) = (x.saturating_sub(r), (x + r).min(width - 1));
+            for c in 0..k {
+                row[x * k + c] = (lo..=hi).map(|i| line[i * k + c]).sum();
+            }
+        }
+    }
+    // Columns.
+    for x in 0..width {
+        for y in 0..height {
+            let src = (y * width + x) * k;
+            line[y * k..(y + 1) * k].copy_from_slice(&data[src..src + k]);
+        }
+        for y in 0..height {
+            let (lo, hi) = (y.saturating_sub(r), (y + r).min(height - 1));
+            for c in 0..k {
+                data[(y * width + x) * k + c] = (lo..=hi).map(|i| line[i * k + c]).sum();
+            }
+        }
+    }
+}
+
+/// Pools `scores` over `(2r + 1)²` boxes; also returns, per pixel, the
+/// number of pixels in its (clipped) box.
+pub fn pool(scores: &mut Scores, r: usize) -> Vec<f32> {
+    let (w, h, n) = (scores.width, scores.height, scores.disparities);
+    box_sum(&mut scores.raw, w, h, n, r);
+    box_sum(&mut scores.total, w, h, 1, r);
+    let mut count = vec![1.0f32; w * h];
+    box_sum(&mut count, w, h, 1, r);
+    count
+}
+
+/// The decision at one pixel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pick {
+    /// Sub-pixel disparity of the best score.
+    pub disparity: f32,
+    /// Best score minus the best score more than 1 px away (∞ if none).
+    pub margin: f32,
+}
+
+/// Argmax over the candidates `0..=max_d` of the normalised scores of one
+/// pixel, with the parabola through `d̂ ± 1`; `None` when `total` is 0.
+pub fn pick(raw: &[f32], total: f32, bias: &[f32], max_d: usize) -> Option<Pick> {
+    if total <= 0.0 || raw.is_empty() {
+        return None;
+    }
+    let top = max_d.min(raw.len() - 1);
+    let s = |d: usize| raw[d] / total - bias[d];
+    let best = (0..=top).fold(0, |b, d| if s(d) > s(b) { d } else { b });
+    let second = (0..=top)
+        .filter(|&d| d.abs_diff(best) > 1)
+        .map(s)
+        .fold(f32::NEG_INFINITY, f32::max);
+    let mut disparity = best as f32;
+    if best > 0 && best < top {
+        let (m, c, p) = (s(best - 1), s(best), s(best + 1));
+        let denom = m - 2.0 * c + p;
+        if denom < 0.0 {
+            disparity += (0.5 * (m - p) / denom).clamp(-0.5, 0.5);
+        }
+    }
+    Some(Pick {
+        disparity,
+        margin: s(best) - second,
+    })
+}

@@ -1,0 +1,299 @@
+//! `protogist stereo` and `protogist train-dem`: the DEM reference on a
+//! stereo pair, with optional ground truth, and the decoder table.
+
+use crate::demo::finish;
+use crate::error::{HostError, Result};
+use crate::ground_truth::{downscale_gt, load_gt, metrics, GtMap, Metrics};
+use crate::io;
+use crate::panels::{rgb_from, Panel};
+use crate::reference::stereo::table::{DemTable, DEFAULT_TABLE};
+use crate::reference::stereo::{self as dem, Decoder, DemLayout, DemParams, StereoError};
+use crate::summary::Summary;
+use image::{Rgb, RgbImage};
+use protogist::image::ImageView;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Options of `protogist stereo`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StereoOptions {
+    /// Left image.
+    pub left: PathBuf,
+    /// Right image.
+    pub right: PathBuf,
+    /// Ground truth (PNG or PFM).
+    pub gt: Option<PathBuf>,
+    /// PNG GT values per pixel of disparity.
+    pub gt_scale: f32,
+    /// Working width.
+    pub width: u32,
+    /// Largest disparity, px of the working size.
+    pub max_disp: u8,
+    /// Pooling radius (None: the default).
+    pub pool: Option<u8>,
+    /// Pyramid levels (None: the default).
+    pub levels: Option<u8>,
+    /// A decoder table to use instead of the built-in or trained one.
+    pub table: Option<PathBuf>,
+    /// Print JSON instead of the summary.
+    pub json: bool,
+    /// Output directory.
+    pub out: PathBuf,
+}
+
+/// The decoder for `params`: `table` if given (it must match), else the
+/// built-in default table when it matches, else trained now. A trained
+/// decoder goes through the integer table, so every path decodes with the
+/// weights core will hold.
+///
+/// # Errors
+/// [`HostError::Io`], [`HostError::Table`] for a bad table,
+/// [`HostError::Stereo`] when it was trained for other parameters.
+pub fn decoder_for(params: &DemParams, table: Option<&Path>) -> Result<Decoder> {
+    let parse = |bytes: &[u8], path: &Path| {
+        DemTable::parse(bytes).map_err(|source| HostError::Table {
+            path: path.to_path_buf(),
+            source,
+        })
+    };
+    let t = match table {
+        Some(path) => parse(
+            &std::fs::read(path).map_err(|e| HostError::io(path, e))?,
+            path,
+        )?,
+        None => match DemTable::parse(DEFAULT_TABLE) {
+            Ok(t) if t.layout == DemLayout::of(params) => t,
+            _ => DemTable::from_decoder(&dem::train(params)),
+        },
+    };
+    if t.layout != DemLayout::of(params) {
+        return Err(StereoError::DecoderMismatch {
+            got: t.layout.max_disp,
+            expected: params.max_disp,
+        }
+        .into());
+    }
+    Ok(t.to_decoder())
+}
+
+/// `protogist train-dem`: trains for `params` and writes the table.
+///
+/// # Errors
+/// [`HostError::Stereo`] for bad parameters, [`HostError::Io`].
+pub fn run_train_dem(params: &DemParams, out: &Path) -> Result<Summary> {
+    params.check()?;
+    let start = Instant::now();
+    let table = DemTable::from_decoder(&dem::train(params));
+    let bytes = table.to_bytes();
+    std::fs::write(out, &bytes).map_err(|e| HostError::io(out, e))?;
+    let mut s = Summary::new(format!("protogist train-dem: {}", out.display()));
+    s.push("max disparity", params.max_disp);
+    s.push("groups", table.layout.groups());
+    s.push(
+        "weights",
+        format!("Q{}.{} i16", 15 - table.weight_frac, table.weight_frac),
+    );
+    s.push("bytes", bytes.len());
+    s.push("train seed", format!("{:#x}", params.train_seed));
+    s.push(
+        "total time",
+        format!("{:.1} ms", start.elapsed().as_secs_f64() * 1e3),
+    );
+    Ok(s)
+}
+
+/// Disparity colour-mapped with turbo over `0..=max`, OFF black.
+pub fn disparity_panel(d: &[Option<f32>], w: usize, h: usize, max: f32) -> RgbImage {
+    RgbImage::from_fn(w as u32, h as u32, |x, y| {
+        match d[y as usize * w + x as usize] {
+            Some(v) => {
+                let c =
+                    colorous::TURBO.eval_continuous(f64::from((v / max.max(1.0)).clamp(0.0, 1.0)));
+                Rgb([c.r, c.g, c.b])
+            }
+            None => Rgb([0, 0, 0]),
+        }
+    })
+}
+
+/// Error map: black no GT, blue no estimate, green ≤ 1 px, yellow ≤ 2,
+/// orange ≤ 4, red above.
+pub fn error_panel(est: &[Option<f32>], gt: &GtMap) -> RgbImage {
+    RgbImage::from_fn(gt.width as u32, gt.height as u32, |x, y| {
+        let p = y as usize * gt.width + x as usize;
+        Rgb(match (est[p], gt.data[p]) {
+            (_, None) => [0, 0, 0],
+            (None, Some(_)) => [0, 0, 160],
+            (Some(e), Some(g)) => match (e - g).abs() {
+                v if v <= 1.0 => [0, 190, 0],
+                v if v <= 2.0 => [230, 210, 0],
+                v if v <= 4.0 => [240, 120, 0],
+                _ => [220, 0, 0],
+            },
+        })
+    })
+}
+
+fn push_metrics(s: &mut Summary, name: &str, m: &Metrics) {
+    let f = |v: [f64; 3]| format!("{:.1} / {:.1} / {:.1}", v[0], v[1], v[2]);
+    s.push(
+        format!("{name} bad-1/2/4 % (estimated)"),
+        f(m.bad_estimated),
+    );
+    s.push(format!("{name} bad-1/2/4 % (all GT)"), f(m.bad_all));
+    s.push(format!("{name} MAE px"), format!("{:.2}", m.mae));
+    s.push(format!("{name} density %"), format!("{:.1}", m.density));
+}
+
+fn metrics_json(m: &Metrics) -> serde_json::Value {
+    serde_json::json!({
+        "gt_pixels": m.gt_pixels,
+        "estimated": m.estimated,
+        "bad1_estimated": m.bad_estimated[0],
+        "bad2_estimated": m.bad_estimated[1],
+        "bad4_estimated": m.bad_estimated[2],
+        "bad1_all": m.bad_all[0],
+        "bad2_all": m.bad_all[1],
+        "bad4_all": m.bad_all[2],
+        "mae": m.mae,
+        "density": m.density,
+    })
+}
+
+/// `protogist stereo`: loads, downscales, runs the DEM, writes the panels
+/// and, with GT, the error map and metrics.
+///
+/// # Errors
+/// [`HostError`] for unreadable or mismatched inputs, bad GT, parameters
+/// the stage rejects, or an unwritable output directory.
+pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
+    let start = Instant::now();
+    if opts.width == 0 {
+        return Err(HostError::ZeroDimension { name: "width" });
+    }
+    let (left, right) = (io::load_rgb(&opts.left)?, io::load_rgb(&opts.right)?);
+    let (ow, oh) = left.dimensions();
+    if right.dimensions() != (ow, oh) {
+        let (rw, rh) = right.dimensions();
+        return Err(StereoError::SizeMismatch {
+            left: (ow as usize, oh as usize),
+            right: (rw as usize, rh as usize),
+        }
+        .into());
+    }
+    let gt_full = match &opts.gt {
+        Some(path) => {
+            let g = load_gt(path, opts.gt_scale)?;
+            if (g.width, g.height) != (ow as usize, oh as usize) {
+                return Err(HostError::GroundTruthSize {
+                    path: path.clone(),
+                    expected: (ow as usize, oh as usize),
+                    got: (g.width, g.height),
+                });
+            }
+            Some(g)
+        }
+        None => None,
+    };
+    let (w, h) = io::working_size(ow, oh, opts.width)?;
+    let scale = |img: image::RgbImage| {
+        if (w, h) == (ow, oh) {
+            img
+        } else {
+            io::area_downscale(&img, w, h)
+        }
+    };
+    let (lp, rp) = (
+        io::to_core_rgb(&scale(left)),
+        io::to_core_rgb(&scale(right)),
+    );
+    let (w, h) = (w as usize, h as usize);
+    let mut params = DemParams {
+        max_disp: opts.max_disp,
+        ..DemParams::default()
+    };
+    if let Some(r) = opts.pool {
+        params.pool_radius = r;
+    }
+    if let Some(l) = opts.levels {
+        params.levels = l;
+    }
+    params.check()?;
+    // Size checks first: training for a hopeless size is wasted time.
+    if usize::from(params.max_disp) >= w {
+        return Err(StereoError::MaxDispTooLarge {
+            max_disp: params.max_disp,
+            width: w,
+        }
+        .into());
+    }
+    let min = params.min_size();
+    if w < min || h < min {
+        return Err(StereoError::TooSmall { min, got: (w, h) }.into());
+    }
+    let t_train = Instant::now();
+    let decoder = decoder_for(&params, opts.table.as_deref())?;
+    let train_ms = t_train.elapsed().as_secs_f64() * 1e3;
+    let t_run = Instant::now();
+    let maps = dem::stereo(
+        &params,
+        &decoder,
+        &ImageView::packed(&lp, w, h)?,
+        &ImageView::packed(&rp, w, h)?,
+    )?;
+    let run_ms = t_run.elapsed().as_secs_f64() * 1e3;
+
+    let mut s = Summary::new(format!("protogist stereo: {}", opts.left.display()));
+    s.push("input", format!("{ow}x{oh}"));
+    s.push("working size", format!("{w}x{h}"));
+    s.push("max disparity", params.max_disp);
+    s.push("pool radius", params.pool_radius);
+    s.push("levels", params.levels);
+    let n = (w * h) as f64;
+    s.push("decoder ms", format!("{train_ms:.1}"));
+    s.push("stereo ms", format!("{run_ms:.1}"));
+    let on = maps.disparity_f32.iter().filter(|d| d.is_some()).count();
+    s.push("ON %", format!("{:.1}", 100.0 * on as f64 / n));
+    s.push(
+        "OFF texture/ambiguous/left-right %",
+        format!(
+            "{:.1} / {:.1} / {:.1}",
+            100.0 * maps.off_texture as f64 / n,
+            100.0 * maps.off_ambiguous as f64 / n,
+            100.0 * maps.off_inconsistent as f64 / n
+        ),
+    );
+    let max = f32::from(params.max_disp);
+    let mut panels = vec![
+        Panel::new("left", rgb_from(&lp, w, h)),
+        Panel::new("disparity", disparity_panel(&maps.disparity_f32, w, h, max)),
+        Panel::new("disparity_raw", disparity_panel(&maps.left_raw, w, h, max)),
+    ];
+    let mut json = serde_json::json!({
+        "left": opts.left.display().to_string(),
+        "width": w, "height": h,
+        "max_disp": params.max_disp,
+        "pool_radius": params.pool_radius,
+        "on_fraction": on as f64 / n,
+        "stereo_ms": run_ms,
+    });
+    if let Some(g) = gt_full {
+        let gt = downscale_gt(&g, w, h);
+        let m = metrics(&maps.disparity_f32, &gt.data);
+        let raw = metrics(&maps.left_raw, &gt.data);
+        let gmax = gt.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
+        s.push("GT max disparity px", format!("{gmax:.1}"));
+        push_metrics(&mut s, "final", &m);
+        push_metrics(&mut s, "raw argmax", &raw);
+        panels.push(Panel::new("gt", disparity_panel(&gt.data, w, h, max)));
+        panels.push(Panel::new("error", error_panel(&maps.disparity_f32, &gt)));
+        json["gt_max_disp"] = serde_json::json!(gmax);
+        json["final"] = metrics_json(&m);
+        json["raw_argmax"] = metrics_json(&raw);
+    }
+    finish(&opts.out, panels, &mut s, start)?;
+    if opts.json {
+        s.raw = Some(format!("{json:#}"));
+    }
+    Ok(s)
+}
