@@ -137,18 +137,26 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
     maps.summarise(&mut summary);
     maps.boundary_score(&scene.mask).summarise(&mut summary);
 
-    // Stage 2: figure-ground and the object mask, from the ground-truth
-    // disparity until the disparity energy model lands.
-    let disparity: Vec<_> = scene.disparity.iter().map(|&d| from_pixels(d)).collect();
-    let seg = run_segment(&SegmentParams::default(), &disparity, &maps.edges, w, h)?;
-    out.extend(seg.panels(&scene.left));
+    // Stage 2: disparity from the stereo pair by the disparity energy model
+    // (the f32 reference; the fixed-point core stage is to come).
+    let dem = crate::stages::run_dem(&scene.left, &scene.right, &scene.disparity, w, h)?;
+    out.extend(dem.panels());
+    dem.summarise(&mut summary);
+
+    // Stage 3: figure-ground and the object mask, from the model's disparity;
+    // with ground-truth disparity too, for comparison.
+    let gt_disparity: Vec<_> = scene.disparity.iter().map(|&d| from_pixels(d)).collect();
+    let seg_gt = run_segment(&SegmentParams::default(), &gt_disparity, &maps.edges, w, h)?;
     summary.push(
-        "disparity input",
-        "ground truth (the DEM stage is not wired yet)",
+        "mask IoU, GT disparity",
+        format!("{:.3}", seg_gt.iou(0, &scene.mask)),
     );
+    let seg = run_segment(&SegmentParams::default(), &dem.disparity, &maps.edges, w, h)?;
+    out.extend(seg.panels(&scene.left));
+    summary.push("disparity input", "disparity energy model");
     seg.summarise(&mut summary, Some(&scene.mask));
 
-    // Stage 3: the shape vector of the most salient object's mask.
+    // Stage 4: the shape vector of the most salient object's mask.
     if seg.report.objects.first().is_some_and(|d| d.area > 0) {
         let shape = run_shape(&seg.mask_u8(0), w, h, "segmented mask")?;
         out.extend(shape.panels(w, h));
