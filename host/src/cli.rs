@@ -123,6 +123,9 @@ pub enum Command {
         /// Frame height, px.
         #[arg(long, default_value_t = 120)]
         height: usize,
+        /// Disparity input: ground truth or the disparity energy model.
+        #[arg(long, value_enum, default_value = "gt")]
+        disparity: crate::eval::DisparitySource,
     },
 }
 
@@ -174,7 +177,8 @@ pub fn run(cli: Cli) -> Result<Summary> {
             scenes,
             width,
             height,
-        }) => segment_eval_summary(scenes, width, height),
+            disparity,
+        }) => segment_eval_summary(scenes, width, height, disparity),
     }
 }
 
@@ -245,13 +249,18 @@ pub fn scratch_summary() -> Summary {
 ///
 /// # Errors
 /// A stage's typed error for a bad size.
-pub fn segment_eval_summary(scenes: u64, width: usize, height: usize) -> Result<Summary> {
+pub fn segment_eval_summary(
+    scenes: u64,
+    width: usize,
+    height: usize,
+    source: crate::eval::DisparitySource,
+) -> Result<Summary> {
     if scenes == 0 {
         return Err(HostError::ZeroDimension { name: "scenes" });
     }
-    let results = crate::eval::segment_eval(scenes, width, height)?;
+    let results = crate::eval::segment_eval(scenes, width, height, source)?;
     let mut s = Summary::new(format!(
-        "protogist segment-eval: {scenes} seeded scenes at {width}x{height}, GT disparity"
+        "protogist segment-eval: {scenes} seeded scenes at {width}x{height}, disparity {source:?}"
     ));
     for r in &results {
         s.push(

@@ -6,7 +6,16 @@ use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::from_pixels;
 use protogist::image::{ImageViewMut, Rgb8};
 use protogist::segment::SegmentParams;
-use protogist::synth::{render_disparity, render_left, render_mask, SceneSpec};
+use protogist::synth::{render_disparity, render_left, render_mask, render_right, SceneSpec};
+
+/// Where the segmentation's disparity comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum DisparitySource {
+    /// The scene's whole-pixel ground truth.
+    Gt,
+    /// The f32 disparity energy model on the rendered pair.
+    Dem,
+}
 
 /// The segmentation of one seeded scene against its ground truth.
 #[derive(Clone, Debug, PartialEq)]
@@ -22,9 +31,9 @@ pub struct SceneIou {
     pub objects: usize,
 }
 
-/// Segments `SceneSpec::random(seed, width, height)` with its ground-truth
-/// disparity and the real conspicuity stage, and scores the most salient
-/// mask against the scene's object masks.
+/// Segments `SceneSpec::random(seed, width, height)` with the real
+/// conspicuity stage and disparity from `source`, and scores the most
+/// salient mask against the scene's object masks.
 ///
 /// # Errors
 /// A stage's typed error (sizes).
@@ -33,6 +42,7 @@ pub fn segment_scene_iou(
     width: usize,
     height: usize,
     params: &SegmentParams,
+    source: DisparitySource,
 ) -> Result<SceneIou> {
     let (w, h) = (width, height);
     let spec = SceneSpec::random(seed, w, h);
@@ -41,7 +51,14 @@ pub fn segment_scene_iou(
     let edges = run_conspicuity(&LuvTables::new(), &EdgeParams::default(), &rgb, w, h)?;
     let mut gt = vec![0u8; w * h];
     render_disparity(&spec, &mut ImageViewMut::packed(&mut gt, w, h)?)?;
-    let d: Vec<_> = gt.iter().map(|&v| from_pixels(v)).collect();
+    let d: Vec<_> = match source {
+        DisparitySource::Gt => gt.iter().map(|&v| from_pixels(v)).collect(),
+        DisparitySource::Dem => {
+            let mut right = vec![Rgb8::default(); w * h];
+            render_right(&spec, &mut ImageViewMut::packed(&mut right, w, h)?)?;
+            crate::stages::run_dem(&rgb, &right, &gt, w, h)?.disparity
+        }
+    };
     let seg = run_segment(params, &d, &edges.edges, w, h)?;
     let mut best = (0.0, None);
     let mut m = vec![0u8; w * h];
@@ -64,9 +81,14 @@ pub fn segment_scene_iou(
 ///
 /// # Errors
 /// As [`segment_scene_iou`].
-pub fn segment_eval(scenes: u64, width: usize, height: usize) -> Result<Vec<SceneIou>> {
+pub fn segment_eval(
+    scenes: u64,
+    width: usize,
+    height: usize,
+    source: DisparitySource,
+) -> Result<Vec<SceneIou>> {
     let params = SegmentParams::default();
     (0..scenes)
-        .map(|seed| segment_scene_iou(seed, width, height, &params))
+        .map(|seed| segment_scene_iou(seed, width, height, &params, source))
         .collect()
 }

@@ -3,6 +3,7 @@
 use protogist::disparity::{from_pixels, DisparityCell};
 use protogist::image::{ImageView, ImageViewMut};
 use protogist::segment::{segment, SegmentParams};
+use protogist_host::eval::DisparitySource;
 use protogist_tests::SegmentStorage;
 
 const W: usize = 160;
@@ -13,7 +14,7 @@ const SCENES: u64 = 24;
 fn mean_mask_iou_on_seeded_scenes() {
     // The same code as `protogist segment-eval`, which `cargo xtask bench`
     // runs for docs/BENCHMARKS.md.
-    let results = protogist_host::eval::segment_eval(SCENES, W, H).unwrap();
+    let results = protogist_host::eval::segment_eval(SCENES, W, H, DisparitySource::Gt).unwrap();
     for r in &results {
         println!(
             "scene {:2}: IoU {:.3} (object {:?} of {})",
@@ -734,7 +735,7 @@ fn psi_mean_over_on_cells_for_comparison() {
     };
     let sum: f64 = (0..SCENES)
         .map(|s| {
-            protogist_host::eval::segment_scene_iou(s, W, H, &params)
+            protogist_host::eval::segment_scene_iou(s, W, H, &params, DisparitySource::Gt)
                 .unwrap()
                 .iou
         })
