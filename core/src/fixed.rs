@@ -37,25 +37,41 @@ pub const fn div_round_i64(x: i64, d: i64) -> i64 {
     (2 * x + d).div_euclid(2 * d)
 }
 
-/// `floor(sqrt(x))` for `u64`, digit by digit (no division, 32 steps).
-pub const fn isqrt_floor_u64(x: u64) -> u64 {
-    let mut rem = x;
-    let mut root = 0u64;
-    let mut bit = 1u64 << 62;
-    while bit > x {
-        bit >>= 2;
-    }
-    while bit != 0 {
-        if rem >= root + bit {
-            rem -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
+/// Digit-by-digit floor square root: no division, one bit pair per step.
+macro_rules! isqrt_floor_digits {
+    ($name:ident, $t:ty, $doc:literal) => {
+        #[doc = $doc]
+        pub const fn $name(x: $t) -> $t {
+            let mut rem = x;
+            let mut root: $t = 0;
+            let mut bit: $t = 1 << (<$t>::BITS - 2);
+            while bit > x {
+                bit >>= 2;
+            }
+            while bit != 0 {
+                if rem >= root + bit {
+                    rem -= root + bit;
+                    root = (root >> 1) + bit;
+                } else {
+                    root >>= 1;
+                }
+                bit >>= 2;
+            }
+            root
         }
-        bit >>= 2;
-    }
-    root
+    };
 }
+
+isqrt_floor_digits!(
+    isqrt_floor_u64,
+    u64,
+    "`floor(sqrt(x))` for `u64` (32 steps)."
+);
+isqrt_floor_digits!(
+    isqrt_floor_u128,
+    u128,
+    "`floor(sqrt(x))` for `u128` (64 steps)."
+);
 
 /// `round(sqrt(x))` for `u64`; [`isqrt_round`] when `x` fits in `u32`.
 #[inline]
@@ -164,6 +180,17 @@ mod tests {
             let (x4, r) = (4 * u128::from(x), u128::from(r));
             assert!(r == 0 || (2 * r - 1) * (2 * r - 1) <= x4, "x={x}");
             assert!(x4 < (2 * r + 1) * (2 * r + 1), "x={x}");
+        }
+    }
+
+    #[test]
+    fn isqrt_u128_is_exact() {
+        let big = [u128::MAX, u128::MAX - 1, 1 << 100, (1 << 100) - 1, u128::from(u64::MAX)];
+        let roots = (1u128..3000).map(|r| r * r * 1_000_003);
+        for x in (0u128..3000).chain(big).chain(roots) {
+            let f = isqrt_floor_u128(x);
+            assert!(f.checked_mul(f).is_some_and(|f2| f2 <= x), "x={x}");
+            assert!((f + 1).checked_mul(f + 1).is_none_or(|g| g > x), "x={x}");
         }
     }
 

@@ -68,7 +68,7 @@
 //! assert!(v[180] > ShapeElem::ZERO && v[270] < ShapeElem::ZERO);
 //! ```
 
-use crate::fixed::{div_round_i64, isqrt_floor_u64, isqrt_round_u64};
+use crate::fixed::{div_round_i64, isqrt_floor_u128, isqrt_round_u64};
 use crate::image::{ImageError, ImageView};
 use core::fmt;
 
@@ -390,29 +390,6 @@ fn interpolate(v: &mut [u32; BINS], filled: &[bool; BINS]) {
 
 /// Fraction bits of the scaled standard deviation in [`normalise`].
 const SIGMA_FRAC_BITS: u32 = 16;
-
-/// `floor(sqrt(x))` for `u128`, digit by digit.
-fn isqrt_floor_u128(x: u128) -> u128 {
-    if let Ok(small) = u64::try_from(x) {
-        return u128::from(isqrt_floor_u64(small));
-    }
-    let mut rem = x;
-    let mut root = 0u128;
-    let mut bit = 1u128 << 126;
-    while bit > x {
-        bit >>= 2;
-    }
-    while bit != 0 {
-        if rem >= root + bit {
-            rem -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
-        }
-        bit >>= 2;
-    }
-    root
-}
 
 /// z-normalises the profile into `out` (max radii, then min radii) and
 /// returns how many elements saturated.

@@ -88,10 +88,10 @@ pub use pipeline::{
     bounding_box, inhibit, refine_border, segment, BoundingBox, Detection, SegmentReport,
 };
 pub use stats::{
-    above_mean, foreground, foreground_conspicuity, in_selected_area, isqrt_round_u64,
-    object_conspicuity, object_region, plane, select_slice, selected_area, selected_stats,
-    slice_cells, slice_counts, slice_radius, slice_range, thresholds, DisparityRange, PsiMean,
-    SelectedStats, Slice, SliceCounts, Thresholds, PLANES, STAT_FRAC_BITS,
+    above_mean, foreground, foreground_conspicuity, in_selected_area, object_conspicuity,
+    object_region, plane, select_slice, selected_area, selected_stats, slice_cells, slice_counts,
+    slice_radius, slice_range, thresholds, DisparityRange, PsiMean, SelectedStats, Slice,
+    SliceCounts, Thresholds, PLANES, STAT_FRAC_BITS,
 };
 
 use crate::image::ImageError;

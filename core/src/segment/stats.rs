@@ -7,6 +7,7 @@
 use super::{check_size, Ratio, SegmentError, SegmentParams};
 use crate::conspicuity::EdgeCell;
 use crate::disparity::DisparityCell;
+use crate::fixed::isqrt_round_u64;
 use crate::image::{ImageView, ImageViewMut};
 
 /// Fraction bits of [`SelectedStats`] and [`DisparityRange`] values.
@@ -59,31 +60,6 @@ impl DisparityRange {
 fn mul_ratio(x: u64, r: Ratio) -> u64 {
     let den = u64::from(r.den.max(1));
     (2 * x * u64::from(r.num) + den) / (2 * den)
-}
-
-/// `round(sqrt(x))`, exact, integer only.
-pub fn isqrt_round_u64(x: u64) -> u64 {
-    // Floor square root, digit by digit (no division, no overflow).
-    let (mut rem, mut root) = (x, 0u64);
-    let mut bit = 1u64 << 62;
-    while bit > x {
-        bit >>= 2;
-    }
-    while bit != 0 {
-        if rem >= root + bit {
-            rem -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
-        }
-        bit >>= 2;
-    }
-    // rem = x − root²; round up when x ≥ root² + root + 1/4.
-    if rem > root {
-        root + 1
-    } else {
-        root
-    }
 }
 
 /// True when `(x, y)` lies in the selected area S of a `width` x `height`
