@@ -185,7 +185,13 @@ mod tests {
 
     #[test]
     fn isqrt_u128_is_exact() {
-        let big = [u128::MAX, u128::MAX - 1, 1 << 100, (1 << 100) - 1, u128::from(u64::MAX)];
+        let big = [
+            u128::MAX,
+            u128::MAX - 1,
+            1 << 100,
+            (1 << 100) - 1,
+            u128::from(u64::MAX),
+        ];
         let roots = (1u128..3000).map(|r| r * r * 1_000_003);
         for x in (0u128..3000).chain(big).chain(roots) {
             let f = isqrt_floor_u128(x);

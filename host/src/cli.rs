@@ -62,42 +62,7 @@ pub enum Command {
     },
     /// Run the disparity energy model (f32 reference) on a stereo pair;
     /// with ground truth, print bad-pixel rates and write an error map.
-    Stereo {
-        /// Left image (PNG or JPEG).
-        #[arg(long)]
-        left: PathBuf,
-        /// Right image, the same size as the left.
-        #[arg(long)]
-        right: PathBuf,
-        /// Ground-truth disparity of the left view at the input size: a
-        /// grey PNG (0 = unknown) or a Middlebury PFM (inf = unknown).
-        #[arg(long)]
-        gt: Option<PathBuf>,
-        /// PNG ground-truth values per pixel of disparity.
-        #[arg(long, default_value_t = 1.0)]
-        gt_scale: f32,
-        /// Working width, px (area-averaged down, aspect kept).
-        #[arg(long, default_value_t = 160)]
-        width: u32,
-        /// Largest disparity searched, px of the working size.
-        #[arg(long, default_value_t = 15)]
-        max_disp: u8,
-        /// Score pooling radius, px (default: the model's, 2).
-        #[arg(long)]
-        pool: Option<u8>,
-        /// Pyramid levels (default: the model's, 2: λ 4 and 8).
-        #[arg(long)]
-        levels: Option<u8>,
-        /// Decoder table (default: built in for max-disp 15, else trained).
-        #[arg(long)]
-        table: Option<PathBuf>,
-        /// Print the numbers as JSON.
-        #[arg(long)]
-        json: bool,
-        /// Output directory (created if missing).
-        #[arg(long)]
-        out: PathBuf,
-    },
+    Stereo(StereoOptions),
     /// Train the DEM decoder on seeded random-dot stereograms and write its
     /// integer table (host/data/dem_default.bin is `--max-disp 15`).
     TrainDem {
@@ -140,31 +105,7 @@ pub fn run(cli: Cli) -> Result<Summary> {
         Some(Command::Conspicuity { image, out, width }) => {
             run_image(&ImageOptions { image, out, width })
         }
-        Some(Command::Stereo {
-            left,
-            right,
-            gt,
-            gt_scale,
-            width,
-            max_disp,
-            pool,
-            levels,
-            table,
-            json,
-            out,
-        }) => run_stereo(&StereoOptions {
-            left,
-            right,
-            gt,
-            gt_scale,
-            width,
-            max_disp,
-            pool,
-            levels,
-            table,
-            json,
-            out,
-        }),
+        Some(Command::Stereo(opts)) => run_stereo(&opts),
         Some(Command::TrainDem { out, max_disp }) => run_train_dem(
             &DemParams {
                 max_disp,

@@ -15,29 +15,41 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Options of `protogist stereo`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, clap::Args)]
 pub struct StereoOptions {
-    /// Left image.
+    /// Left image (PNG or JPEG).
+    #[arg(long)]
     pub left: PathBuf,
-    /// Right image.
+    /// Right image, the same size as the left.
+    #[arg(long)]
     pub right: PathBuf,
-    /// Ground truth (PNG or PFM).
+    /// Ground-truth disparity of the left view at the input size: a
+    /// grey PNG (0 = unknown) or a Middlebury PFM (inf = unknown).
+    #[arg(long)]
     pub gt: Option<PathBuf>,
-    /// PNG GT values per pixel of disparity.
+    /// PNG ground-truth values per pixel of disparity.
+    #[arg(long, default_value_t = 1.0)]
     pub gt_scale: f32,
-    /// Working width.
+    /// Working width, px (area-averaged down, aspect kept).
+    #[arg(long, default_value_t = 160)]
     pub width: u32,
-    /// Largest disparity, px of the working size.
+    /// Largest disparity searched, px of the working size.
+    #[arg(long, default_value_t = 15)]
     pub max_disp: u8,
-    /// Pooling radius (None: the default).
+    /// Score pooling radius, px (default: the model's, 2).
+    #[arg(long)]
     pub pool: Option<u8>,
-    /// Pyramid levels (None: the default).
+    /// Pyramid levels (default: the model's, 2: λ 4 and 8).
+    #[arg(long)]
     pub levels: Option<u8>,
-    /// A decoder table to use instead of the built-in or trained one.
+    /// Decoder table (default: built in for max-disp 15, else trained).
+    #[arg(long)]
     pub table: Option<PathBuf>,
-    /// Print JSON instead of the summary.
+    /// Print the numbers as JSON.
+    #[arg(long)]
     pub json: bool,
-    /// Output directory.
+    /// Output directory (created if missing).
+    #[arg(long)]
     pub out: PathBuf,
 }
 
