@@ -7,7 +7,9 @@ use std::time::Instant;
 
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
+use firmware_sim::objects;
 use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, EdgeCell, Luv};
+use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::{App, Buffers, SimCamera, Ticks, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
 
@@ -82,7 +84,23 @@ pub fn run() -> ExitCode {
             )
         },
     );
+    let result = result.and_then(|()| {
+        // The object stages on a 64x48 frame: its conspicuity map first.
+        let (ow, oh) = (objects::OBJ_WIDTH, objects::OBJ_HEIGHT);
+        app.process(ow, oh, &mut bufs, &mut WallTicks(Instant::now()))?;
+        Ok(())
+    });
+    let objects = result.as_ref().ok().map(|()| run_objects(&conspicuity));
     print!("{out}");
+    if let Some(r) = objects {
+        match r {
+            Ok(line) => print!("{line}"),
+            Err(e) => {
+                eprintln!("firmware-sim: object stages: {e:?}");
+                return ExitCode::FAILURE;
+            }
+        }
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -90,4 +108,34 @@ pub fn run() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// The object stages on the 64x48 conspicuity map; the line to print.
+fn run_objects(edges: &[EdgeCell]) -> Result<String, objects::ObjectError> {
+    use objects::len;
+    let mut depth = vec![0u8; len::INPUT];
+    let mut input = vec![DisparityCell::OFF; len::INPUT];
+    let mut disparity = vec![DisparityCell::OFF; len::DISPARITY];
+    let mut edge_maps = vec![EdgeCell::OFF; len::EDGES];
+    let mut binary = vec![false; len::BINARY];
+    let mut labels = vec![0u16; len::LABELS];
+    let mut area = vec![0u32; len::AREA];
+    let mut mask = vec![false; len::INPUT];
+    let mut mask_u8 = vec![0u8; len::INPUT];
+    let mut bufs = objects::ObjectBuffers {
+        depth: &mut depth,
+        input: &mut input,
+        disparity: &mut disparity,
+        edges: &mut edge_maps,
+        binary: &mut binary,
+        labels: &mut labels,
+        area: &mut area,
+        mask: &mut mask,
+        mask_u8: &mut mask_u8,
+    };
+    let r = objects::detect(edges, &mut bufs, &mut WallTicks(Instant::now()))?;
+    let mut line = String::new();
+    // Writing into a String cannot fail.
+    let _ = objects::write_result(&mut line, &r);
+    Ok(line)
 }

@@ -16,7 +16,9 @@ use cortex_m_semihosting::{debug, hio};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use firmware_sim::app::write_ipp;
+use firmware_sim::objects::{self, len};
 use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, scratch_bytes, EdgeCell, Luv};
+use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::{App, Buffers, SimCamera, Ticks, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
 
@@ -182,6 +184,39 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
         writeln!(out, "scratch conspicuity {w}x{h} {}", scratch_bytes(w, h))
     })
     .map_err(|_| "firmware app failed")?;
+
+    // The object stages on a 64x48 frame, after its conspicuity map.
+    let (ow, oh) = (objects::OBJ_WIDTH, objects::OBJ_HEIGHT);
+    app.process(ow, oh, &mut bufs, &mut ticks)
+        .map_err(|_| "firmware app failed")?;
+    let mut obj = objects::ObjectBuffers {
+        depth: singleton!(: [u8; len::INPUT] = [0; len::INPUT]).ok_or("depth taken")?,
+        input: singleton!(: [DisparityCell; len::INPUT] = [DisparityCell::OFF; len::INPUT])
+            .ok_or("input taken")?,
+        disparity:
+            singleton!(: [DisparityCell; len::DISPARITY] = [DisparityCell::OFF; len::DISPARITY])
+                .ok_or("disparity taken")?,
+        edges: singleton!(: [EdgeCell; len::EDGES] = [EdgeCell::OFF; len::EDGES])
+            .ok_or("edges taken")?,
+        binary: singleton!(: [bool; len::BINARY] = [false; len::BINARY]).ok_or("binary taken")?,
+        labels: singleton!(: [u16; len::LABELS] = [0; len::LABELS]).ok_or("labels taken")?,
+        area: singleton!(: [u32; len::AREA] = [0; len::AREA]).ok_or("area taken")?,
+        mask: singleton!(: [bool; len::INPUT] = [false; len::INPUT]).ok_or("mask taken")?,
+        mask_u8: singleton!(: [u8; len::INPUT] = [0; len::INPUT]).ok_or("mask bytes taken")?,
+    };
+    let r = objects::detect(bufs.conspicuity, &mut obj, &mut ticks)
+        .map_err(|_| "object stages failed")?;
+    objects::write_result(out, &r).map_err(|_| "semihosting write failed")?;
+    write_ipp(out, "segment", ow, oh, to_instructions(r.segment))
+        .and_then(|()| write_ipp(out, "shape", ow, oh, to_instructions(r.shape)))
+        .and_then(|()| {
+            writeln!(
+                out,
+                "scratch segment {ow}x{oh} {}",
+                firmware_sim::pg::segment::scratch_bytes(ow, oh)
+            )
+        })
+        .map_err(|_| "semihosting write failed")?;
     writeln!(out, "stack peak {} bytes", stack_peak_bytes()).map_err(|_| "semihosting write failed")
 }
 
