@@ -139,7 +139,17 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
 
     // Stage 2: disparity from the stereo pair by the disparity energy model
     // (the f32 reference; the fixed-point core stage is to come).
-    let dem = crate::stages::run_dem(&scene.left, &scene.right, &scene.disparity, w, h)?;
+    let dem_params = crate::reference::stereo::DemParams::default();
+    let decoder = crate::stereo_cmd::decoder_for(&dem_params, None)?;
+    let dem = crate::stages::run_dem(
+        &dem_params,
+        &decoder,
+        &scene.left,
+        &scene.right,
+        &scene.disparity,
+        w,
+        h,
+    )?;
     out.extend(dem.panels());
     dem.summarise(&mut summary);
 

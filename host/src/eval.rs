@@ -1,12 +1,17 @@
 //! Accuracy checks that both tests and `cargo xtask bench` run.
 
 use crate::error::Result;
+use crate::reference::stereo::{Decoder, DemParams};
 use crate::stages::{run_conspicuity, run_segment};
 use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::from_pixels;
 use protogist::image::{ImageViewMut, Rgb8};
 use protogist::segment::SegmentParams;
 use protogist::synth::{render_disparity, render_left, render_mask, render_right, SceneSpec};
+
+/// Largest disparity of `SceneSpec::random` scenes at 160 px, with margin:
+/// the model's search range for the evaluation.
+pub const EVAL_MAX_DISP: u8 = 31;
 
 /// Where the segmentation's disparity comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -43,6 +48,7 @@ pub fn segment_scene_iou(
     height: usize,
     params: &SegmentParams,
     source: DisparitySource,
+    dem: Option<&(DemParams, Decoder)>,
 ) -> Result<SceneIou> {
     let (w, h) = (width, height);
     let spec = SceneSpec::random(seed, w, h);
@@ -56,7 +62,15 @@ pub fn segment_scene_iou(
         DisparitySource::Dem => {
             let mut right = vec![Rgb8::default(); w * h];
             render_right(&spec, &mut ImageViewMut::packed(&mut right, w, h)?)?;
-            crate::stages::run_dem(&rgb, &right, &gt, w, h)?.disparity
+            let trained;
+            let (p, dec) = match dem {
+                Some((p, d)) => (p, d),
+                None => {
+                    trained = eval_dem()?;
+                    (&trained.0, &trained.1)
+                }
+            };
+            crate::stages::run_dem(p, dec, &rgb, &right, &gt, w, h)?.disparity
         }
     };
     let seg = run_segment(params, &d, &edges.edges, w, h)?;
@@ -88,7 +102,25 @@ pub fn segment_eval(
     source: DisparitySource,
 ) -> Result<Vec<SceneIou>> {
     let params = SegmentParams::default();
+    let dem = match source {
+        DisparitySource::Dem => Some(eval_dem()?),
+        DisparitySource::Gt => None,
+    };
     (0..scenes)
-        .map(|seed| segment_scene_iou(seed, width, height, &params, source))
+        .map(|seed| segment_scene_iou(seed, width, height, &params, source, dem.as_ref()))
         .collect()
+}
+
+/// The model for the evaluation: default parameters with
+/// [`EVAL_MAX_DISP`], its decoder trained now (seeded, about 2 s).
+///
+/// # Errors
+/// As [`crate::stereo_cmd::decoder_for`].
+pub fn eval_dem() -> Result<(DemParams, Decoder)> {
+    let params = DemParams {
+        max_disp: EVAL_MAX_DISP,
+        ..DemParams::default()
+    };
+    let decoder = crate::stereo_cmd::decoder_for(&params, None)?;
+    Ok((params, decoder))
 }

@@ -522,25 +522,25 @@ pub struct DemResult {
     pub elapsed: Duration,
 }
 
-/// Runs the f32 disparity energy model (default parameters, built-in
-/// decoder table) on a packed pair, and scores it against whole-pixel GT.
+/// Runs the f32 disparity energy model on a packed pair, and scores it
+/// against whole-pixel GT.
 ///
 /// # Errors
 /// The stage's typed errors (sizes, a decoder of other parameters).
 pub fn run_dem(
+    params: &crate::reference::stereo::DemParams,
+    decoder: &crate::reference::stereo::Decoder,
     left: &[Rgb8],
     right: &[Rgb8],
     gt: &[u8],
     width: usize,
     height: usize,
 ) -> Result<DemResult> {
-    use crate::reference::stereo::{stereo, DemParams};
-    let params = DemParams::default();
-    let decoder = crate::stereo_cmd::decoder_for(&params, None)?;
+    use crate::reference::stereo::stereo;
     let start = Instant::now();
     let maps = stereo(
-        &params,
-        &decoder,
+        params,
+        decoder,
         &ImageView::packed(left, width, height)?,
         &ImageView::packed(right, width, height)?,
     )?;

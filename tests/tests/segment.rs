@@ -735,7 +735,7 @@ fn psi_mean_over_on_cells_for_comparison() {
     };
     let sum: f64 = (0..SCENES)
         .map(|s| {
-            protogist_host::eval::segment_scene_iou(s, W, H, &params, DisparitySource::Gt)
+            protogist_host::eval::segment_scene_iou(s, W, H, &params, DisparitySource::Gt, None)
                 .unwrap()
                 .iou
         })
