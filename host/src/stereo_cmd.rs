@@ -172,18 +172,40 @@ fn metrics_json(m: &Metrics) -> serde_json::Value {
     })
 }
 
-/// `protogist stereo`: loads, downscales, runs the DEM, writes the panels
-/// and, with GT, the error map and metrics.
+/// A stereo pair (and its optional ground truth) at the working size.
+#[derive(Clone, Debug)]
+pub struct Pair {
+    /// Input size `(width, height)`.
+    pub input_size: (u32, u32),
+    /// Working width.
+    pub width: usize,
+    /// Working height.
+    pub height: usize,
+    /// Left view, packed.
+    pub left: Vec<protogist::image::Rgb8>,
+    /// Right view, packed.
+    pub right: Vec<protogist::image::Rgb8>,
+    /// Ground-truth disparity in px of the working size, when given.
+    pub gt: Option<GtMap>,
+}
+
+/// Loads a pair and optional GT, checks their sizes, and area-downscales all
+/// to `max_width` (GT disparities scale with the images).
 ///
 /// # Errors
-/// [`HostError`] for unreadable or mismatched inputs, bad GT, parameters
-/// the stage rejects, or an unwritable output directory.
-pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
-    let start = Instant::now();
-    if opts.width == 0 {
+/// [`HostError`] for unreadable files, a pair of different sizes, GT of
+/// another size, or a zero width.
+pub fn load_pair(
+    left: &Path,
+    right: &Path,
+    gt: Option<&Path>,
+    gt_scale: f32,
+    max_width: u32,
+) -> Result<Pair> {
+    if max_width == 0 {
         return Err(HostError::ZeroDimension { name: "width" });
     }
-    let (left, right) = (io::load_rgb(&opts.left)?, io::load_rgb(&opts.right)?);
+    let (left, right) = (io::load_rgb(left)?, io::load_rgb(right)?);
     let (ow, oh) = left.dimensions();
     if right.dimensions() != (ow, oh) {
         let (rw, rh) = right.dimensions();
@@ -193,12 +215,12 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         }
         .into());
     }
-    let gt_full = match &opts.gt {
+    let gt_full = match gt {
         Some(path) => {
-            let g = load_gt(path, opts.gt_scale)?;
+            let g = load_gt(path, gt_scale)?;
             if (g.width, g.height) != (ow as usize, oh as usize) {
                 return Err(HostError::GroundTruthSize {
-                    path: path.clone(),
+                    path: path.to_path_buf(),
                     expected: (ow as usize, oh as usize),
                     got: (g.width, g.height),
                 });
@@ -207,7 +229,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         }
         None => None,
     };
-    let (w, h) = io::working_size(ow, oh, opts.width)?;
+    let (w, h) = io::working_size(ow, oh, max_width)?;
     let scale = |img: image::RgbImage| {
         if (w, h) == (ow, oh) {
             img
@@ -220,6 +242,34 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         io::to_core_rgb(&scale(right)),
     );
     let (w, h) = (w as usize, h as usize);
+    Ok(Pair {
+        input_size: (ow, oh),
+        width: w,
+        height: h,
+        left: lp,
+        right: rp,
+        gt: gt_full.map(|g| downscale_gt(&g, w, h)),
+    })
+}
+
+/// `protogist stereo`: loads, downscales, runs the DEM, writes the panels
+/// and, with GT, the error map and metrics.
+///
+/// # Errors
+/// [`HostError`] for unreadable or mismatched inputs, bad GT, parameters
+/// the stage rejects, or an unwritable output directory.
+pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
+    let start = Instant::now();
+    let pair = load_pair(
+        &opts.left,
+        &opts.right,
+        opts.gt.as_deref(),
+        opts.gt_scale,
+        opts.width,
+    )?;
+    let (ow, oh) = pair.input_size;
+    let (lp, rp, gt_small) = (pair.left, pair.right, pair.gt);
+    let (w, h) = (pair.width, pair.height);
     let mut params = DemParams {
         max_disp: opts.max_disp,
         ..DemParams::default()
@@ -289,8 +339,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         "on_fraction": on as f64 / n,
         "stereo_ms": run_ms,
     });
-    if let Some(g) = gt_full {
-        let gt = downscale_gt(&g, w, h);
+    if let Some(gt) = gt_small {
         let m = metrics(&maps.disparity_f32, &gt.data);
         let raw = metrics(&maps.left_raw, &gt.data);
         let gmax = gt.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
