@@ -63,6 +63,10 @@ pub enum Command {
     /// Run the disparity energy model (f32 reference) on a stereo pair;
     /// with ground truth, print bad-pixel rates and write an error map.
     Stereo(StereoOptions),
+    /// Run the whole pipeline on a stereo pair: conspicuity, disparity,
+    /// figure-ground, object masks and shape vectors; write the paper's
+    /// Fig. 2 panels, shape plots and report.json.
+    Run(crate::run_cmd::RunOptions),
     /// Train the DEM decoder on seeded random-dot stereograms and write its
     /// integer table (host/data/dem_default.bin is `--max-disp 15`).
     TrainDem {
@@ -106,6 +110,7 @@ pub fn run(cli: Cli) -> Result<Summary> {
             run_image(&ImageOptions { image, out, width })
         }
         Some(Command::Stereo(opts)) => run_stereo(&opts),
+        Some(Command::Run(opts)) => crate::run_cmd::run_pipeline(&opts),
         Some(Command::TrainDem { out, max_disp }) => run_train_dem(
             &DemParams {
                 max_disp,

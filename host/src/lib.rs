@@ -20,6 +20,7 @@ pub mod io;
 pub mod panels;
 pub mod plot;
 pub mod reference;
+pub mod run_cmd;
 pub mod stages;
 pub mod stereo_cmd;
 pub mod storage;
