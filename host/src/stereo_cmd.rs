@@ -45,6 +45,9 @@ pub struct StereoOptions {
     /// Decoder table (default: built in for max-disp 15, else trained).
     #[arg(long)]
     pub table: Option<PathBuf>,
+    /// Border refinement radius, px (default: the model's; 0 disables).
+    #[arg(long)]
+    pub refine: Option<u8>,
     /// Print the numbers as JSON.
     #[arg(long)]
     pub json: bool,
@@ -279,6 +282,9 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     }
     if let Some(l) = opts.levels {
         params.levels = l;
+    }
+    if let Some(r) = opts.refine {
+        params.refine_radius = r;
     }
     params.check()?;
     // Size checks first: training for a hopeless size is wasted time.

@@ -330,10 +330,16 @@ fn dem_aloe() -> Section {
          --width W --max-disp D --json --out DIR`, default `DemParams` (3 orientations, 2 scales, \
          5x5 pooling, left-right check). bad-k: % of pixels off by more than k px, over pixels \
          with an estimate, and over all GT pixels with a missing estimate counted as an error.\n\n\
-         | width | D | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
-         |---|---|---|---|---|---|---|\n",
+         The `--refine 1` rows add the colour-guided border refinement (docs/STEREO.md).\n\n\
+         | width | D | refine | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
+         |---|---|---|---|---|---|---|---|\n",
     );
-    for (w, d) in [("160", "32"), ("320", "64")] {
+    for (w, d, refine) in [
+        ("160", "32", "0"),
+        ("160", "32", "1"),
+        ("320", "64", "0"),
+        ("320", "64", "1"),
+    ] {
         let out_dir = root().join("target/bench-stereo");
         let args = [
             "stereo",
@@ -347,6 +353,8 @@ fn dem_aloe() -> Section {
             w,
             "--max-disp",
             d,
+            "--refine",
+            refine,
             "--json",
             "--out",
             &out_dir.to_string_lossy(),
@@ -360,13 +368,13 @@ fn dem_aloe() -> Section {
                 let f = v.get("final")?;
                 let g = |k: &str| f.get(k).and_then(serde_json::Value::as_f64);
                 Some(format!(
-                    "| {w} | {d} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {:.0} |\n",
+                    "| {w} | {d} | {refine} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {:.0} |\n",
                     g("bad1_estimated")?, g("bad2_estimated")?, g("bad4_estimated")?,
                     g("bad1_all")?, g("bad2_all")?, g("bad4_all")?,
                     g("mae")?, g("density")?, v.get("stereo_ms")?.as_f64()?
                 ))
             })
-            .unwrap_or_else(|| format!("| {w} | {d} | {NOT_YET} | | | | |\n"));
+            .unwrap_or_else(|| format!("| {w} | {d} | {refine} | {NOT_YET} | | | | |\n"));
         body.push_str(&row);
     }
     body.push_str(&opencv_aloe(&dir));

@@ -14,6 +14,7 @@
 pub mod filters;
 pub mod population;
 pub mod readout;
+pub mod refine;
 pub mod table;
 pub mod train;
 
@@ -53,6 +54,15 @@ pub struct DemParams {
     /// Left-right check: OFF when `|d_L(x) − d_R(x − d_L)|` exceeds this,
     /// px; negative disables the check. Default 1.
     pub lr_tolerance: f32,
+    /// Border refinement: pixels within this many px of a colour edge (and
+    /// OFF pixels) take the disparity of the colour-nearest trusted
+    /// neighbours (see `refine`); 0 disables it. Default 0.
+    pub refine_radius: u8,
+    /// Border refinement: search window radius, px. Default 8.
+    pub refine_window: u8,
+    /// Border refinement: colour-nearest neighbours whose median is taken.
+    /// Default 5.
+    pub refine_k: u8,
     /// Training: seed of the random-dot stereograms.
     pub train_seed: u64,
     /// Training: images per disparity. Default 4.
@@ -77,6 +87,9 @@ impl Default for DemParams {
             min_energy: 0.1,
             min_margin: 0.0,
             lr_tolerance: 1.0,
+            refine_radius: 0,
+            refine_window: 8,
+            refine_k: 5,
             train_seed: 0x0de1_5eed,
             train_images: 4,
             train_width: 64,
@@ -279,12 +292,9 @@ pub fn stereo(
     right: &ImageView<'_, Rgb8>,
 ) -> Result<DisparityMapsF, StereoError> {
     check(params, decoder, left.size(), right.size())?;
-    Ok(stereo_grey(
-        params,
-        decoder,
-        filters::grey(left),
-        filters::grey(right),
-    ))
+    let mut maps = stereo_grey(params, decoder, filters::grey(left), filters::grey(right));
+    refine::refine_borders(params, left, &mut maps);
+    Ok(maps)
 }
 
 /// Runs the stage on grey planes of equal size (sizes checked by the
