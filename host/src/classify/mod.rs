@@ -7,12 +7,12 @@
 //!   or the unknown class `U_{N+1}` below `Δ`), ranked lists, and the score
 //!   sets that the metrics take.
 //! * [`metrics`]: ROR and CMC, the FAR/FRR sweep over `Δ` (DET), EER,
-//!   HTER_min, verification rate at a FAR, ROC and AUC, and the probit
-//!   (inverse normal CDF) for DET axes.
+//!   HTER_min, verification rate at a FAR, ROC and AUC; [`probit`] is the
+//!   inverse normal CDF for DET axes.
 //! * [`plots`]: CMC, DET and ROC curves like the paper's Fig. 8, as PNG and
 //!   SVG.
 //! * [`shapes`]: seeded parametric binary silhouettes in an image-folder
-//!   layout (`protogist gen-shapes`).
+//!   layout (`protogist gen-shapes`), of the [`families`].
 //!
 //! The network of section 4.4 is not here yet: the rules take any output
 //! vectors (`&[Vec<f32>]`), so the 720-element shape vectors themselves can
@@ -20,8 +20,10 @@
 //!
 //! Rates are fractions in `[0, 1]` throughout; the paper prints them in %.
 
+pub mod families;
 pub mod metrics;
 pub mod plots;
+pub mod probit;
 pub mod rules;
 pub mod shapes;
 

@@ -18,7 +18,7 @@
 //!
 //! Each curve is drawn solid or dashed in its colour, as in Fig. 8.
 
-use super::metrics::probit;
+use super::probit::probit;
 use crate::error::{HostError, Result};
 use crate::io::{ensure_dir, write_atomic};
 use plotters::coord::types::RangedCoordf64;
