@@ -246,6 +246,14 @@ mod tests {
     }
 
     #[test]
+    fn tiny_sizes_do_not_panic() {
+        for size in [(0, 0), (1, 1), (3, 200)] {
+            let _ = render_png(PlotKind::Det, &[], size);
+            let _ = render_svg(PlotKind::Cmc { classes: 0 }, &[], size);
+        }
+    }
+
+    #[test]
     fn write_plot_writes_png_and_svg() {
         let dir = tempfile::tempdir().unwrap();
         let [png, svg] = write_plot(dir.path(), "roc", PlotKind::Roc, &[], (64, 64)).unwrap();
