@@ -7,6 +7,7 @@
 //! protogist stereo --left L --right R [--gt GT --gt-scale S] [--width W]
 //!                  [--max-disp D] [--pool R] [--levels L] [--table FILE] [--json] --out DIR
 //! protogist train-dem --out FILE [--max-disp D]
+//! protogist gen-shapes --out DIR [--classes N --per-class M --seed S --size PX]
 //! ```
 
 use crate::demo::{finish, run_demo, DemoOptions};
@@ -77,6 +78,9 @@ pub enum Command {
         #[arg(long, default_value_t = 15)]
         max_disp: u8,
     },
+    /// Generate seeded binary silhouettes of parametric shapes (PNG, object
+    /// white on black), one subfolder per class.
+    GenShapes(crate::classify::shapes::GenShapesOptions),
     /// Print the core's working memory per stage and frame size, from its
     /// `const fn`s (`scratch <stage> <W>x<H> <bytes>` lines).
     Scratch,
@@ -118,6 +122,7 @@ pub fn run(cli: Cli) -> Result<Summary> {
             },
             &out,
         ),
+        Some(Command::GenShapes(opts)) => crate::classify::shapes::gen_shapes(&opts),
         Some(Command::Scratch) => Ok(scratch_summary()),
         Some(Command::SegmentEval {
             scenes,

@@ -88,6 +88,17 @@ pub enum HostError {
         /// The GT's size.
         got: (usize, usize),
     },
+    /// An argument out of its accepted range.
+    #[error("--{name}: {reason}")]
+    InvalidArgument {
+        /// The option's name.
+        name: &'static str,
+        /// What is wrong (one line).
+        reason: String,
+    },
+    /// A classification rule or metric rejected its input.
+    #[error("classify: {0}")]
+    Classify(#[from] crate::classify::ClassifyError),
     /// An output path exists and is not a directory.
     #[error("{} exists and is not a directory", .0.display())]
     NotADirectory(PathBuf),

@@ -172,6 +172,26 @@ pub fn write_panels(dir: &Path, panels: &[Panel]) -> Result<Vec<PathBuf>> {
     Ok(renamed)
 }
 
+/// Writes `bytes` to `path` atomically: to a hidden temporary name in the
+/// same directory, flushed, then renamed into place. On failure the
+/// temporary file is removed and `path` is untouched.
+///
+/// # Errors
+/// [`HostError::Io`].
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let name = path
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let result = write_synced(&tmp, bytes)
+        .and_then(|()| fs::rename(&tmp, path).map_err(|e| HostError::io(path, e)));
+    if result.is_err() {
+        // Best effort: the original error is what the user needs to see.
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
 /// Writes `bytes` to `path` and flushes them to disk.
 fn write_synced(path: &Path, bytes: &[u8]) -> Result<()> {
     let io = |e| HostError::io(path, e);

@@ -9,8 +9,11 @@
 //! into [`panels`], [`io`] loads, downscales and writes images, [`summary`]
 //! is what gets printed, and [`error`] is the one error type of them all.
 //! [`stereo_cmd`] runs the DEM reference on a pair and scores it against
-//! [`ground_truth`].
+//! [`ground_truth`]. [`classify`] holds the classification rules, the
+//! performance measures and plots of the paper's sections 4.1 and 5.1, and
+//! the development silhouettes of `protogist gen-shapes`.
 
+pub mod classify;
 pub mod cli;
 pub mod demo;
 pub mod error;

@@ -282,3 +282,40 @@ fn an_output_path_that_is_a_file_is_a_clean_error() {
     let out = protogist(&["demo", "--out", file.to_str().unwrap()], tmp.path());
     assert_fails(&out, "not a directory", tmp.path());
 }
+
+#[test]
+fn gen_shapes_writes_class_folders_and_rejects_bad_counts() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("shapes");
+    let d = dir.to_str().unwrap();
+    let out = protogist(
+        &[
+            "gen-shapes",
+            "--out",
+            d,
+            "--classes",
+            "3",
+            "--per-class",
+            "2",
+        ],
+        tmp.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("square rounded-square star5"));
+    for class in ["00_square", "01_rounded-square", "02_star5"] {
+        assert_eq!(fs::read_dir(dir.join(class)).unwrap().count(), 2, "{class}");
+    }
+    let bad = tmp.path().join("bad");
+    let b = bad.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--classes", "0"], "--classes must be at least 1"),
+        (vec!["--per-class", "0"], "--per-class must be at least 1"),
+        (vec!["--classes", "20"], "--classes: 20 asked, 19 available"),
+        (vec!["--size", "8"], "--size: 8 px"),
+    ] {
+        let mut all = vec!["gen-shapes", "--out", b];
+        all.extend(args);
+        assert_fails(&protogist(&all, tmp.path()), needle, &bad);
+        assert!(!bad.exists(), "nothing written for {needle}");
+    }
+}
