@@ -22,10 +22,12 @@
 
 pub mod families;
 pub mod metrics;
+pub mod mlp;
 pub mod plots;
 pub mod probit;
 pub mod rules;
 pub mod shapes;
+pub mod train;
 
 /// Why a classification rule or a metric rejected its input.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
