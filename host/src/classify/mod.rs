@@ -18,7 +18,7 @@
 //!   log-sigmoid, `MSE_REG`) and its full-batch Rprop− training.
 //! * [`dataset`]: image-folder datasets of silhouettes, their shape vectors
 //!   and a seeded stratified split; [`model_cmd`]: `protogist train` and
-//!   `protogist eval` and the JSON model file.
+//!   `protogist eval`; [`model`]: the JSON model file.
 //!
 //! The rules take any output vectors (`&[Vec<f32>]`), so the 720-element
 //! shape vectors themselves can also stand in for a network output (an
@@ -30,6 +30,7 @@ pub mod dataset;
 pub mod families;
 pub mod metrics;
 pub mod mlp;
+pub mod model;
 pub mod model_cmd;
 pub mod plots;
 pub mod probit;
