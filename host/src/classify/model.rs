@@ -1,5 +1,8 @@
 //! The JSON model file of `protogist train`: the float network, its class
 //! names, its training parameters and its split.
+//!
+//! Weights are `f64` and read back bit-exact (`serde_json` is built with
+//! `float_roundtrip`; its default parser may be off by one ulp).
 
 use super::mlp::Mlp;
 use crate::error::{HostError, Result};
@@ -101,5 +104,56 @@ impl ModelFile {
             w2: arr(&self.w2, n, h)?,
             b2: self.b2.clone().into(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file(net: &Mlp) -> ModelFile {
+        ModelFile {
+            format: MODEL_FORMAT.into(),
+            classes: (0..net.outputs()).map(|c| format!("c{c}")).collect(),
+            inputs: net.inputs(),
+            hidden: net.hidden(),
+            gamma: 0.2,
+            seed: 1,
+            test_fraction: 0.5,
+            epochs: 0,
+            final_perf: 0.0,
+            final_mse: 0.0,
+            train: vec![],
+            test: vec![],
+            w1: net.w1.iter().copied().collect(),
+            b1: net.b1.to_vec(),
+            w2: net.w2.iter().copied().collect(),
+            b2: net.b2.to_vec(),
+        }
+    }
+
+    #[test]
+    fn json_round_trip_and_shape_checks() {
+        let net = Mlp::new(SHAPE_LEN, 3, 2, 5);
+        let f = file(&net);
+        let back: ModelFile = serde_json::from_str(&serde_json::to_string(&f).unwrap()).unwrap();
+        let p = Path::new("m.json");
+        assert_eq!(back.network(p).unwrap(), net);
+        let reason = |f: &ModelFile| match f.network(p) {
+            Err(HostError::BadModel { reason, .. }) => reason,
+            other => panic!("{other:?}"),
+        };
+        let mut bad = f.clone();
+        bad.w1.pop();
+        assert_eq!(reason(&bad), "w1 has 2159 values, expected 2160");
+        let mut bad = f.clone();
+        bad.b1[0] = f64::NAN;
+        assert_eq!(reason(&bad), "b1 holds a NaN or infinite value");
+        let mut bad = f.clone();
+        bad.inputs = 10;
+        assert!(reason(&bad).starts_with("10 inputs"));
+        let mut bad = f;
+        bad.format = "other".into();
+        assert!(reason(&bad).starts_with("format \"other\""));
     }
 }
