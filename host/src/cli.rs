@@ -8,6 +8,9 @@
 //!                  [--max-disp D] [--pool R] [--levels L] [--table FILE] [--json] --out DIR
 //! protogist train-dem --out FILE [--max-disp D]
 //! protogist gen-shapes --out DIR [--classes N --per-class M --seed S --size PX]
+//! protogist train --dataset DIR --out model.json [--hidden H --epochs E]
+//!                 [--test-fraction F --seed S --gamma G]
+//! protogist eval --model model.json --dataset DIR --out DIR [--json]
 //! ```
 
 use crate::demo::{finish, run_demo, DemoOptions};
@@ -81,6 +84,12 @@ pub enum Command {
     /// Generate seeded binary silhouettes of parametric shapes (PNG, object
     /// white on black), one subfolder per class.
     GenShapes(crate::classify::shapes::GenShapesOptions),
+    /// Train the float network (section 4.4) on the shape vectors of an
+    /// image-folder dataset and write the model as JSON.
+    Train(crate::classify::model_cmd::TrainOptions),
+    /// Evaluate a trained model on its test split: ROR, CMC, EER, HTER_min,
+    /// AUC, verification rates; CMC, DET and ROC plots.
+    Eval(crate::classify::model_cmd::EvalOptions),
     /// Print the core's working memory per stage and frame size, from its
     /// `const fn`s (`scratch <stage> <W>x<H> <bytes>` lines).
     Scratch,
@@ -123,6 +132,8 @@ pub fn run(cli: Cli) -> Result<Summary> {
             &out,
         ),
         Some(Command::GenShapes(opts)) => crate::classify::shapes::gen_shapes(&opts),
+        Some(Command::Train(opts)) => crate::classify::model_cmd::run_train(&opts),
+        Some(Command::Eval(opts)) => crate::classify::model_cmd::run_eval(&opts),
         Some(Command::Scratch) => Ok(scratch_summary()),
         Some(Command::SegmentEval {
             scenes,

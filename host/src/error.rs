@@ -99,6 +99,22 @@ pub enum HostError {
     /// A classification rule or metric rejected its input.
     #[error("classify: {0}")]
     Classify(#[from] crate::classify::ClassifyError),
+    /// An image-folder dataset that cannot be used.
+    #[error("dataset {}: {reason}", path.display())]
+    Dataset {
+        /// The dataset or class folder.
+        path: PathBuf,
+        /// What is wrong with it (one line).
+        reason: String,
+    },
+    /// A model file that cannot be used.
+    #[error("model {}: {reason}", path.display())]
+    BadModel {
+        /// The model file.
+        path: PathBuf,
+        /// What is wrong with it (one line).
+        reason: String,
+    },
     /// An output path exists and is not a directory.
     #[error("{} exists and is not a directory", .0.display())]
     NotADirectory(PathBuf),

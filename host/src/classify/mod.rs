@@ -14,18 +14,29 @@
 //! * [`shapes`]: seeded parametric binary silhouettes in an image-folder
 //!   layout (`protogist gen-shapes`), of the [`families`].
 //!
-//! The network of section 4.4 is not here yet: the rules take any output
-//! vectors (`&[Vec<f32>]`), so the 720-element shape vectors themselves can
-//! stand in for a network output (an identity "network") as a baseline.
+//! * [`mlp`], [`train`]: the float network of section 4.4 (two layers,
+//!   log-sigmoid, `MSE_REG`) and its full-batch Rprop− training.
+//! * [`dataset`]: image-folder datasets of silhouettes, their shape vectors
+//!   and a seeded stratified split; [`model_cmd`]: `protogist train` and
+//!   `protogist eval`; [`model`]: the JSON model file.
+//!
+//! The rules take any output vectors (`&[Vec<f32>]`), so the 720-element
+//! shape vectors themselves can also stand in for a network output (an
+//! identity "network") as a baseline.
 //!
 //! Rates are fractions in `[0, 1]` throughout; the paper prints them in %.
 
+pub mod dataset;
 pub mod families;
 pub mod metrics;
+pub mod mlp;
+pub mod model;
+pub mod model_cmd;
 pub mod plots;
 pub mod probit;
 pub mod rules;
 pub mod shapes;
+pub mod train;
 
 /// Why a classification rule or a metric rejected its input.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

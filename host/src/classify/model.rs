@@ -1,0 +1,159 @@
+//! The JSON model file of `protogist train`: the float network, its class
+//! names, its training parameters and its split.
+//!
+//! Weights are `f64` and read back bit-exact (`serde_json` is built with
+//! `float_roundtrip`; its default parser may be off by one ulp).
+
+use super::mlp::Mlp;
+use crate::error::{HostError, Result};
+use ndarray::Array2;
+use protogist::shape::SHAPE_LEN;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The `format` field of a model file.
+pub const MODEL_FORMAT: &str = "protogist-mlp-f64";
+
+/// The model file: the float network, its class names and its split.
+/// Weights are row-major: `w1` is `hidden × inputs`, `w2` is
+/// `classes × hidden`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelFile {
+    /// [`MODEL_FORMAT`].
+    pub format: String,
+    /// Class folder names; output `c` is class `classes[c]`.
+    pub classes: Vec<String>,
+    /// Input length (720).
+    pub inputs: usize,
+    /// Hidden units.
+    pub hidden: usize,
+    /// γ of MSE_REG.
+    pub gamma: f64,
+    /// Seed of split and initialisation.
+    pub seed: u64,
+    /// Held-out fraction.
+    pub test_fraction: f64,
+    /// Epochs run.
+    pub epochs: usize,
+    /// Final MSE_REG and MSE on the training split.
+    pub final_perf: f64,
+    /// Final MSE on the training split.
+    pub final_mse: f64,
+    /// Training images (`class/file`).
+    pub train: Vec<String>,
+    /// Test images (`class/file`).
+    pub test: Vec<String>,
+    /// Hidden weights.
+    pub w1: Vec<f64>,
+    /// Hidden biases.
+    pub b1: Vec<f64>,
+    /// Output weights.
+    pub w2: Vec<f64>,
+    /// Output biases.
+    pub b2: Vec<f64>,
+}
+
+pub(crate) fn bad_model(path: &Path, reason: impl Into<String>) -> HostError {
+    HostError::BadModel {
+        path: path.to_path_buf(),
+        reason: reason.into(),
+    }
+}
+
+impl ModelFile {
+    /// The network, after checking every shape.
+    ///
+    /// # Errors
+    /// [`HostError::BadModel`] naming the first inconsistency.
+    pub fn network(&self, path: &Path) -> Result<Mlp> {
+        let (d, h, n) = (self.inputs, self.hidden, self.classes.len());
+        if self.format != MODEL_FORMAT {
+            return Err(bad_model(
+                path,
+                format!("format {:?}, expected {MODEL_FORMAT:?}", self.format),
+            ));
+        }
+        if d != SHAPE_LEN || h == 0 || n == 0 {
+            return Err(bad_model(path, format!("{d} inputs, {h} hidden, {n} classes; expected {SHAPE_LEN} inputs and at least 1 of each")));
+        }
+        for (name, v, len) in [
+            ("w1", &self.w1, h * d),
+            ("b1", &self.b1, h),
+            ("w2", &self.w2, n * h),
+            ("b2", &self.b2, n),
+        ] {
+            if v.len() != len {
+                return Err(bad_model(
+                    path,
+                    format!("{name} has {} values, expected {len}", v.len()),
+                ));
+            }
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(bad_model(
+                    path,
+                    format!("{name} holds a NaN or infinite value"),
+                ));
+            }
+        }
+        let arr = |v: &[f64], r, c| {
+            Array2::from_shape_vec((r, c), v.to_vec()).map_err(|e| bad_model(path, e.to_string()))
+        };
+        Ok(Mlp {
+            w1: arr(&self.w1, h, d)?,
+            b1: self.b1.clone().into(),
+            w2: arr(&self.w2, n, h)?,
+            b2: self.b2.clone().into(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file(net: &Mlp) -> ModelFile {
+        ModelFile {
+            format: MODEL_FORMAT.into(),
+            classes: (0..net.outputs()).map(|c| format!("c{c}")).collect(),
+            inputs: net.inputs(),
+            hidden: net.hidden(),
+            gamma: 0.2,
+            seed: 1,
+            test_fraction: 0.5,
+            epochs: 0,
+            final_perf: 0.0,
+            final_mse: 0.0,
+            train: vec![],
+            test: vec![],
+            w1: net.w1.iter().copied().collect(),
+            b1: net.b1.to_vec(),
+            w2: net.w2.iter().copied().collect(),
+            b2: net.b2.to_vec(),
+        }
+    }
+
+    #[test]
+    fn json_round_trip_and_shape_checks() {
+        let net = Mlp::new(SHAPE_LEN, 3, 2, 5);
+        let f = file(&net);
+        let back: ModelFile = serde_json::from_str(&serde_json::to_string(&f).unwrap()).unwrap();
+        let p = Path::new("m.json");
+        assert_eq!(back.network(p).unwrap(), net);
+        let reason = |f: &ModelFile| match f.network(p) {
+            Err(HostError::BadModel { reason, .. }) => reason,
+            other => panic!("{other:?}"),
+        };
+        let mut bad = f.clone();
+        bad.w1.pop();
+        assert_eq!(reason(&bad), "w1 has 2159 values, expected 2160");
+        let mut bad = f.clone();
+        bad.b1[0] = f64::NAN;
+        assert_eq!(reason(&bad), "b1 holds a NaN or infinite value");
+        let mut bad = f.clone();
+        bad.inputs = 10;
+        assert!(reason(&bad).starts_with("10 inputs"));
+        let mut bad = f;
+        bad.format = "other".into();
+        assert!(reason(&bad).starts_with("format \"other\""));
+    }
+}
