@@ -39,6 +39,7 @@ pub mod disparity;
 pub mod fixed;
 pub mod image;
 pub mod off;
+pub mod rng;
 pub mod segment;
 pub mod shape;
 pub mod synth;

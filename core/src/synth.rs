@@ -22,6 +22,7 @@
 //! ```
 
 use crate::image::{ImageError, ImageViewMut, Rgb8};
+use crate::rng::SplitMix64;
 use core::fmt;
 
 /// Most objects a scene holds.
@@ -153,9 +154,9 @@ impl SceneSpec {
     /// (away from the top, bottom and left strips) when the frame allows;
     /// they may overlap one another.
     pub fn random(seed: u64, width: usize, height: usize) -> SceneSpec {
-        let mut rng = SplitMix(seed ^ 0x0005_ce4e_5eed);
+        let mut rng = SplitMix64::new(seed ^ 0x0005_ce4e_5eed);
         let (w, h) = (clamp_i32(width).max(1), clamp_i32(height).max(1));
-        let background_disparity = clamp_u8(1 + rng.below(width / 40) as usize);
+        let background_disparity = clamp_u8(1 + rng.below((width / 40) as u64) as usize);
         let background_colour = Rgb8::new(
             rng.range(40, 215) as u8,
             rng.range(40, 215) as u8,
@@ -291,7 +292,7 @@ impl SceneSpec {
 /// (as wrong estimates), so the main object is drawn above that. Rejection
 /// sampling; the last candidate after 64 tries.
 fn main_object_size(
-    rng: &mut SplitMix,
+    rng: &mut SplitMix64,
     shape: Shape,
     (sw, sh): (i32, i32),
     s_area: i64,
@@ -313,36 +314,6 @@ fn main_object_size(
         }
     }
     best
-}
-
-/// SplitMix64, the generator of [`SceneSpec::random`].
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `0..n` (0 when `n` is 0).
-    fn below(&mut self, n: usize) -> u64 {
-        match n as u64 {
-            0 => 0,
-            n => self.next() % n,
-        }
-    }
-
-    /// Uniform in `lo..=hi`; the midpoint when the range is empty.
-    fn range(&mut self, lo: i32, hi: i32) -> i32 {
-        if hi < lo {
-            return lo + (hi - lo) / 2;
-        }
-        let span = (i64::from(hi) - i64::from(lo) + 1) as u64;
-        lo + (self.next() % span) as i32
-    }
 }
 
 fn object_seed(seed: u64, index: usize) -> u64 {

@@ -36,29 +36,12 @@ pub struct Mlp {
 /// Gradients (or any per-parameter quantity) shaped like an [`Mlp`].
 pub type Grads = Mlp;
 
-/// `splitmix64`: a tiny seeded generator for the initial weights.
-#[derive(Clone, Debug)]
-pub struct SplitMix(u64);
+/// The project's seeded generator (re-exported for the host's users).
+pub use protogist::rng::SplitMix64 as SplitMix;
 
-impl SplitMix {
-    /// A generator from `seed`.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)`.
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
+/// Uniform in `[0, 1)` from 53 random bits.
+pub fn unit(rng: &mut SplitMix) -> f64 {
+    (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// The logistic (log-sigmoid) function.
@@ -68,7 +51,7 @@ pub fn logsig(x: f64) -> f64 {
 }
 
 fn uniform(rng: &mut SplitMix, rows: usize, cols: usize, a: f64) -> Array2<f64> {
-    Array2::from_shape_simple_fn((rows, cols), || a * (2.0 * rng.unit() - 1.0))
+    Array2::from_shape_simple_fn((rows, cols), || a * (2.0 * unit(rng) - 1.0))
 }
 
 impl Mlp {

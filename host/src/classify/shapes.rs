@@ -19,30 +19,13 @@
 //! seed gives the same images whatever crate versions are locked.
 
 pub use super::families::{Family, ShapeClass, CLASSES, SIZE_RANGE};
+use super::mlp::{unit, SplitMix};
 use crate::error::{HostError, Result};
 use crate::io::{ensure_dir, write_atomic};
 use crate::summary::Summary;
 use image::GrayImage;
 use std::f64::consts::PI;
 use std::path::PathBuf;
-
-/// SplitMix64: a small, fixed, seedable stream.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[lo, hi)`.
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
 
 /// Renders image `index` of class `class` (into [`CLASSES`]) for `seed`
 /// as a `size` x `size` mask, object 255 on 0.
@@ -58,21 +41,28 @@ pub fn render(class: usize, index: u64, seed: u64, size: u32) -> Result<GrayImag
             reason: format!("class {class} out of range, there are {}", CLASSES.len()),
         })?;
     check_size(size)?;
-    let mut rng = SplitMix(seed);
-    rng.0 ^= rng.next() ^ ((class as u64) << 40) ^ index;
-    let _ = rng.next();
-    let rot = rng.range(-15.0, 15.0).to_radians();
+    // A sub-stream per image: the state after one draw, mixed with the
+    // draw, the class and the index.
+    let mut rng = SplitMix::new(seed);
+    let first = rng.next_u64();
+    let mut rng = SplitMix::new(rng.state() ^ first ^ ((class as u64) << 40) ^ index);
+    let _ = rng.next_u64();
+    let rot = range(&mut rng, -15.0, 15.0).to_radians();
     let half = f64::from(size) / 2.0;
-    let scale = rng.range(0.55, 0.75) * half;
-    let aspect = rng.range(0.9, 1.1);
+    let scale = range(&mut rng, 0.55, 0.75) * half;
+    let aspect = range(&mut rng, 0.9, 1.1);
     let (cx, cy) = (
-        half + rng.range(-0.05, 0.05) * f64::from(size),
-        half + rng.range(-0.05, 0.05) * f64::from(size),
+        half + range(&mut rng, -0.05, 0.05) * f64::from(size),
+        half + range(&mut rng, -0.05, 0.05) * f64::from(size),
     );
     let noise: Vec<(f64, f64, f64)> = (0..3)
         .map(|_| {
-            let k = (rng.next() % 7 + 3) as f64;
-            (k, rng.range(0.0, 0.03), rng.range(0.0, 2.0 * PI))
+            let k = (rng.next_u64() % 7 + 3) as f64;
+            (
+                k,
+                range(&mut rng, 0.0, 0.03),
+                range(&mut rng, 0.0, 2.0 * PI),
+            )
         })
         .collect();
     let (sin, cos) = rot.sin_cos();
@@ -182,6 +172,11 @@ pub fn gen_shapes(opts: &GenShapesOptions) -> Result<Summary> {
             .join(" "),
     );
     Ok(s)
+}
+
+/// Uniform in `[lo, hi)`.
+fn range(rng: &mut SplitMix, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * unit(rng)
 }
 
 #[cfg(test)]

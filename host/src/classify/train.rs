@@ -169,7 +169,7 @@ mod tests {
             let c = i % k;
             for j in 0..d {
                 let centre = if j % k == c { 2.0 } else { -1.0 };
-                x[[i, j]] = centre + 0.6 * (rng.unit() - 0.5);
+                x[[i, j]] = centre + 0.6 * (crate::classify::mlp::unit(&mut rng) - 0.5);
             }
             t[[i, c]] = 1.0;
             labels.push(c);

@@ -11,6 +11,7 @@
 use super::filters::{monocular, Plane};
 use super::population::{cells, energies, groups, Energy, PHASES};
 use super::{DemLayout, DemParams};
+use protogist::rng::SplitMix64;
 
 /// The trained read-out: folded log-templates and the normalised ΣW(d).
 #[derive(Clone, Debug, PartialEq)]
@@ -36,30 +37,10 @@ impl Decoder {
     }
 }
 
-/// SplitMix64: the training images' random source.
-#[derive(Clone, Debug)]
-pub struct SplitMix(u64);
-
-impl SplitMix {
-    /// A generator from a seed.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-}
-
 /// A random-dot stereogram of uniform disparity `d`: 50 % of the 1-px dots
 /// are 255, the rest 0, and `right(x) = left(x + d)`.
 pub fn random_dot_pair(width: usize, height: usize, d: usize, seed: u64) -> (Plane, Plane) {
-    let mut rng = SplitMix::new(seed);
+    let mut rng = SplitMix64::new(seed);
     let wide = width + d;
     let field: Vec<f32> = (0..wide * height)
         .map(|_| {
