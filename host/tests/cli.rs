@@ -5,7 +5,10 @@
 use image::{Rgb, RgbImage};
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
+
+mod common;
+use common::{assert_one_line_error, protogist, text};
 
 const DEMO_PANELS: [&str; 9] = [
     "left",
@@ -27,18 +30,6 @@ const IMAGE_PANELS: [&str; 6] = [
     "overview",
 ];
 
-fn protogist(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_protogist"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .unwrap()
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
 fn assert_panels(dir: &Path, names: &[&str]) {
     for name in names {
         let path = dir.join(format!("{name}.png"));
@@ -56,12 +47,7 @@ fn assert_panels(dir: &Path, names: &[&str]) {
 /// Asserts a clean failure: non-zero exit, exactly one `error:` line on
 /// stderr mentioning `needle`, no panic, and no PNG in `out`.
 fn assert_fails(out: &Output, needle: &str, dir: &Path) {
-    let stderr = text(&out.stderr);
-    assert!(!out.status.success(), "succeeded: {}", text(&out.stdout));
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
-    assert!(stderr.starts_with("error: "), "{stderr}");
-    assert!(stderr.contains(needle), "{stderr:?} lacks {needle:?}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_one_line_error(out, needle);
     if dir.exists() {
         let pngs: Vec<PathBuf> = fs::read_dir(dir)
             .unwrap()

@@ -3,28 +3,9 @@
 
 use std::fs;
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn protogist(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_protogist"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .unwrap()
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn assert_fails(out: &Output, needle: &str) {
-    let stderr = text(&out.stderr);
-    assert!(!out.status.success(), "succeeded: {}", text(&out.stdout));
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
-    assert!(stderr.starts_with("error: "), "{stderr}");
-    assert!(stderr.contains(needle), "{stderr:?} lacks {needle:?}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-}
+mod common;
+use common::{assert_one_line_error, protogist, text};
 
 #[test]
 fn train_and_eval_run_and_reject_bad_input() {
@@ -75,12 +56,12 @@ fn train_and_eval_run_and_reject_bad_input() {
     }
 
     // Bad input.
-    assert_fails(
+    assert_one_line_error(
         &protogist(&["train", "--dataset", "missing", "--out", "x.json"], cwd),
         "missing: not a directory",
     );
-    assert_fails(&train(&["--hidden", "0"]), "--hidden must be at least 1");
-    assert_fails(&train(&["--test-fraction", "1"]), "--test-fraction");
+    assert_one_line_error(&train(&["--hidden", "0"]), "--hidden must be at least 1");
+    assert_one_line_error(&train(&["--test-fraction", "1"]), "--test-fraction");
     let empty = cwd.join("empty");
     fs::create_dir_all(empty.join("a")).unwrap();
     fs::create_dir_all(empty.join("b")).unwrap();
@@ -94,7 +75,7 @@ fn train_and_eval_run_and_reject_bad_input() {
         empty.join("a/one.png"),
     )
     .unwrap();
-    assert_fails(
+    assert_one_line_error(
         &protogist(
             &[
                 "train",
@@ -127,8 +108,8 @@ fn train_and_eval_run_and_reject_bad_input() {
             cwd,
         )
     };
-    assert_fails(&eval_bad(&bad), "b2 has 2 values, expected 3");
+    assert_one_line_error(&eval_bad(&bad), "b2 has 2 values, expected 3");
     fs::write(&bad, b"{ not json").unwrap();
-    assert_fails(&eval_bad(&bad), "bad.json");
-    assert_fails(&eval_bad(&cwd.join("nope.json")), "nope.json");
+    assert_one_line_error(&eval_bad(&bad), "bad.json");
+    assert_one_line_error(&eval_bad(&cwd.join("nope.json")), "nope.json");
 }

@@ -5,17 +5,12 @@ use image::{GrayImage, Luma, Rgb, RgbImage};
 use protogist::image::{ImageViewMut, Rgb8};
 use protogist::synth::{render_disparity, render_left, render_mask, render_right, SceneSpec};
 use std::path::Path;
-use std::process::{Command, Output};
+
+mod common;
+use common::{assert_one_line_error, protogist};
 
 const W: usize = 160;
 const H: usize = 120;
-
-fn protogist(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_protogist"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
 
 fn save_rgb(px: &[Rgb8], w: usize, path: &Path) {
     let img = RgbImage::from_fn(w as u32, (px.len() / w) as u32, |x, y| {
@@ -51,19 +46,22 @@ fn run_with_gt_disparity_finds_the_object_and_reports_it() {
     let mask = write_scene(dir.path());
     let out = dir.path().join("out");
     let p = |f: &str| dir.path().join(f).display().to_string();
-    let o = protogist(&[
-        "run",
-        "--left",
-        &p("l.png"),
-        "--right",
-        &p("r.png"),
-        "--gt-disparity",
-        &p("gt.png"),
-        "--gt-scale",
-        "16",
-        "--out",
-        &out.display().to_string(),
-    ]);
+    let o = protogist(
+        &[
+            "run",
+            "--left",
+            &p("l.png"),
+            "--right",
+            &p("r.png"),
+            "--gt-disparity",
+            &p("gt.png"),
+            "--gt-scale",
+            "16",
+            "--out",
+            &out.display().to_string(),
+        ],
+        dir.path(),
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
@@ -126,11 +124,7 @@ fn run_rejects_bad_input_and_leaves_no_output() {
         let mut args = vec!["run", "--left", &left];
         args.extend_from_slice(extra);
         args.extend_from_slice(&["--out", &outs]);
-        let o = protogist(&args);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{args:?} succeeded");
-        assert_eq!(err.lines().count(), 1, "{err}");
-        assert!(err.to_lowercase().contains(word), "{args:?}: {err}");
-        assert!(!out.join("report.json").exists());
+        assert_one_line_error(&protogist(&args, dir.path()), word);
+        assert!(!out.join("report.json").exists(), "{args:?}");
     }
 }
