@@ -34,6 +34,7 @@
 )]
 
 pub mod checksum;
+pub mod complete;
 pub mod conspicuity;
 pub mod disparity;
 pub mod fixed;

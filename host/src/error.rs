@@ -35,6 +35,9 @@ pub enum HostError {
     /// The shape stage rejected its mask.
     #[error("shape stage: {0}")]
     Shape(#[from] protogist::shape::ShapeError),
+    /// The disparity completion stage rejected its input.
+    #[error("disparity completion: {0}")]
+    Complete(#[from] protogist::complete::CompleteError),
     /// A file or directory could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {

@@ -3,6 +3,7 @@
 use crate::error::Result;
 use crate::reference::stereo::{Decoder, DemParams};
 use crate::stages::{run_conspicuity, run_segment};
+use protogist::complete::CompleteParams;
 use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::from_pixels;
 use protogist::image::{ImageViewMut, Rgb8};
@@ -18,8 +19,12 @@ pub const EVAL_MAX_DISP: u8 = 31;
 pub enum DisparitySource {
     /// The scene's whole-pixel ground truth.
     Gt,
-    /// The f32 disparity energy model on the rendered pair.
+    /// The f32 disparity energy model on the rendered pair, completed over
+    /// the conspicuity regions (`protogist::complete`), as the pipeline
+    /// runs it.
     Dem,
+    /// The model's raw output, without the completion.
+    DemRaw,
 }
 
 /// The segmentation of one seeded scene against its ground truth.
@@ -59,7 +64,7 @@ pub fn segment_scene_iou(
     render_disparity(&spec, &mut ImageViewMut::packed(&mut gt, w, h)?)?;
     let d: Vec<_> = match source {
         DisparitySource::Gt => gt.iter().map(|&v| from_pixels(v)).collect(),
-        DisparitySource::Dem => {
+        DisparitySource::Dem | DisparitySource::DemRaw => {
             let mut right = vec![Rgb8::default(); w * h];
             render_right(&spec, &mut ImageViewMut::packed(&mut right, w, h)?)?;
             let trained;
@@ -70,7 +75,20 @@ pub fn segment_scene_iou(
                     (&trained.0, &trained.1)
                 }
             };
-            crate::stages::run_dem(p, dec, &rgb, &right, &gt, w, h)?.disparity
+            let raw = crate::stages::run_dem(p, dec, &rgb, &right, &gt, w, h)?.disparity;
+            if source == DisparitySource::Dem {
+                crate::stages::run_complete(
+                    &CompleteParams::default(),
+                    &edges.edges,
+                    &edges.smoothed,
+                    &raw,
+                    w,
+                    h,
+                )?
+                .0
+            } else {
+                raw
+            }
         }
     };
     let seg = run_segment(params, &d, &edges.edges, w, h)?;
@@ -103,7 +121,7 @@ pub fn segment_eval(
 ) -> Result<Vec<SceneIou>> {
     let params = SegmentParams::default();
     let dem = match source {
-        DisparitySource::Dem => Some(eval_dem()?),
+        DisparitySource::Dem | DisparitySource::DemRaw => Some(eval_dem()?),
         DisparitySource::Gt => None,
     };
     (0..scenes)

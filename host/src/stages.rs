@@ -583,3 +583,51 @@ impl DemResult {
         );
     }
 }
+
+/// Runs the core disparity completion (`protogist::complete`) on packed
+/// maps: the conspicuity stage's edges and smoothed colour, and the model's
+/// disparity. Same arguments as the reference
+/// [`crate::reference::complete::complete`].
+///
+/// # Errors
+/// The stage's [`CompleteError`](protogist::complete::CompleteError) for
+/// maps of different sizes.
+pub fn run_complete(
+    params: &protogist::complete::CompleteParams,
+    edges: &[EdgeCell],
+    colour: &[Luv],
+    disparity: &[protogist::disparity::DisparityCell],
+    width: usize,
+    height: usize,
+) -> Result<(
+    Vec<protogist::disparity::DisparityCell>,
+    protogist::complete::CompleteReport,
+)> {
+    use protogist::complete::{complete, region_table_len, RegionTables};
+    use protogist::segment::{label_capacity, Labeller};
+    let (w, h) = (width, height);
+    let cap = label_capacity(w, h);
+    let (mut labels, mut parent, mut area) = (vec![0u16; w * h], vec![0u16; cap], vec![0u32; cap]);
+    let mut lab = Labeller::new(w, h, &mut labels, &mut parent, &mut area)?;
+    let n = region_table_len(w, h);
+    let (mut total, mut below, mut lo, mut hi) =
+        (vec![0u32; n], vec![0u32; n], vec![0u8; n], vec![0u8; n]);
+    let mut tables = RegionTables {
+        total: &mut total,
+        below: &mut below,
+        lo: &mut lo,
+        hi: &mut hi,
+    };
+    let mut out = disparity.to_vec();
+    let mut edge_map = vec![false; w * h];
+    let report = complete(
+        params,
+        &ImageView::packed(edges, w, h)?,
+        &ImageView::packed(colour, w, h)?,
+        &mut ImageViewMut::packed(&mut out, w, h)?,
+        &mut ImageViewMut::packed(&mut edge_map, w, h)?,
+        &mut lab,
+        &mut tables,
+    )?;
+    Ok((out, report))
+}

@@ -1,5 +1,6 @@
 //! f32 references of the core stages, same names and argument order.
 
+pub mod complete;
 pub mod conspicuity;
 pub mod segment;
 pub mod shape;

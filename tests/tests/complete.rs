@@ -1,0 +1,229 @@
+//! Disparity completion over conspicuity regions (`protogist::complete`):
+//! bit for bit against its independent reference, a hand-worked case, and
+//! bad input.
+
+use proptest::prelude::*;
+use protogist::complete::{complete, CompleteError, CompleteParams, RegionTables};
+use protogist::conspicuity::{Conspicuity, EdgeCell, Luv};
+use protogist::disparity::{from_pixels, Disparity, DisparityCell};
+use protogist::image::{ImageView, ImageViewMut};
+use protogist::segment::{label_capacity, Labeller};
+use protogist_host::reference::complete as rf;
+use protogist_host::stages::run_complete;
+
+fn edge_on() -> EdgeCell {
+    EdgeCell::on(Conspicuity::from_bits(100)).unwrap()
+}
+
+/// A random case: edges along a few random lines plus noise, colours from a
+/// small palette, disparities with OFF cells.
+#[allow(clippy::type_complexity)]
+fn case() -> impl Strategy<
+    Value = (
+        Vec<EdgeCell>,
+        Vec<Luv>,
+        Vec<DisparityCell>,
+        usize,
+        usize,
+        u8,
+    ),
+> {
+    (1usize..=24, 1usize..=24, 0u8..=3).prop_flat_map(|(w, h, guard)| {
+        let n = w * h;
+        (
+            proptest::collection::vec(0u8..100, n),
+            proptest::collection::vec(0u8..4, n),
+            proptest::collection::vec(proptest::option::weighted(0.8, 0u16..=20 * 256), n),
+            0usize..=w,
+            Just((w, h, guard)),
+        )
+            .prop_map(|(noise, palette, disp, col, (w, h, guard))| {
+                let edges = noise
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &r)| {
+                        if i % w == col || r < 8 {
+                            edge_on()
+                        } else {
+                            EdgeCell::OFF
+                        }
+                    })
+                    .collect();
+                let colour = palette
+                    .iter()
+                    .map(|&c| Luv::from_bits(i16::from(c) * 900, -i16::from(c) * 300, 50))
+                    .collect();
+                let disparity = disp
+                    .iter()
+                    .map(|d| match d {
+                        Some(bits) => DisparityCell::on(Disparity::from_bits(*bits)).unwrap(),
+                        None => DisparityCell::OFF,
+                    })
+                    .collect();
+                (edges, colour, disparity, w, h, guard)
+            })
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn core_matches_the_reference_bit_for_bit((edges, colour, disp, w, h, guard) in case()) {
+        let params = CompleteParams { guard };
+        let (core_out, core_report) = run_complete(&params, &edges, &colour, &disp, w, h).unwrap();
+        let (ref_out, ref_report) = rf::complete(&params, &edges, &colour, &disp, w, h);
+        prop_assert_eq!(core_out, ref_out);
+        prop_assert_eq!(core_report, ref_report);
+    }
+}
+
+/// Parses rows of `0`-`9` (whole px), `.` (OFF) and `|` (an edge cell, OFF).
+fn parse(rows: &[&str]) -> (Vec<EdgeCell>, Vec<DisparityCell>, usize, usize) {
+    let (w, h) = (rows[0].len(), rows.len());
+    let mut edges = Vec::new();
+    let mut disp = Vec::new();
+    for row in rows {
+        for ch in row.chars() {
+            edges.push(if ch == '|' { edge_on() } else { EdgeCell::OFF });
+            disp.push(match ch.to_digit(10) {
+                Some(d) => from_pixels(d as u8),
+                None => DisparityCell::OFF,
+            });
+        }
+    }
+    (edges, disp, w, h)
+}
+
+fn show(d: &[DisparityCell], w: usize) -> Vec<String> {
+    d.chunks(w)
+        .map(|r| {
+            r.iter()
+                .map(|c| match c.get() {
+                    Some(v) => char::from_digit(u32::from(v.to_bits() >> 8), 10).unwrap_or('*'),
+                    None => '.',
+                })
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn a_border_goes_to_the_side_it_looks_like_and_holes_take_the_region_median() {
+    // Left region disparity 3 with a wrong spill value 7 next to the edge
+    // and an OFF hole; right region 7 with an OFF occlusion strip; the edge
+    // column is OFF. Colour: the edge cells look like the right side.
+    let (edges, disp, w, h) = parse(&[
+        "3333337|..77777",
+        "33.3337|..77777",
+        "3333337|..77777",
+        "3333333|.777777",
+    ]);
+    let colour: Vec<Luv> = (0..w * h)
+        .map(|i| {
+            if i % w >= 7 {
+                Luv::from_bits(6000, 0, 0)
+            } else {
+                Luv::from_bits(2000, 0, 0)
+            }
+        })
+        .collect();
+    let (out, report) =
+        run_complete(&CompleteParams { guard: 1 }, &edges, &colour, &disp, w, h).unwrap();
+    assert_eq!(
+        show(&out, w),
+        [
+            "333333377777777",
+            "333333377777777",
+            "333333377777777",
+            "333333377777777",
+        ],
+        "{:#?}",
+        show(&out, w)
+    );
+    assert_eq!(report.regions, 2);
+    assert_eq!(report.regions_with_median, 2);
+    // Replaced: the spill cells and the guard ring of ON cells; filled: the
+    // hole, the occlusion strip and the edge column.
+    assert_eq!(report.filled, 1 + 7 + 4);
+}
+
+#[test]
+fn a_region_without_trusted_cells_is_left_alone() {
+    // Everything OFF: nothing to take a median of.
+    let (edges, disp, w, h) = parse(&["...|...", "...|..."]);
+    let colour = vec![Luv::default(); w * h];
+    let (out, report) =
+        run_complete(&CompleteParams::default(), &edges, &colour, &disp, w, h).unwrap();
+    assert_eq!(out, disp);
+    assert_eq!(report.regions_with_median, 0);
+    assert_eq!(report.filled + report.replaced, 0);
+}
+
+#[test]
+fn bad_input_is_a_typed_error_or_a_reported_skip() {
+    let (w, h) = (8, 4);
+    let edges = vec![EdgeCell::OFF; w * h];
+    let colour = vec![Luv::default(); w * h];
+    let mut disp = vec![from_pixels(2); w * h];
+    let mut edge_map = vec![false; w * h];
+    let cap = label_capacity(w, h);
+    let (mut labels, mut parent, mut area) = (vec![0u16; w * h], vec![0u16; cap], vec![0u32; cap]);
+    let (mut total, mut below, mut lo, mut hi) =
+        (vec![0u32; 1], vec![0u32; 1], vec![0u8; 1], vec![0u8; 1]);
+    let mut tables = RegionTables {
+        total: &mut total,
+        below: &mut below,
+        lo: &mut lo,
+        hi: &mut hi,
+    };
+    // Maps of different sizes.
+    let mut lab = Labeller::new(w, h, &mut labels, &mut parent, &mut area).unwrap();
+    let small = vec![Luv::default(); 4];
+    let err = complete(
+        &CompleteParams::default(),
+        &ImageView::packed(&edges, w, h).unwrap(),
+        &ImageView::packed(&small, 2, 2).unwrap(),
+        &mut ImageViewMut::packed(&mut disp, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut edge_map, w, h).unwrap(),
+        &mut lab,
+        &mut tables,
+    )
+    .unwrap_err();
+    assert!(matches!(err, CompleteError::Image(_)), "{err:?}");
+    // Region tables of capacity 1 (label 0 only): the one region is skipped.
+    let report = complete(
+        &CompleteParams::default(),
+        &ImageView::packed(&edges, w, h).unwrap(),
+        &ImageView::packed(&colour, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut disp, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut edge_map, w, h).unwrap(),
+        &mut lab,
+        &mut tables,
+    )
+    .unwrap();
+    assert_eq!((report.regions, report.regions_skipped), (1, 1));
+    // A labeller whose tables cannot hold a checkerboard's labels.
+    let checker: Vec<EdgeCell> = (0..w * h)
+        .map(|i| {
+            if (i % w + i / w) % 2 == 0 {
+                edge_on()
+            } else {
+                EdgeCell::OFF
+            }
+        })
+        .collect();
+    let (mut p2, mut a2) = (vec![0u16; 3], vec![0u32; 3]);
+    let mut tiny = Labeller::new(w, h, &mut labels, &mut p2, &mut a2).unwrap();
+    let err = complete(
+        &CompleteParams::default(),
+        &ImageView::packed(&checker, w, h).unwrap(),
+        &ImageView::packed(&colour, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut disp, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut edge_map, w, h).unwrap(),
+        &mut tiny,
+        &mut tables,
+    )
+    .unwrap_err();
+    assert!(matches!(err, CompleteError::Label(_)), "{err:?}");
+}
