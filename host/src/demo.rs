@@ -161,9 +161,21 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
         "mask IoU, GT disparity",
         format!("{:.3}", seg_gt.iou(0, &scene.mask)),
     );
-    let seg = run_segment(&SegmentParams::default(), &dem.disparity, &maps.edges, w, h)?;
+    // The model's borders, completed over the conspicuity regions.
+    let (completed, _) = crate::stages::run_complete(
+        &protogist::complete::CompleteParams::default(),
+        &maps.edges,
+        &maps.smoothed,
+        &dem.disparity,
+        w,
+        h,
+    )?;
+    let seg = run_segment(&SegmentParams::default(), &completed, &maps.edges, w, h)?;
     out.extend(seg.panels(&scene.left));
-    summary.push("disparity input", "disparity energy model");
+    summary.push(
+        "disparity input",
+        "disparity energy model, completed over conspicuity regions",
+    );
     seg.summarise(&mut summary, Some(&scene.mask));
 
     // Stage 4: the shape vector of the most salient object's mask.

@@ -7,9 +7,10 @@ use crate::demo::finish;
 use crate::error::{HostError, Result};
 use crate::panels::{rgb_from, Panel};
 use crate::reference::stereo::DemParams;
-use crate::stages::{run_conspicuity, run_segment, run_shape};
+use crate::stages::{run_complete, run_conspicuity, run_segment, run_shape};
 use crate::stereo_cmd::{decoder_for, disparity_panel, load_pair};
 use crate::summary::Summary;
+use protogist::complete::CompleteParams;
 use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::{Disparity, DisparityCell};
 use protogist::image::ImageView;
@@ -39,6 +40,10 @@ pub struct RunOptions {
     /// Objects to detect, most salient first (the paper: 1).
     #[arg(long, default_value_t = 1)]
     pub objects: u8,
+    /// Segment the model's raw disparity, without the completion over
+    /// conspicuity regions (`protogist::complete`).
+    #[arg(long)]
+    pub raw_disparity: bool,
     /// Largest disparity the model searches, px of the working size.
     #[arg(long, default_value_t = 15)]
     pub max_disp: u8,
@@ -101,11 +106,38 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
                 &ImageView::packed(&pair.left, w, h)?,
                 &ImageView::packed(&pair.right, w, h)?,
             )?;
-            (
-                maps.disparity,
-                maps.disparity_f32,
-                "disparity energy model (f32)",
-            )
+            if opts.raw_disparity {
+                (
+                    maps.disparity,
+                    maps.disparity_f32,
+                    "disparity energy model (f32), raw",
+                )
+            } else {
+                let (done, report) = run_complete(
+                    &CompleteParams::default(),
+                    &edges.edges,
+                    &edges.smoothed,
+                    &maps.disparity,
+                    w,
+                    h,
+                )?;
+                s.push(
+                    "disparity completion",
+                    format!(
+                        "{} regions, {} cells replaced, {} filled",
+                        report.regions, report.replaced, report.filled
+                    ),
+                );
+                let f32s = done
+                    .iter()
+                    .map(|c| c.get().map(|d| d.to_num::<f32>()))
+                    .collect();
+                (
+                    done,
+                    f32s,
+                    "disparity energy model (f32), completed over conspicuity regions",
+                )
+            }
         }
     };
     s.push("disparity", source);
