@@ -28,7 +28,7 @@
 //!    raster order, first minimum) whose colour is closest to its own, so a
 //!    border cell goes to the side it looks like.
 //!
-//! A region without trusted cells, or beyond the region tables' capacity,
+//! A region with fewer than `min_trusted` trusted cells, or beyond the region tables' capacity,
 //! leaves its cells as they were (the report counts skipped regions).
 //! Every step is integer; [`complete`] never panics.
 
@@ -43,11 +43,17 @@ pub struct CompleteParams {
     /// Cells within this many px of an edge are not trusted and are
     /// replaced. Default 1: the edge's own two-pixel ring.
     pub guard: u8,
+    /// A region needs at least this many trusted cells to give a median
+    /// (at least 1). Default 1.
+    pub min_trusted: u32,
 }
 
 impl Default for CompleteParams {
     fn default() -> Self {
-        Self { guard: 1 }
+        Self {
+            guard: 1,
+            min_trusted: 1,
+        }
     }
 }
 
@@ -89,7 +95,7 @@ impl core::error::Error for CompleteError {}
 pub struct CompleteReport {
     /// Regions of the conspicuity map.
     pub regions: u16,
-    /// Regions with at least one trusted cell.
+    /// Regions with at least `min_trusted` trusted cells.
     pub regions_with_median: u16,
     /// Regions past the tables' capacity, left unchanged.
     pub regions_skipped: u16,
@@ -244,6 +250,7 @@ pub fn complete(
     })?;
     let cap = tables.capacity();
     let g = usize::from(params.guard);
+    let min_trusted = params.min_trusted.max(1);
     let mut report = CompleteReport {
         regions,
         regions_skipped: u16::try_from(usize::from(regions).saturating_sub(cap.saturating_sub(1)))
@@ -308,7 +315,7 @@ pub fn complete(
             .iter()
             .skip(1)
             .take(usize::from(regions))
-            .filter(|&&t| t > 0)
+            .filter(|&&t| t >= min_trusted)
             .count(),
     )
     .unwrap_or(u16::MAX);
@@ -329,7 +336,7 @@ pub fn complete(
                 labels.get(x, y).unwrap_or(0)
             };
             let l = usize::from(l);
-            if l == 0 || tables.total.get(l).copied().unwrap_or(0) == 0 {
+            if l == 0 || tables.total.get(l).copied().unwrap_or(0) < min_trusted {
                 continue;
             }
             let Some(&v) = tables.lo.get(l) else {

@@ -25,19 +25,19 @@ fn case() -> impl Strategy<
         Vec<DisparityCell>,
         usize,
         usize,
-        u8,
+        CompleteParams,
     ),
 > {
-    (1usize..=24, 1usize..=24, 0u8..=3).prop_flat_map(|(w, h, guard)| {
+    (1usize..=24, 1usize..=24, 0u8..=3, 0u32..=6).prop_flat_map(|(w, h, guard, min_trusted)| {
         let n = w * h;
         (
             proptest::collection::vec(0u8..100, n),
             proptest::collection::vec(0u8..4, n),
             proptest::collection::vec(proptest::option::weighted(0.8, 0u16..=20 * 256), n),
             0usize..=w,
-            Just((w, h, guard)),
+            Just((w, h, guard, min_trusted)),
         )
-            .prop_map(|(noise, palette, disp, col, (w, h, guard))| {
+            .prop_map(|(noise, palette, disp, col, (w, h, guard, min_trusted))| {
                 let edges = noise
                     .iter()
                     .enumerate()
@@ -60,7 +60,14 @@ fn case() -> impl Strategy<
                         None => DisparityCell::OFF,
                     })
                     .collect();
-                (edges, colour, disparity, w, h, guard)
+                (
+                    edges,
+                    colour,
+                    disparity,
+                    w,
+                    h,
+                    CompleteParams { guard, min_trusted },
+                )
             })
     })
 }
@@ -69,8 +76,7 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
 
     #[test]
-    fn core_matches_the_reference_bit_for_bit((edges, colour, disp, w, h, guard) in case()) {
-        let params = CompleteParams { guard };
+    fn core_matches_the_reference_bit_for_bit((edges, colour, disp, w, h, params) in case()) {
         let (core_out, core_report) = run_complete(&params, &edges, &colour, &disp, w, h).unwrap();
         let (ref_out, ref_report) = rf::complete(&params, &edges, &colour, &disp, w, h);
         prop_assert_eq!(core_out, ref_out);
@@ -129,7 +135,7 @@ fn a_border_goes_to_the_side_it_looks_like_and_holes_take_the_region_median() {
         })
         .collect();
     let (out, report) =
-        run_complete(&CompleteParams { guard: 1 }, &edges, &colour, &disp, w, h).unwrap();
+        run_complete(&CompleteParams::default(), &edges, &colour, &disp, w, h).unwrap();
     assert_eq!(
         show(&out, w),
         [

@@ -75,6 +75,9 @@ pub fn complete(
         .iter_mut()
         .map(|v| {
             v.sort_unstable();
+            if v.len() < params.min_trusted.max(1) as usize {
+                return None;
+            }
             v.get(v.len().saturating_sub(1) / 2).copied()
         })
         .collect();
