@@ -149,16 +149,17 @@ fn whole_px(c: DisparityCell) -> Option<u8> {
         .map(|d| u8::try_from((u32::from(d.to_bits()) + 128) >> 8).unwrap_or(u8::MAX))
 }
 
-/// True when an edge lies within Chebyshev distance `g` of `(x, y)`.
-fn near_edge(edges: &ImageView<'_, bool>, x: usize, y: usize, g: usize) -> bool {
-    let (w, h) = edges.size();
+/// True when an edge (label 0) lies within Chebyshev distance `g` of
+/// `(x, y)`.
+fn near_edge(labels: &ImageView<'_, u16>, x: usize, y: usize, g: usize) -> bool {
+    let (w, h) = labels.size();
     let (x0, x1) = (x.saturating_sub(g), (x + g).min(w.saturating_sub(1)));
     let (y0, y1) = (y.saturating_sub(g), (y + g).min(h.saturating_sub(1)));
     (y0..=y1).any(|yy| {
-        edges
+        labels
             .row(yy)
             .and_then(|r| r.get(x0..=x1))
-            .is_some_and(|r| r.iter().any(|&e| e))
+            .is_some_and(|r| r.contains(&0))
     })
 }
 
@@ -178,7 +179,6 @@ fn colour_dist2(a: Luv, b: Luv) -> u64 {
 /// 0 when none.
 fn edge_region(
     labels: &ImageView<'_, u16>,
-    edges: &ImageView<'_, bool>,
     colour: &ImageView<'_, Luv>,
     x: usize,
     y: usize,
@@ -191,12 +191,12 @@ fn edge_region(
         let mut best: Option<(u64, u16)> = None;
         for yy in y.saturating_sub(r)..=(y + r).min(h.saturating_sub(1)) {
             for xx in x.saturating_sub(r)..=(x + r).min(w.saturating_sub(1)) {
-                if edges.get(xx, yy) != Some(false) {
-                    continue;
-                }
                 let (Some(c), Some(l)) = (colour.get(xx, yy), labels.get(xx, yy)) else {
                     continue;
                 };
+                if l == 0 {
+                    continue;
+                }
                 let d = colour_dist2(own, c);
                 if best.is_none_or(|(bd, _)| d < bd) {
                     best = Some((d, l));
@@ -212,8 +212,8 @@ fn edge_region(
 
 /// Completes `disparity` in place over the regions of the conspicuity map
 /// `edges`, with `colour` (the stage's smoothed CIELUV) deciding the side of
-/// each edge cell. `edge_map` is scratch; `lab` and `tables` hold the
-/// labelling and the per-region medians.
+/// each edge cell. `edge_map` is scratch (the edges, then the trusted
+/// cells); `lab` and `tables` hold the labelling and the per-region medians.
 ///
 /// # Errors
 /// [`CompleteError::Image`] when the maps or buffers differ in size, and
@@ -242,14 +242,25 @@ pub fn complete(
             *d = s.is_on();
         }
     }
-    let edge_view = edge_map.as_view();
-    let regions = lab.label(&edge_view, false, Connectivity::Four)?;
+    let regions = lab.label(&edge_map.as_view(), false, Connectivity::Four)?;
     let labels = lab.labels().ok_or(ImageError::BufferTooSmall {
         needed: size.0 * size.1,
         got: 0,
     })?;
-    let cap = tables.capacity();
+    // From here on an edge is label 0, and `edge_map` holds the trusted
+    // cells: ON, and no edge within `guard` px.
     let g = usize::from(params.guard);
+    for (y, (trow, drow)) in edge_map
+        .rows_mut()
+        .zip(disparity.as_view().rows())
+        .enumerate()
+    {
+        for (x, (t, c)) in trow.iter_mut().zip(drow).enumerate() {
+            *t = c.is_on() && !near_edge(&labels, x, y, g);
+        }
+    }
+    let trusted_map = edge_map.as_view();
+    let cap = tables.capacity();
     let min_trusted = params.min_trusted.max(1);
     let mut report = CompleteReport {
         regions,
@@ -264,12 +275,10 @@ pub fn complete(
     // Trusted cells, visited once per pass: (label, whole px).
     let disp = disparity.as_view();
     let trusted = |f: &mut dyn FnMut(usize, u8)| {
-        for (y, (drow, lrow)) in disp.rows().zip(labels.rows()).enumerate() {
-            for (x, (&c, &l)) in drow.iter().zip(lrow).enumerate() {
-                if let Some(v) = whole_px(c) {
-                    if l != 0 && usize::from(l) < cap && !near_edge(&edge_view, x, y, g) {
-                        f(usize::from(l), v);
-                    }
+        for ((drow, lrow), trow) in disp.rows().zip(labels.rows()).zip(trusted_map.rows()) {
+            for ((&c, &l), &t) in drow.iter().zip(lrow).zip(trow) {
+                if let (true, Some(v)) = (t && usize::from(l) < cap, whole_px(c)) {
+                    f(usize::from(l), v);
                 }
             }
         }
@@ -326,14 +335,12 @@ pub fn complete(
             let Some(cell) = disparity.get(x, y) else {
                 continue;
             };
-            let is_edge = edge_view.get(x, y) == Some(true);
-            if cell.is_on() && !near_edge(&edge_view, x, y, g) {
+            if trusted_map.get(x, y) != Some(false) {
                 continue;
             }
-            let l = if is_edge {
-                edge_region(&labels, &edge_view, colour, x, y)
-            } else {
-                labels.get(x, y).unwrap_or(0)
+            let l = match labels.get(x, y) {
+                Some(0) => edge_region(&labels, colour, x, y),
+                l => l.unwrap_or(0),
             };
             let l = usize::from(l);
             if l == 0 || tables.total.get(l).copied().unwrap_or(0) < min_trusted {
