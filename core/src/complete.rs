@@ -105,18 +105,24 @@ pub struct CompleteReport {
     pub filled: u32,
 }
 
-/// Entries each region table needs for any `width` x `height` frame: one per
-/// label the labelling can return, label 0 included.
+/// Entries each region table needs so that no region of a `width` x
+/// `height` frame is ever skipped: one per label the labelling can return,
+/// label 0 included. Smaller tables are fine: regions past their capacity
+/// are left unchanged and counted in [`CompleteReport::regions_skipped`].
 pub const fn region_table_len(width: usize, height: usize) -> usize {
     label_capacity(width, height)
 }
 
-/// Scratch bytes of [`complete`] for a `width` x `height` frame: the edge
-/// map, the labelling (labels, parents, areas) and the four region tables.
-pub const fn scratch_bytes(width: usize, height: usize) -> usize {
-    let n = width * height;
-    let cap = label_capacity(width, height);
-    n + 2 * n + 2 * cap + 4 * cap + cap * (4 + 4 + 1 + 1)
+/// Region-table entries that suit frames up to 160x120 on a board: the
+/// synthetic scenes have a handful of regions and Aloe at 160 px about 600.
+pub const DEFAULT_REGION_CAPACITY: usize = 1024;
+
+/// Scratch bytes of [`complete`] for a `width` x `height` frame with region
+/// tables of `regions` entries: the edge/trusted map and the four tables.
+/// The labeller's buffers come on top (`segment::label_capacity`); the
+/// segmentation stage that follows can lend its own.
+pub const fn scratch_bytes(width: usize, height: usize, regions: usize) -> usize {
+    width * height + regions * (4 + 4 + 1 + 1)
 }
 
 /// Per-region tables of [`complete`], caller-provided; the capacity is the

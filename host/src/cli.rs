@@ -203,6 +203,10 @@ pub fn scratch_summary() -> Summary {
             format!("scratch conspicuity {w}x{h}"),
             protogist::conspicuity::scratch_bytes(w, h),
         );
+        s.push(
+            format!("scratch complete {w}x{h}"),
+            protogist::complete::scratch_bytes(w, h, protogist::complete::DEFAULT_REGION_CAPACITY),
+        );
     }
     s
 }
