@@ -551,5 +551,49 @@ pub fn stereo_probed(
             got: out.size(),
         }));
     }
-    readout::run(dem, table, [left, right], bufs, out, probe)
+    let mut sink = |x: usize, y: usize, c: DisparityCell| {
+        out.set(x, y, c);
+    };
+    readout::run(dem, table, [left, right], bufs, &mut sink, probe)
+}
+
+/// Grey rows of an input frame, on demand: a whole frame in memory, or a
+/// camera (or renderer) that produces rows as the stage asks for them.
+pub trait GreyRows {
+    /// `(width, height)`.
+    fn size(&self) -> (usize, usize);
+    /// Row `y` (`y < height`) as [`filters::grey`] (`U8F8`) into `out`
+    /// (`width` long).
+    fn grey_row(&self, y: usize, out: &mut [u16]);
+}
+
+impl GreyRows for ImageView<'_, Rgb8> {
+    fn size(&self) -> (usize, usize) {
+        ImageView::size(self)
+    }
+
+    fn grey_row(&self, y: usize, out: &mut [u16]) {
+        if let Some(row) = self.row(y) {
+            filters::grey_row(row, out);
+        }
+    }
+}
+
+/// The streaming form of [`stereo`]: rows come from `left` and `right` as
+/// needed and every output cell goes to `sink(x, y, cell)`, row by row, so
+/// neither the frames nor the map need to be in memory.
+///
+/// # Errors
+/// As [`stereo`] (before any cell is produced).
+pub fn stereo_streamed<S: GreyRows>(
+    dem: &Dem,
+    table: &DemTable<'_>,
+    left: &S,
+    right: &S,
+    bufs: &mut StereoBuffers<'_>,
+    sink: &mut impl FnMut(usize, usize, DisparityCell),
+    probe: &mut impl Probe,
+) -> Result<StereoReport, StereoError> {
+    dem.check(table, left.size(), right.size())?;
+    readout::run(dem, table, [left, right], bufs, sink, probe)
 }

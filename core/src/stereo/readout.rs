@@ -14,10 +14,11 @@
 
 use super::filters::{energy, level_size, pyramid_row, x_pass, y_pass, Z};
 use super::MAX_LEVELS;
-use super::{Dem, DemTable, Probe, Step, StereoBuffers, StereoError, StereoReport, CHUNK};
+use super::{
+    Dem, DemTable, GreyRows, Probe, Step, StereoBuffers, StereoError, StereoReport, CHUNK,
+};
 use crate::disparity::DisparityCell;
 use crate::fixed::{round_shift, U8F8};
-use crate::image::{ImageView, ImageViewMut, Rgb8};
 
 /// One pixel's decision before the OFF tests.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -174,12 +175,12 @@ impl RowWeights {
 }
 
 /// Runs the stage (sizes checked by the caller).
-pub(super) fn run(
+pub(super) fn run<S: GreyRows>(
     dem: &Dem,
     table: &DemTable<'_>,
-    rgb: [&ImageView<'_, Rgb8>; 2],
+    rgb: [&S; 2],
     bufs: &mut StereoBuffers<'_>,
-    out: &mut ImageViewMut<'_, DisparityCell>,
+    sink: &mut impl FnMut(usize, usize, DisparityCell),
     probe: &mut impl Probe,
 ) -> Result<StereoReport, StereoError> {
     let (w, h) = rgb[0].size();
@@ -238,23 +239,20 @@ pub(super) fn run(
     e.planes(rgb);
     let mut report = StereoReport::default();
     for y in 0..h {
-        e.row(table, rgb, y, out, &mut report, probe);
+        e.row(table, rgb, y, sink, &mut report, probe);
     }
     Ok(report)
 }
 
 impl Engine<'_, '_> {
     /// Loads level-0 grey rows up to `j` (inclusive) into the rings.
-    fn load_grey(&mut self, rgb: [&ImageView<'_, Rgb8>; 2], j: usize) {
+    fn load_grey<S: GreyRows>(&mut self, rgb: [&S; 2], j: usize) {
         while self.next_grey <= j.min(self.h - 1) {
             let row = self.next_grey;
             let slot = row % self.ring_rows;
             for (eye, img) in self.eyes.iter_mut().zip(rgb) {
-                if let (Some(dst), Some(src)) = (
-                    eye.ring.get_mut(slot * self.w..(slot + 1) * self.w),
-                    img.row(row),
-                ) {
-                    super::filters::grey_row(src, dst);
+                if let Some(dst) = eye.ring.get_mut(slot * self.w..(slot + 1) * self.w) {
+                    img.grey_row(row, dst);
                 }
             }
             self.next_grey += 1;
@@ -263,7 +261,7 @@ impl Engine<'_, '_> {
 
     /// The pyramid planes of levels 1.. (level 1 from grey rows streamed
     /// through the level-0 ring, which is then reset).
-    fn planes(&mut self, rgb: [&ImageView<'_, Rgb8>; 2]) {
+    fn planes<S: GreyRows>(&mut self, rgb: [&S; 2]) {
         let (w, h) = (self.w, self.h);
         for l in 1..self.levels {
             let (lw, lh) = (level_size(w, l), level_size(h, l));
@@ -304,9 +302,9 @@ impl Engine<'_, '_> {
 
     /// Computes response rows of `level` up to `j` (inclusive), both eyes,
     /// every carrier.
-    fn responses(
+    fn responses<S: GreyRows>(
         &mut self,
-        rgb: [&ImageView<'_, Rgb8>; 2],
+        rgb: [&S; 2],
         level: usize,
         j: usize,
         probe: &mut impl Probe,
@@ -360,12 +358,12 @@ impl Engine<'_, '_> {
     }
 
     /// One output row.
-    fn row(
+    fn row<S: GreyRows>(
         &mut self,
         table: &DemTable<'_>,
-        rgb: [&ImageView<'_, Rgb8>; 2],
+        rgb: [&S; 2],
         y: usize,
-        out: &mut ImageViewMut<'_, DisparityCell>,
+        sink: &mut impl FnMut(usize, usize, DisparityCell),
         report: &mut StereoReport,
         probe: &mut impl Probe,
     ) {
@@ -441,9 +439,8 @@ impl Engine<'_, '_> {
         }
         // The OFF tests and the output row.
         let (lp, rp) = self.picks.split_at(w);
-        let Some(dst) = out.row_mut(y) else { return };
-        for (x, (o, &code)) in dst.iter_mut().zip(lp.iter()).enumerate() {
-            *o = DisparityCell::OFF;
+        for (x, &code) in lp.iter().enumerate() {
+            let mut o = DisparityCell::OFF;
             match code {
                 -1 => report.off_texture += 1,
                 -2 => report.off_ambiguous += 1,
@@ -458,12 +455,13 @@ impl Engine<'_, '_> {
                     if ok {
                         report.on += 1;
                         let q = d.clamp(0, i32::from(u16::MAX - 1)) as u16;
-                        *o = DisparityCell::from_raw(U8F8::from_bits(q));
+                        o = DisparityCell::from_raw(U8F8::from_bits(q));
                     } else {
                         report.off_inconsistent += 1;
                     }
                 }
             }
+            sink(x, y, o);
         }
     }
 
