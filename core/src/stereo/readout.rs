@@ -78,6 +78,16 @@ pub fn pick(raw: &[i64], total: i64, table: &DemTable<'_>, lo: usize, hi: usize)
     })
 }
 
+/// `[|z_R|², X_r, X_i]` of one pixel (the left term of `A` is pooled
+/// separately), `Q12`, exact; `None` (outside the image) reads as 0.
+#[inline(always)]
+fn energy_right(l: Z, r: Option<Z>) -> [i64; 3] {
+    let Some(r) = r else { return [0; 3] };
+    let (lr, li) = (i64::from(l[0]), i64::from(l[1]));
+    let (rr, ri) = (i64::from(r[0]), i64::from(r[1]));
+    [rr * rr + ri * ri, lr * rr + li * ri, li * rr - lr * ri]
+}
+
 /// Moves the first `n` elements of `*s` out.
 fn take<'a, T>(
     s: &mut &'a mut [T],
@@ -345,18 +355,6 @@ impl Engine<'_, '_> {
         }
     }
 
-    /// The response row slice of `(eye, level, level row, carrier)`.
-    fn zrow(&self, eye: usize, level: usize, j: usize, c: usize) -> &[Z] {
-        let lw = level_size(self.w, level);
-        let slot = j % super::z_ring_rows(self.pool, level);
-        let off = (slot * self.carriers + c) * lw;
-        self.eyes
-            .get(eye)
-            .and_then(|e| e.z.get(level))
-            .and_then(|z| z.get(off..off + lw))
-            .unwrap_or(&[])
-    }
-
     /// One output row.
     fn row<S: GreyRows>(
         &mut self,
@@ -466,44 +464,70 @@ impl Engine<'_, '_> {
     }
 
     /// Vertically pooled energies of every group at full-resolution pixel
-    /// `x`, into chunk slot `k`, in `Q8` grey² (one rounding each).
+    /// `x`, into chunk slot `k`, in `Q8` grey² (one rounding each). The
+    /// left term `Σ w·|z_L|²` is pooled once per carrier and shared by its
+    /// shifts.
     fn energies(&mut self, weights: &[RowWeights; MAX_LEVELS], x: usize, k: usize) {
         let groups = self.dem.layout.groups();
         let base = 3 * k * groups;
-        let mut g = 0;
+        let Some(dst) = self.energy.get_mut(base..base + 3 * groups) else {
+            return;
+        };
+        let mut dst = dst.chunks_exact_mut(3);
+        let step = usize::from(self.dem.layout.shift_step);
+        let [left, right] = &self.eyes;
         for (l, rw) in weights.iter().enumerate().take(self.levels) {
             let lw = level_size(self.w, l);
+            let zrows = super::z_ring_rows(self.pool, l);
             let mask = (1usize << l) - 1;
             let (i0, fx) = (x >> l, (x & mask) as i64);
             let i1 = (i0 + 1).min(lw - 1);
             let w0 = (1i64 << l) - fx;
-            let step = usize::from(self.dem.layout.shift_step);
+            let sh = 4 + 2 * l as u32;
+            let (zl_all, zr_all) = (
+                left.z.get(l).map_or(&[][..], |z| &**z),
+                right.z.get(l).map_or(&[][..], |z| &**z),
+            );
             for c in 0..self.carriers {
+                let mut taps: [(i64, i64, Z, Z, &[Z]); 16] = [(0, 0, [0; 2], [0; 2], &[]); 16];
+                let mut n = 0;
+                let mut pooled_left = 0i64;
+                for (&(j, wj), tap) in rw.iter().zip(taps.iter_mut()) {
+                    let off = ((j % zrows) * self.carriers + c) * lw;
+                    let zl = zl_all.get(off..off + lw).unwrap_or(&[]);
+                    let zr = zr_all.get(off..off + lw).unwrap_or(&[]);
+                    let (a, b) = (i64::from(wj) * w0, i64::from(wj) * fx);
+                    let l0 = zl.get(i0).copied().unwrap_or([0; 2]);
+                    let l1 = zl.get(i1).copied().unwrap_or([0; 2]);
+                    pooled_left += a * energy(l0, None)[0] + b * energy(l1, None)[0];
+                    *tap = (a, b, l0, l1, zr);
+                    n += 1;
+                }
                 for k_s in 0..self.dem.layout.shifts(l) {
                     let s = k_s * step;
                     let mut acc = [0i64; 3];
                     if (s << l) <= x {
-                        for &(j, wj) in rw.iter() {
-                            let (zl, zr) = (self.zrow(0, l, j, c), self.zrow(1, l, j, c));
-                            let at = |i: usize| -> [i64; 3] {
-                                let l = zl.get(i).copied().unwrap_or([0, 0]);
-                                let r = i.checked_sub(s).and_then(|ir| zr.get(ir).copied());
-                                energy(l, r)
-                            };
-                            let e0 = at(i0);
-                            let e1 = if fx > 0 { at(i1) } else { [0; 3] };
-                            for ((a, v0), v1) in acc.iter_mut().zip(e0).zip(e1) {
-                                *a += i64::from(wj) * (w0 * v0 + fx * v1);
+                        acc[0] = pooled_left;
+                        for &(a, b, l0, l1, zr) in taps.iter().take(n) {
+                            let r0 = i0.checked_sub(s).and_then(|i| zr.get(i).copied());
+                            let e = energy_right(l0, r0);
+                            for (acc, e) in acc.iter_mut().zip(e) {
+                                *acc += a * e;
+                            }
+                            if b != 0 {
+                                let r1 = i1.checked_sub(s).and_then(|i| zr.get(i).copied());
+                                let e = energy_right(l1, r1);
+                                for (acc, e) in acc.iter_mut().zip(e) {
+                                    *acc += b * e;
+                                }
                             }
                         }
                     }
-                    let sh = 4 + 2 * l as u32;
-                    for (t, a) in acc.iter().enumerate() {
-                        if let Some(dst) = self.energy.get_mut(base + 3 * g + t) {
-                            *dst = round_shift(*a, sh) as i32;
+                    if let Some(d) = dst.next() {
+                        for (d, a) in d.iter_mut().zip(acc) {
+                            *d = round_shift(a, sh) as i32;
                         }
                     }
-                    g += 1;
                 }
             }
         }
@@ -548,7 +572,7 @@ impl Engine<'_, '_> {
                         .get(base + 3 * gi..base + 3 * gi + 3)
                         .unwrap_or(&[]);
                     let [a, xr, xi] = match *e {
-                        [a, b, c] => [i64::from(a), i64::from(b), i64::from(c)],
+                        [a, b, c] => [a, b, c],
                         _ => continue,
                     };
                     let ri = ((x - s) % r_slots) * stride;
@@ -562,9 +586,9 @@ impl Engine<'_, '_> {
                     for ((lv, rv), c) in ls.iter_mut().zip(rs.iter_mut()).zip(wb.chunks_exact(6)) {
                         let v = match *c {
                             [a0, a1, b0, b1, c0, c1] => {
-                                a * i64::from(i16::from_le_bytes([a0, a1]))
-                                    + xr * i64::from(i16::from_le_bytes([b0, b1]))
-                                    + xi * i64::from(i16::from_le_bytes([c0, c1]))
+                                i64::from(a) * i64::from(i16::from_le_bytes([a0, a1]))
+                                    + i64::from(xr) * i64::from(i16::from_le_bytes([b0, b1]))
+                                    + i64::from(xi) * i64::from(i16::from_le_bytes([c0, c1]))
                             }
                             _ => 0,
                         };
@@ -572,8 +596,8 @@ impl Engine<'_, '_> {
                         *rv += v;
                     }
                     if let (Some(lt), Some(rt)) = (ls.get_mut(n), rs.get_mut(n)) {
-                        *lt += 4 * a;
-                        *rt += 4 * a;
+                        *lt += 4 * i64::from(a);
+                        *rt += 4 * i64::from(a);
                     }
                 }
             }
