@@ -577,3 +577,89 @@ fn scratch_for_160x120_d32_is_within_96_kb() {
     eprintln!("scratch stereo 160x120 D=32: {bytes} bytes");
     assert!(bytes <= 96 * 1024, "{bytes}");
 }
+
+// ---------------------------------------------------------------------------
+// Streaming and the random-dot anchor.
+
+/// One eye of a synthetic scene, rendered row by row on demand.
+struct SceneRows<'s> {
+    spec: &'s protogist::synth::SceneSpec,
+    right: bool,
+    w: usize,
+    h: usize,
+}
+
+impl qs::GreyRows for SceneRows<'_> {
+    fn size(&self) -> (usize, usize) {
+        (self.w, self.h)
+    }
+    fn grey_row(&self, y: usize, out: &mut [u16]) {
+        for (x, o) in out.iter_mut().enumerate() {
+            *o = qf::grey(self.spec.colour(self.right, x as i32, y as i32));
+        }
+    }
+}
+
+#[test]
+fn streamed_rows_and_sink_equal_the_in_memory_run() {
+    use protogist::synth::{render_left, render_right, SceneSpec};
+    let (w, h) = (96, 64);
+    let spec = SceneSpec::demo(w, h);
+    let (mut l, mut r) = (vec![Rgb8::default(); w * h], vec![Rgb8::default(); w * h]);
+    render_left(&spec, &mut ImageViewMut::packed(&mut l, w, h).unwrap()).unwrap();
+    render_right(&spec, &mut ImageViewMut::packed(&mut r, w, h).unwrap()).unwrap();
+    let p = qs::DemParams::default();
+    let (whole, rep) = run_core(&p, DEFAULT_TABLE, &l, &r, w, h).unwrap();
+    let dem = Dem::new(&p).unwrap();
+    let t = qs::DemTable::parse(DEFAULT_TABLE).unwrap();
+    let mut st = Storage::new(w, h, &p);
+    let mut streamed = vec![DisparityCell::OFF; w * h];
+    let mut order = Vec::new();
+    let eye = |right| SceneRows { spec: &spec, right, w, h };
+    let rep2 = qs::stereo_streamed(
+        &dem,
+        &t,
+        &eye(false),
+        &eye(true),
+        &mut st.bufs(),
+        &mut |x, y, c| {
+            order.push(y * w + x);
+            streamed[y * w + x] = c;
+        },
+        &mut (),
+    )
+    .unwrap();
+    assert_eq!(whole, streamed);
+    assert_eq!(rep, rep2);
+    assert!(order.iter().copied().eq(0..w * h), "cells arrive row-major once each");
+    assert!(rep.on > w * h / 2, "{rep:?}");
+}
+
+#[test]
+fn random_dots_bad1_below_5_percent_unpooled() {
+    // Issue 3 §2's unit anchor, on the fixed-point stage: argmax off by
+    // more than 1 px, interior pixels, ON pixels only (the left-right
+    // check is off here, as in the reference's raw-argmax anchor).
+    let p = qs::DemParams {
+        pool_radius: 0,
+        lr_tolerance: -1.0,
+        min_energy: 0.0,
+        ..qs::DemParams::default()
+    };
+    let (w, h) = (72, 48);
+    let (mut bad, mut n) = (0usize, 0usize);
+    for d in 0..=15usize {
+        let (l, r) = rds_rgb(w, h, d, 0xabcd_0000 + d as u64);
+        let (m, _) = run_core(&p, DEFAULT_TABLE, &l, &r, w, h).unwrap();
+        for y in 12..h - 12 {
+            for x in 15 + 12..w - 12 {
+                n += 1;
+                let v = m[y * w + x].get().map_or(f32::INFINITY, |v| v.to_num::<f32>());
+                bad += usize::from((v - d as f32).abs() > 1.0);
+            }
+        }
+    }
+    let pct = 100.0 * bad as f64 / n as f64;
+    eprintln!("core RDS bad-1 unpooled: {pct:.2} %");
+    assert!(pct < 5.0, "{pct}");
+}
