@@ -362,6 +362,23 @@ fn random_dots_end_to_end_agree() {
     assert!(agree >= 99.0, "{agree}");
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+
+    #[test]
+    fn random_dot_pairs_agree(seed: u64, d in 0usize..=15, pool in 0u8..=2) {
+        let p = qs::DemParams { pool_radius: pool, ..qs::DemParams::default() };
+        let (w, h) = (56, 36);
+        let (l, r) = rds_rgb(w, h, d, seed);
+        let (q, _) = run_core(&p, DEFAULT_TABLE, &l, &r, w, h).unwrap();
+        let f = run_float(&p, DEFAULT_TABLE, &l, &r, w, h);
+        let (close, agree, both) = agreement(&q, &f);
+        prop_assert!(both > 0);
+        prop_assert!(close >= 99.0, "d={d} pool={pool}: {close} % within 0.25 px");
+        prop_assert!(agree >= 99.0, "d={d} pool={pool}: OFF agree {agree} %");
+    }
+}
+
 /// Aloe pair area-downscaled to 160 px wide.
 fn aloe_160() -> Option<(Vec<Rgb8>, Vec<Rgb8>, usize, usize)> {
     let l = load_rgb(&data_file("aloe/aloeL.jpg")?).unwrap();
@@ -615,7 +632,12 @@ fn streamed_rows_and_sink_equal_the_in_memory_run() {
     let mut st = Storage::new(w, h, &p);
     let mut streamed = vec![DisparityCell::OFF; w * h];
     let mut order = Vec::new();
-    let eye = |right| SceneRows { spec: &spec, right, w, h };
+    let eye = |right| SceneRows {
+        spec: &spec,
+        right,
+        w,
+        h,
+    };
     let rep2 = qs::stereo_streamed(
         &dem,
         &t,
@@ -631,7 +653,10 @@ fn streamed_rows_and_sink_equal_the_in_memory_run() {
     .unwrap();
     assert_eq!(whole, streamed);
     assert_eq!(rep, rep2);
-    assert!(order.iter().copied().eq(0..w * h), "cells arrive row-major once each");
+    assert!(
+        order.iter().copied().eq(0..w * h),
+        "cells arrive row-major once each"
+    );
     assert!(rep.on > w * h / 2, "{rep:?}");
 }
 
@@ -654,7 +679,9 @@ fn random_dots_bad1_below_5_percent_unpooled() {
         for y in 12..h - 12 {
             for x in 15 + 12..w - 12 {
                 n += 1;
-                let v = m[y * w + x].get().map_or(f32::INFINITY, |v| v.to_num::<f32>());
+                let v = m[y * w + x]
+                    .get()
+                    .map_or(f32::INFINITY, |v| v.to_num::<f32>());
                 bad += usize::from((v - d as f32).abs() > 1.0);
             }
         }

@@ -500,3 +500,23 @@ fn opencv_aloe(data: &Path) -> String {
     );
     out
 }
+
+#[cfg(test)]
+mod stereo_tests {
+    use super::stereo_m4;
+
+    #[test]
+    fn stereo_section_reads_the_firmware_lines() {
+        let out = "ipp capture 160x120 528.0\nchecksum stereo 160x120 0x4554b818 on=15823\n\
+                   ipp stereo-pyramid 160x120 2372.4\nipp stereo-readout 160x120 62886.3\n\
+                   ipp stereo 160x120 108554.7\nscratch stereo 160x120 76616\n";
+        let s = stereo_m4(out);
+        assert!(s.body.contains("| pyramid | 2372.4 |"), "{}", s.body);
+        assert!(s.body.contains("| readout | 62886.3 |"));
+        assert!(s.body.contains("**108554.7**"));
+        assert!(s.body.contains("76616 bytes"));
+        assert!(s.body.contains("0x4554b818"));
+        assert!(!s.body.contains("capture"));
+        assert_eq!(stereo_m4("ipp capture 160x120 1.0\n").body, super::NOT_YET);
+    }
+}
