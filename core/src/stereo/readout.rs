@@ -12,7 +12,7 @@
 //! every `d`), where `raw'`, `T'` are `raw`, `T` shifted right together
 //! until `T' < 2^30` (block floating point per pixel), so `|n| < 2^61`.
 
-use super::filters::{energy, level_size, pyramid_row, x_pass, y_pass, Z};
+use super::filters::{level_size, pyramid_row, x_pass, y_pass, Z};
 use super::MAX_LEVELS;
 use super::{
     Dem, DemTable, GreyRows, Probe, Step, StereoBuffers, StereoError, StereoReport, CHUNK,
@@ -78,14 +78,31 @@ pub fn pick(raw: &[i64], total: i64, table: &DemTable<'_>, lo: usize, hi: usize)
     })
 }
 
-/// `[|z_R|², X_r, X_i]` of one pixel (the left term of `A` is pooled
-/// separately), `Q12`, exact; `None` (outside the image) reads as 0.
-#[inline(always)]
-fn energy_right(l: Z, r: Option<Z>) -> [i64; 3] {
-    let Some(r) = r else { return [0; 3] };
-    let (lr, li) = (i64::from(l[0]), i64::from(l[1]));
-    let (rr, ri) = (i64::from(r[0]), i64::from(r[1]));
-    [rr * rr + ri * ri, lr * rr + li * ri, li * rr - lr * ri]
+/// One pooled row of one level pixel pair in the energy stage.
+#[derive(Clone, Copy, Default)]
+struct Tap {
+    /// Weight of column `i0` (units of `4^-level`).
+    a: i32,
+    /// Weight of column `i1`.
+    b: i32,
+    /// `a·z_L(i0)`.
+    la: [i32; 2],
+    /// `b·z_L(i1)`.
+    lb: [i32; 2],
+    /// Offset of the row in the response ring.
+    off: usize,
+}
+
+impl Tap {
+    /// Adds `w·[|z_R|², X_r, X_i]` with `lw = w·z_L` (exact: `w·z` < 2^25,
+    /// every product < 2^40).
+    #[inline(always)]
+    fn add_right(&self, acc: &mut [i64; 3], w: i32, lw: [i32; 2], r: Z) {
+        let (rr, ri) = (i32::from(r[0]), i32::from(r[1]));
+        acc[0] += i64::from(w * rr) * i64::from(rr) + i64::from(w * ri) * i64::from(ri);
+        acc[1] += i64::from(lw[0]) * i64::from(rr) + i64::from(lw[1]) * i64::from(ri);
+        acc[2] += i64::from(lw[1]) * i64::from(rr) - i64::from(lw[0]) * i64::from(ri);
+    }
 }
 
 /// Moves the first `n` elements of `*s` out.
@@ -488,37 +505,41 @@ impl Engine<'_, '_> {
                 left.z.get(l).map_or(&[][..], |z| &**z),
                 right.z.get(l).map_or(&[][..], |z| &**z),
             );
+            let shifts = self.dem.layout.shifts(l);
             for c in 0..self.carriers {
-                let mut taps: [(i64, i64, Z, Z, &[Z]); 16] = [(0, 0, [0; 2], [0; 2], &[]); 16];
+                // Per pooled row: the weights of columns i0 and i1 (units of
+                // 4^-l, at most (2·7 + 1)·4^3 = 960), the left responses
+                // premultiplied by them (< 2^25) and the right response row.
+                let mut taps = [Tap::default(); 16];
                 let mut n = 0;
                 let mut pooled_left = 0i64;
                 for (&(j, wj), tap) in rw.iter().zip(taps.iter_mut()) {
                     let off = ((j % zrows) * self.carriers + c) * lw;
                     let zl = zl_all.get(off..off + lw).unwrap_or(&[]);
-                    let zr = zr_all.get(off..off + lw).unwrap_or(&[]);
-                    let (a, b) = (i64::from(wj) * w0, i64::from(wj) * fx);
-                    let l0 = zl.get(i0).copied().unwrap_or([0; 2]);
-                    let l1 = zl.get(i1).copied().unwrap_or([0; 2]);
-                    pooled_left += a * energy(l0, None)[0] + b * energy(l1, None)[0];
-                    *tap = (a, b, l0, l1, zr);
+                    let (a, b) = (wj as i32 * w0 as i32, wj as i32 * fx as i32);
+                    let l0 = zl.get(i0).copied().unwrap_or([0; 2]).map(i32::from);
+                    let l1 = zl.get(i1).copied().unwrap_or([0; 2]).map(i32::from);
+                    let (la, lb) = (l0.map(|v| a * v), l1.map(|v| b * v));
+                    pooled_left += i64::from(la[0]) * i64::from(l0[0])
+                        + i64::from(la[1]) * i64::from(l0[1])
+                        + i64::from(lb[0]) * i64::from(l1[0])
+                        + i64::from(lb[1]) * i64::from(l1[1]);
+                    *tap = Tap { a, b, la, lb, off };
                     n += 1;
                 }
-                for k_s in 0..self.dem.layout.shifts(l) {
+                for k_s in 0..shifts {
                     let s = k_s * step;
                     let mut acc = [0i64; 3];
                     if (s << l) <= x {
                         acc[0] = pooled_left;
-                        for &(a, b, l0, l1, zr) in taps.iter().take(n) {
-                            let r0 = i0.checked_sub(s).and_then(|i| zr.get(i).copied());
-                            let e = energy_right(l0, r0);
-                            for (acc, e) in acc.iter_mut().zip(e) {
-                                *acc += a * e;
+                        for t in taps.iter().take(n) {
+                            let zr = zr_all.get(t.off..t.off + lw).unwrap_or(&[]);
+                            if let Some(r) = i0.checked_sub(s).and_then(|i| zr.get(i)) {
+                                t.add_right(&mut acc, t.a, t.la, *r);
                             }
-                            if b != 0 {
-                                let r1 = i1.checked_sub(s).and_then(|i| zr.get(i).copied());
-                                let e = energy_right(l1, r1);
-                                for (acc, e) in acc.iter_mut().zip(e) {
-                                    *acc += b * e;
+                            if t.b != 0 {
+                                if let Some(r) = i1.checked_sub(s).and_then(|i| zr.get(i)) {
+                                    t.add_right(&mut acc, t.b, t.lb, *r);
                                 }
                             }
                         }
