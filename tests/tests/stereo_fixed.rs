@@ -690,3 +690,52 @@ fn random_dots_bad1_below_5_percent_unpooled() {
     eprintln!("core RDS bad-1 unpooled: {pct:.2} %");
     assert!(pct < 5.0, "{pct}");
 }
+
+#[test]
+fn extreme_parameters_and_contrast_do_not_overflow() {
+    // The largest pooling box, most carriers and levels, step 1, on
+    // full-contrast gratings and dots: every integer range of
+    // ERROR_BOUNDS.md §7 at its widest (the test profile checks overflow).
+    let p = qs::DemParams {
+        max_disp: 7,
+        carriers: 6,
+        levels: 4,
+        wavelength: 2.0,
+        sigma_per_wavelength: 0.3,
+        radius: 3,
+        shift_step: 1,
+        pool_radius: 7,
+        min_energy: 0.0,
+        ..qs::DemParams::default()
+    };
+    let table = HostTable::from_decoder(&dem::train(&dem::DemParams {
+        train_images: 1,
+        train_width: 8,
+        train_height: 4,
+        ..host_params(&p)
+    }))
+    .to_bytes();
+    let (w, h) = (64, 60);
+    let grating: Vec<Rgb8> = (0..w * h)
+        .map(|i| {
+            if (i % w + i / w) % 2 == 0 {
+                Rgb8::new(255, 255, 255)
+            } else {
+                Rgb8::new(0, 0, 0)
+            }
+        })
+        .collect();
+    let (dots_l, dots_r) = rds_rgb(w, h, 5, 77);
+    for (l, r) in [
+        (&grating, &grating),
+        (&dots_l, &dots_r),
+        (&grating, &dots_r),
+    ] {
+        let (m, rep) = run_core(&p, &table, l, r, w, h).unwrap();
+        assert_eq!(
+            rep.on + rep.off_texture + rep.off_ambiguous + rep.off_inconsistent,
+            w * h
+        );
+        assert_eq!(m.iter().filter(|c| c.is_on()).count(), rep.on);
+    }
+}
