@@ -415,7 +415,7 @@ impl Engine<'_, '_> {
             probe.enter(Step::Readout);
             for x in x0..x1 {
                 if x < w {
-                    self.votes(table, x, x - x0, n, l_slots, r_slots);
+                    self.votes(table, x, x - x0, n, 0..=n - 1, l_slots, r_slots);
                 }
                 // Left pixel c = x − pool is complete.
                 if let Some(c) = x.checked_sub(pool).filter(|&c| c < w) {
@@ -554,18 +554,22 @@ impl Engine<'_, '_> {
         }
     }
 
-    /// Clears the slots of pixel `x` and adds its votes: every group's
-    /// vote goes to the left-referenced pixel `x` and the right-referenced
-    /// pixel `x − s`.
+    /// Clears the slots of pixel `x` and adds its votes for the candidates
+    /// `cand` (the current read-out: all of them): every group's vote goes
+    /// to the left-referenced pixel `x` and the right-referenced pixel
+    /// `x − s`.
+    #[allow(clippy::too_many_arguments)]
     fn votes(
         &mut self,
         table: &DemTable<'_>,
         x: usize,
         k: usize,
         n: usize,
+        cand: core::ops::RangeInclusive<usize>,
         l_slots: usize,
         r_slots: usize,
     ) {
+        let (lo, count) = (*cand.start(), cand.end().saturating_sub(*cand.start()) + 1);
         let stride = n + 1;
         let li = (x % l_slots) * stride;
         if let Some(s) = self.left.get_mut(li..li + stride) {
@@ -603,8 +607,16 @@ impl Engine<'_, '_> {
                     ) else {
                         continue;
                     };
-                    let wb = table.group_bytes(gi);
-                    for ((lv, rv), c) in ls.iter_mut().zip(rs.iter_mut()).zip(wb.chunks_exact(6)) {
+                    let wb = table
+                        .group_bytes(gi)
+                        .get(6 * lo..6 * (lo + count))
+                        .unwrap_or(&[]);
+                    let (Some(lw), Some(rw)) =
+                        (ls.get_mut(lo..lo + count), rs.get_mut(lo..lo + count))
+                    else {
+                        continue;
+                    };
+                    for ((lv, rv), c) in lw.iter_mut().zip(rw.iter_mut()).zip(wb.chunks_exact(6)) {
                         let v = match *c {
                             [a0, a1, b0, b1, c0, c1] => {
                                 i64::from(a) * i64::from(i16::from_le_bytes([a0, a1]))
