@@ -43,4 +43,5 @@ pub mod off;
 pub mod rng;
 pub mod segment;
 pub mod shape;
+pub mod stereo;
 pub mod synth;

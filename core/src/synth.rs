@@ -257,6 +257,17 @@ impl SceneSpec {
         }
     }
 
+    /// The colour of pixel `(x, y)` of the left or right view, exactly what
+    /// [`render_left`] / [`render_right`] write there (for cameras that
+    /// deliver rows, e.g. the firmware's streamed stereo pair).
+    pub fn colour(&self, right: bool, x: i32, y: i32) -> Rgb8 {
+        if right {
+            self.right_colour(x, y)
+        } else {
+            self.left_colour(x, y)
+        }
+    }
+
     /// The colour the right camera sees at `(x, y)`: the nearest surface `s`
     /// whose left-image point `(x + d_s, y)` it covers.
     fn right_colour(&self, x: i32, y: i32) -> Rgb8 {

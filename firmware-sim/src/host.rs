@@ -101,6 +101,12 @@ pub fn run() -> ExitCode {
             }
         }
     }
+    if result.is_ok() {
+        if let Err(e) = run_stereo() {
+            eprintln!("firmware-sim: stereo stage: {e}");
+            return ExitCode::FAILURE;
+        }
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -138,4 +144,41 @@ fn run_objects(edges: &[EdgeCell]) -> Result<String, objects::ObjectError> {
     // Writing into a String cannot fail.
     let _ = objects::write_result(&mut line, &r);
     Ok(line)
+}
+
+/// The stereo stage on the 160x120 demo pair, as on the board.
+fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
+    use firmware_sim::stereo_run::{self, len};
+    let (mut grey, mut z, mut col) = (
+        vec![0u16; len::GREY],
+        vec![[0i16; 2]; len::Z],
+        vec![[0i32; 3]; len::COL],
+    );
+    let (mut energy, mut scores, mut picks) = (
+        vec![0i32; len::ENERGY],
+        vec![0i64; len::SCORES],
+        vec![0i32; len::PICKS],
+    );
+    let mut bufs = firmware_sim::pg::stereo::StereoBuffers {
+        grey: &mut grey,
+        z: &mut z,
+        col: &mut col,
+        energy: &mut energy,
+        scores: &mut scores,
+        picks: &mut picks,
+    };
+    let r = stereo_run::run(&mut bufs, &mut WallTicks(Instant::now()))?;
+    let mut out = String::new();
+    // Writing into a String cannot fail.
+    let _ = stereo_run::write_result(&mut out, &r);
+    let px = (stereo_run::WIDTH * stereo_run::HEIGHT) as f64;
+    let _ = writeln!(
+        out,
+        "host-ns-per-pixel stereo {}x{} {:.1}",
+        stereo_run::WIDTH,
+        stereo_run::HEIGHT,
+        r.total as f64 / px
+    );
+    print!("{out}");
+    Ok(())
 }

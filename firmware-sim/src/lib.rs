@@ -9,6 +9,7 @@
 pub mod app;
 pub mod camera;
 pub mod objects;
+pub mod stereo_run;
 
 pub use protogist as pg;
 

@@ -217,7 +217,29 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
             )
         })
         .map_err(|_| "semihosting write failed")?;
+    run_stereo(out, &mut ticks, &to_instructions)?;
     writeln!(out, "stack peak {} bytes", stack_peak_bytes()).map_err(|_| "semihosting write failed")
+}
+
+/// The stereo stage on the 160x120 demo pair (row-streamed: only its
+/// scratch is in RAM).
+fn run_stereo(
+    out: &mut impl Write,
+    ticks: &mut SysTicks,
+    to_instructions: &impl Fn(u64) -> u64,
+) -> Result<(), &'static str> {
+    use firmware_sim::pg::stereo::StereoBuffers;
+    use firmware_sim::stereo_run::{self, len, ZCell};
+    let mut bufs = StereoBuffers {
+        grey: singleton!(: [u16; len::GREY] = [0; len::GREY]).ok_or("stereo grey taken")?,
+        z: singleton!(: [ZCell; len::Z] = [[0; 2]; len::Z]).ok_or("stereo z taken")?,
+        col: singleton!(: [[i32; 3]; len::COL] = [[0; 3]; len::COL]).ok_or("stereo col taken")?,
+        energy: singleton!(: [i32; len::ENERGY] = [0; len::ENERGY]).ok_or("stereo energy taken")?,
+        scores: singleton!(: [i64; len::SCORES] = [0; len::SCORES]).ok_or("stereo scores taken")?,
+        picks: singleton!(: [i32; len::PICKS] = [0; len::PICKS]).ok_or("stereo picks taken")?,
+    };
+    let r = stereo_run::run(&mut bufs, ticks).map_err(|_| "stereo stage failed")?;
+    stereo_run::write_report(out, &r, to_instructions).map_err(|_| "semihosting write failed")
 }
 
 #[entry]

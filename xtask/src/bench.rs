@@ -23,6 +23,7 @@ pub fn run() -> Result<()> {
     let sections = [
         machine(),
         qemu_ipp(&qemu.stdout),
+        stereo_m4(&qemu.stdout),
         firmware_size(&qemu.stdout)?,
         host_criterion(),
         scratch(&qemu.stdout),
@@ -140,6 +141,57 @@ fn qemu_ipp(stdout: &str) -> Section {
     }
     Section {
         title: "Cortex-M4 instructions per pixel (QEMU)",
+        body,
+    }
+}
+
+/// The core stereo stage on the board (issue 3 §4): instructions per pixel
+/// per step, and its scratch, from the firmware's `stereo` lines.
+fn stereo_m4(stdout: &str) -> Section {
+    let mut body = String::from(
+        "`protogist::stereo` in the firmware (`firmware-sim/src/stereo_run.rs`): the demo scene's \
+         160x120 pair, 32 disparities (`max_disp` 31, table `firmware-sim/data/dem_d32.bin`), \
+         default parameters, rows streamed from the simulated camera and the map folded into the \
+         checksum row by row. Same QEMU setup as above.\n\n\
+         | step | instructions / pixel |\n|---|---|\n",
+    );
+    let mut total = None;
+    for l in stdout.lines() {
+        if let ["ipp", step, "160x120", v] = l.split_whitespace().collect::<Vec<_>>()[..] {
+            if let Some(name) = step.strip_prefix("stereo-") {
+                body.push_str(&format!("| {name} | {v} |\n"));
+            } else if step == "stereo" {
+                total = v.parse::<f64>().ok();
+                body.push_str(&format!("| **total** | **{v}** |\n"));
+            }
+        }
+    }
+    let scratch = stdout.lines().find_map(|l| {
+        l.strip_prefix("scratch stereo 160x120 ")
+            .and_then(|b| b.trim().parse::<u64>().ok())
+    });
+    let (Some(total), Some(scratch)) = (total, scratch) else {
+        return Section {
+            title: "Stereo on the Cortex-M4 (QEMU)",
+            body: NOT_YET.into(),
+        };
+    };
+    if let Some(c) = stdout.lines().find(|l| l.starts_with("checksum stereo ")) {
+        body.push_str(&format!(
+            "\nResult line (equal on the desktop run): `{c}`\n"
+        ));
+    }
+    body.push_str(&format!(
+        "\n**Targets** (issue 3 §4): 1,500 instructions/px or fewer: **not reached, {total:.0}** \
+         ({:.0}x); scratch ≤ 96 KB (98,304 bytes) beyond the two frames: **{scratch} bytes \
+         ({:.1} KB), reached** (`stereo::scratch_bytes(160, 120, 31)`). The read-out scores all \
+         32 candidates with all 72 cell groups (72 x 32 x 3 MAC per pixel, each vote added to a \
+         left- and a right-referenced score); see docs/STEREO.md, Fixed point.\n",
+        total / 1500.0,
+        scratch as f64 / 1024.0
+    ));
+    Section {
+        title: "Stereo on the Cortex-M4 (QEMU)",
         body,
     }
 }
@@ -451,4 +503,24 @@ fn opencv_aloe(data: &Path) -> String {
          the table above is the like-for-like comparison.\n",
     );
     out
+}
+
+#[cfg(test)]
+mod stereo_tests {
+    use super::stereo_m4;
+
+    #[test]
+    fn stereo_section_reads_the_firmware_lines() {
+        let out = "ipp capture 160x120 528.0\nchecksum stereo 160x120 0x4554b818 on=15823\n\
+                   ipp stereo-pyramid 160x120 2372.4\nipp stereo-readout 160x120 62886.3\n\
+                   ipp stereo 160x120 108554.7\nscratch stereo 160x120 76616\n";
+        let s = stereo_m4(out);
+        assert!(s.body.contains("| pyramid | 2372.4 |"), "{}", s.body);
+        assert!(s.body.contains("| readout | 62886.3 |"));
+        assert!(s.body.contains("**108554.7**"));
+        assert!(s.body.contains("76616 bytes"));
+        assert!(s.body.contains("0x4554b818"));
+        assert!(!s.body.contains("capture"));
+        assert_eq!(stereo_m4("ipp capture 160x120 1.0\n").body, super::NOT_YET);
+    }
 }

@@ -20,55 +20,10 @@
 
 use super::{Decoder, DemLayout};
 use protogist::checksum::Fnv1a;
-
-/// The magic bytes.
-pub const MAGIC: [u8; 4] = *b"PGDM";
-/// The format version this code writes and reads.
-pub const VERSION: u16 = 1;
-/// Bytes before the weights.
-pub const HEADER_LEN: usize = 24;
-
-/// Why a table was rejected.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-#[non_exhaustive]
-pub enum TableError {
-    /// Fewer bytes than the header or the dimensions require.
-    #[error("decoder table truncated: {got} bytes, need {needed}")]
-    Truncated {
-        /// Bytes needed.
-        needed: usize,
-        /// Bytes present.
-        got: usize,
-    },
-    /// More bytes than the dimensions require.
-    #[error("decoder table has {got} bytes, expected {expected}")]
-    TrailingBytes {
-        /// Bytes expected.
-        expected: usize,
-        /// Bytes present.
-        got: usize,
-    },
-    /// Not a decoder table.
-    #[error("not a decoder table (bad magic)")]
-    BadMagic,
-    /// A version this code does not read.
-    #[error("decoder table version {0} is not supported (expected {VERSION})")]
-    Version(u16),
-    /// A header length this version does not use.
-    #[error("decoder table header length {0} (expected {HEADER_LEN})")]
-    HeaderLen(u16),
-    /// The stored checksum differs from the bytes'.
-    #[error("decoder table checksum {stored:#010x} does not match {computed:#010x}")]
-    Checksum {
-        /// Stored.
-        stored: u32,
-        /// Computed.
-        computed: u32,
-    },
-    /// Header fields that contradict each other.
-    #[error("decoder table header is inconsistent: {0}")]
-    Inconsistent(&'static str),
-}
+// The parser is core's (`protogist::stereo::table`); this file keeps the
+// owned form and the writer.
+use protogist::stereo::table as core_table;
+pub use protogist::stereo::table::{table_len, TableError, HEADER_LEN, MAGIC, VERSION};
 
 /// The integer table.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -162,107 +117,29 @@ impl DemTable {
         b
     }
 
-    /// Parses and checks a table.
+    /// Parses and checks a table (core's parser, then copied).
     ///
     /// # Errors
     /// [`TableError`] for anything but an intact table of this version.
     pub fn parse(bytes: &[u8]) -> Result<Self, TableError> {
-        let got = bytes.len();
-        if got < HEADER_LEN + 4 {
-            return Err(TableError::Truncated {
-                needed: HEADER_LEN + 4,
-                got,
-            });
-        }
-        let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
-        if bytes[..4] != MAGIC {
-            return Err(TableError::BadMagic);
-        }
-        if u16_at(4) != VERSION {
-            return Err(TableError::Version(u16_at(4)));
-        }
-        if usize::from(u16_at(6)) != HEADER_LEN {
-            return Err(TableError::HeaderLen(u16_at(6)));
-        }
-        let (groups, n) = (usize::from(u16_at(20)), usize::from(u16_at(22)));
-        let expected = table_len(groups * n, n);
-        if got < expected {
-            return Err(TableError::Truncated {
-                needed: expected,
-                got,
-            });
-        }
-        if got > expected {
-            return Err(TableError::TrailingBytes { expected, got });
-        }
-        let body = expected - 4;
-        let stored = u32::from_le_bytes([
-            bytes[body],
-            bytes[body + 1],
-            bytes[body + 2],
-            bytes[body + 3],
-        ]);
-        let mut h = Fnv1a::new();
-        h.write(&bytes[..body]);
-        if h.finish() != stored {
-            return Err(TableError::Checksum {
-                stored,
-                computed: h.finish(),
-            });
-        }
-        let layout = DemLayout {
-            max_disp: bytes[8],
-            levels: bytes[9],
-            carriers: bytes[10],
-            shift_step: bytes[11],
-            radius: bytes[12],
-            wavelength_q8: u16_at(16),
-            sigma_q12: u16_at(18),
-        };
-        let (weight_frac, bias_frac) = (bytes[13], bytes[14]);
-        let bad = |ok: bool, what| {
-            if ok {
-                Ok(())
-            } else {
-                Err(TableError::Inconsistent(what))
-            }
-        };
-        bad(bytes[15] == 0, "reserved byte is not 0")?;
-        bad(
-            weight_frac <= 15 && bias_frac <= 15,
-            "more than 15 fraction bits",
-        )?;
-        bad((1..=4).contains(&layout.levels), "levels must be 1..=4")?;
-        bad(
-            layout.carriers >= 1 && layout.shift_step >= 1 && layout.radius >= 1,
-            "zero carriers, step or radius",
-        )?;
-        bad(
-            n == usize::from(layout.max_disp) + 1,
-            "disparities != max_disp + 1",
-        )?;
-        bad(
-            groups == layout.groups(),
-            "group count does not match the layout",
-        )?;
-        let i16s: Vec<i16> = bytes[HEADER_LEN..body]
-            .chunks_exact(2)
-            .map(|c| i16::from_le_bytes([c[0], c[1]]))
-            .collect();
-        let (w, b) = i16s.split_at(3 * groups * n);
+        let t = core_table::DemTable::parse(bytes)?;
+        let l = t.layout;
         Ok(Self {
-            layout,
-            weight_frac,
-            bias_frac,
-            weights: w.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
-            bias: b.to_vec(),
+            layout: DemLayout {
+                max_disp: l.max_disp,
+                levels: l.levels,
+                carriers: l.carriers,
+                shift_step: l.shift_step,
+                radius: l.radius,
+                wavelength_q8: l.wavelength_q8,
+                sigma_q12: l.sigma_q12,
+            },
+            weight_frac: t.weight_frac,
+            bias_frac: t.bias_frac,
+            weights: t.weights().collect(),
+            bias: t.bias().collect(),
         })
     }
-}
-
-/// Total bytes of a table with `cells` weight triples and `n` biases.
-pub fn table_len(cells: usize, n: usize) -> usize {
-    HEADER_LEN + 6 * cells + 2 * n + 4
 }
 
 /// The table trained for `DemParams::default()`, by

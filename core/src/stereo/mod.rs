@@ -1,0 +1,599 @@
+//! Stereo (paper section 3.1): the disparity energy model (DEM) with a
+//! trained decoding population, in fixed point, row-streamed.
+//!
+//! ```text
+//! left, right RGB ─► grey (U8F8) ─► ↓2 pyramid ─► complex Gabor bank
+//!   (I10F6, per eye, once) ─► energies A, X per (level, carrier, shift)
+//!   ─► Poisson log-likelihood per candidate (integer table) ─► 5x5 pool
+//!   ─► argmax + parabola ─► OFF tests (texture, ambiguity, left-right)
+//! ```
+//!
+//! The f32 reference of every step is `protogist_host::reference::stereo`
+//! (same names). Disparity is left-referenced, `d = x_L − x_R ≥ 0`.
+//!
+//! **Row streaming.** Level 0 keeps a ring of `2r + 1` grey rows per eye;
+//! the coarser pyramid levels (a quarter of the pixels and less) are whole
+//! planes; each level keeps a ring of the response rows that the vertical
+//! pooling window needs. Pooling is linear, so the vertical half of the
+//! box is applied to the energies of each group (exactly what pooling the
+//! scores gives) and the horizontal half to the scores, in a ring of
+//! `2·pool + 1` pixels (left-referenced) and `2·pool + max_shift + 1`
+//! pixels (right-referenced). [`scratch_bytes`] states the total.
+//!
+//! **Candidates.** The read-out scores a window `lo..=hi` of candidates per
+//! pixel ([`readout::pick`]); the current read-out uses `0..=max_disp`
+//! (clipped to the image), so a coarse-to-fine search can narrow the window
+//! without touching the rest.
+
+pub mod filters;
+pub mod readout;
+pub mod table;
+
+use crate::disparity::DisparityCell;
+use crate::image::{ImageError, ImageView, ImageViewMut, Rgb8};
+use core::fmt;
+pub use filters::{Gabor, Z};
+pub use table::{DemLayout, DemTable, TableError};
+
+/// Largest number of carriers.
+pub const MAX_CARRIERS: usize = 6;
+/// Largest pooling radius.
+pub const MAX_POOL_RADIUS: u8 = 7;
+/// Largest number of pyramid levels.
+pub const MAX_LEVELS: usize = 4;
+/// Pixels per chunk of the energy stage (the energies of a chunk's pixels
+/// for every group are computed before their votes).
+pub const CHUNK: usize = 8;
+
+/// Every parameter of the model, with the reference's defaults
+/// (`protogist_host::reference::stereo::DemParams`; training parameters
+/// live only on the host).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DemParams {
+    /// Largest disparity searched, px; candidates are `0..=max_disp`.
+    /// Default 15 (160x120 frames).
+    pub max_disp: u8,
+    /// Carrier orientations, evenly spread around horizontal: 3 gives
+    /// −45°, 0°, 45°. Default 3; at most [`MAX_CARRIERS`].
+    pub carriers: u8,
+    /// Pyramid levels; level `l` has effective wavelength `λ·2^l`.
+    /// Default 2 (λ 4 and 8); 1..=4.
+    pub levels: u8,
+    /// Wavelength on every level, px. Default 4 (setup only).
+    pub wavelength: f32,
+    /// Envelope σ / λ (isotropic). Default 0.56, one octave (setup only).
+    pub sigma_per_wavelength: f32,
+    /// Kernel radius, taps `−r..=r`. Default 7; at most
+    /// [`filters::MAX_RADIUS`].
+    pub radius: u8,
+    /// Position-shift step in pixels of each level. Default 2 (λ/2).
+    pub shift_step: u8,
+    /// Score pooling box radius, px (0: none). Default 2 (5x5); at most
+    /// [`MAX_POOL_RADIUS`].
+    pub pool_radius: u8,
+    /// OFF below this mean cell energy (grey levels², per cell and pooled
+    /// pixel): no texture. Default 0.1.
+    pub min_energy: f32,
+    /// OFF when the best score beats the best score more than 1 px away by
+    /// less than this (normalised score units). Default 0.
+    pub min_margin: f32,
+    /// Left-right check: OFF when `|d_L(x) − d_R(x − d_L)|` exceeds this,
+    /// px; negative disables the check. Default 1.
+    pub lr_tolerance: f32,
+}
+
+impl DemParams {
+    /// The defaults, as a `const`.
+    pub const DEFAULT: Self = Self {
+        max_disp: 15,
+        carriers: 3,
+        levels: 2,
+        wavelength: 4.0,
+        sigma_per_wavelength: 0.56,
+        radius: 7,
+        shift_step: 2,
+        pool_radius: 2,
+        min_energy: 0.1,
+        min_margin: 0.0,
+        lr_tolerance: 1.0,
+    };
+
+    /// Smallest width and height the filters support: one kernel at the
+    /// coarsest level.
+    pub const fn min_size(&self) -> usize {
+        let l = if self.levels == 0 {
+            0
+        } else {
+            self.levels as usize - 1
+        };
+        (2 * self.radius as usize + 1) << l
+    }
+
+    /// The layout a decoder for these parameters has (λ and σ/λ quantised
+    /// as the table stores them). Setup only.
+    #[allow(
+        clippy::float_arithmetic,
+        clippy::cast_possible_truncation,
+        clippy::cast_sign_loss
+    )]
+    pub fn layout(&self) -> DemLayout {
+        let q = |v: f32, one: f32| libm::roundf(v * one).clamp(0.0, 65535.0) as u16;
+        DemLayout {
+            max_disp: self.max_disp,
+            levels: self.levels,
+            carriers: self.carriers,
+            shift_step: self.shift_step,
+            radius: self.radius,
+            wavelength_q8: q(self.wavelength, 256.0),
+            sigma_q12: q(self.sigma_per_wavelength, 4096.0),
+        }
+    }
+
+    /// Checks the parameters.
+    ///
+    /// # Errors
+    /// [`StereoError::BadParams`] naming the first bad one.
+    pub fn check(&self) -> Result<(), StereoError> {
+        let bad = |ok: bool, what| {
+            if ok {
+                Ok(())
+            } else {
+                Err(StereoError::BadParams(what))
+            }
+        };
+        bad(
+            (1..=MAX_CARRIERS).contains(&usize::from(self.carriers)),
+            "carriers must be 1..=6",
+        )?;
+        bad(
+            (1..=MAX_LEVELS).contains(&usize::from(self.levels)),
+            "levels must be 1..=4",
+        )?;
+        bad(
+            self.wavelength >= 2.0 && self.wavelength <= 64.0,
+            "wavelength must be 2..=64",
+        )?;
+        bad(
+            self.sigma_per_wavelength > 0.1 && self.sigma_per_wavelength < 4.0,
+            "sigma_per_wavelength must be in (0.1, 4)",
+        )?;
+        bad(
+            (1..=filters::MAX_RADIUS).contains(&usize::from(self.radius)),
+            "radius must be 1..=15",
+        )?;
+        bad(self.shift_step >= 1, "shift_step must be at least 1")?;
+        bad(
+            self.pool_radius <= MAX_POOL_RADIUS,
+            "pool_radius must be at most 7",
+        )?;
+        bad(
+            self.min_energy >= 0.0 && self.min_energy <= 1.0e6,
+            "min_energy must be in 0..=1e6",
+        )?;
+        bad(
+            self.min_margin >= 0.0 && self.min_margin <= 1.0e4,
+            "min_margin must be in 0..=1e4",
+        )?;
+        bad(
+            self.lr_tolerance <= 255.0 && !self.lr_tolerance.is_nan(),
+            "lr_tolerance must be at most 255",
+        )
+    }
+}
+
+impl Default for DemParams {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Why the stereo stage rejected its input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum StereoError {
+    /// Left and right differ in size.
+    SizeMismatch {
+        /// Left size.
+        left: (usize, usize),
+        /// Right size.
+        right: (usize, usize),
+    },
+    /// An image smaller than one filter at the coarsest level.
+    TooSmall {
+        /// The smallest width and height.
+        min: usize,
+        /// The image size.
+        got: (usize, usize),
+    },
+    /// `max_disp` not below the width.
+    MaxDispTooLarge {
+        /// The maximum disparity.
+        max_disp: u8,
+        /// The width.
+        width: usize,
+    },
+    /// The decoder table is corrupt.
+    Table(TableError),
+    /// The decoder table was trained for other parameters.
+    DecoderMismatch {
+        /// The table's layout.
+        got: DemLayout,
+        /// The parameters' layout.
+        expected: DemLayout,
+    },
+    /// A parameter out of range.
+    BadParams(&'static str),
+    /// A scratch buffer or the output is not of the working size.
+    Buffer {
+        /// Which buffer.
+        what: &'static str,
+        /// Elements needed.
+        needed: usize,
+        /// Elements given.
+        got: usize,
+    },
+    /// The output map cannot be viewed.
+    Image(ImageError),
+}
+
+impl fmt::Display for StereoError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::SizeMismatch { left, right } => write!(
+                f,
+                "left is {}x{} but right is {}x{}",
+                left.0, left.1, right.0, right.1
+            ),
+            Self::TooSmall { min, got } => write!(
+                f,
+                "{}x{} is smaller than the filter support ({min}x{min})",
+                got.0, got.1
+            ),
+            Self::MaxDispTooLarge { max_disp, width } => write!(
+                f,
+                "max disparity {max_disp} must be below the image width {width}"
+            ),
+            Self::Table(e) => write!(f, "{e}"),
+            Self::DecoderMismatch { got, expected } => write!(
+                f,
+                "the decoder was trained for other parameters ({got:?}, expected {expected:?})"
+            ),
+            Self::BadParams(what) => write!(f, "bad stereo parameters: {what}"),
+            Self::Buffer { what, needed, got } => {
+                write!(f, "stereo buffer {what} holds {got}, needs {needed}")
+            }
+            Self::Image(e) => write!(f, "stereo output: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for StereoError {}
+
+impl From<TableError> for StereoError {
+    fn from(e: TableError) -> Self {
+        Self::Table(e)
+    }
+}
+
+/// Rows of level-`level` responses the vertical pooling window of radius
+/// `pool` needs (bilinear upsampling reads one more row above level 0).
+pub const fn z_ring_rows(pool: usize, level: usize) -> usize {
+    if level == 0 {
+        2 * pool + 1
+    } else {
+        ((2 * pool) >> level) + 2
+    }
+}
+
+/// `u16` elements of grey scratch: the level-0 ring of `max(2r + 1, 5)` rows per
+/// eye and the planes of levels 1.. per eye.
+pub const fn grey_len(w: usize, h: usize, p: &DemParams) -> usize {
+    let mut n = readout::grey_ring_rows(p.radius as usize) * w;
+    let mut l = 1;
+    while l < p.levels as usize {
+        n += filters::level_size(w, l) * filters::level_size(h, l);
+        l += 1;
+    }
+    2 * n
+}
+
+/// Response ([`Z`]) elements: per eye, level and carrier, a ring of
+/// [`z_ring_rows`] rows.
+pub const fn z_len(w: usize, p: &DemParams) -> usize {
+    let mut n = 0;
+    let mut l = 0;
+    while l < p.levels as usize {
+        n += z_ring_rows(p.pool_radius as usize, l) * filters::level_size(w, l);
+        l += 1;
+    }
+    2 * p.carriers as usize * n
+}
+
+/// `[i32; 3]` elements of the y-pass row.
+pub const fn col_len(w: usize) -> usize {
+    w
+}
+
+/// `i32` elements of the energy chunk: `[A, X_r, X_i]` per group for
+/// [`CHUNK`] pixels.
+pub const fn energy_len(p: &DemParams) -> usize {
+    3 * CHUNK * layout_const(p).groups()
+}
+
+/// `i64` elements of the score rings: `max_disp + 2` per slot (scores and
+/// the total), for `2·pool + 1` left and `2·pool + max_shift + 1` right
+/// slots, plus one pooled slot.
+pub const fn score_len(p: &DemParams) -> usize {
+    let pr = p.pool_radius as usize;
+    let slots = (2 * pr + 1) + (2 * pr + layout_const(p).max_shift() + 1) + 1;
+    slots * (p.max_disp as usize + 2)
+}
+
+/// `i32` elements of the per-row picks (left and right).
+pub const fn pick_len(w: usize) -> usize {
+    2 * w
+}
+
+/// The integer part of the layout (for the `const fn` sizes).
+const fn layout_const(p: &DemParams) -> DemLayout {
+    DemLayout {
+        max_disp: p.max_disp,
+        levels: p.levels,
+        carriers: p.carriers,
+        shift_step: p.shift_step,
+        radius: p.radius,
+        wavelength_q8: 0,
+        sigma_q12: 0,
+    }
+}
+
+/// Scratch bytes of the stage for `params` at `w` x `h`, beyond the two
+/// input frames and the output map.
+pub const fn scratch_bytes_for(w: usize, h: usize, p: &DemParams) -> usize {
+    2 * grey_len(w, h, p)
+        + 4 * z_len(w, p)
+        + 12 * col_len(w)
+        + 4 * energy_len(p)
+        + 8 * score_len(p)
+        + 4 * pick_len(w)
+}
+
+/// Scratch bytes for the default parameters with `max_disp` (e.g. 31 for
+/// 32 disparities) at `w` x `h`.
+pub const fn scratch_bytes(w: usize, h: usize, max_disp: u8) -> usize {
+    let p = DemParams {
+        max_disp,
+        ..DemParams::DEFAULT
+    };
+    scratch_bytes_for(w, h, &p)
+}
+
+/// Caller-provided scratch, sized by [`grey_len`], [`z_len`], [`col_len`],
+/// [`energy_len`], [`score_len`] and [`pick_len`].
+pub struct StereoBuffers<'a> {
+    /// Grey rings and planes.
+    pub grey: &'a mut [u16],
+    /// Response rings.
+    pub z: &'a mut [Z],
+    /// y-pass row.
+    pub col: &'a mut [[i32; 3]],
+    /// Energy chunk.
+    pub energy: &'a mut [i32],
+    /// Score rings.
+    pub scores: &'a mut [i64],
+    /// Per-row picks.
+    pub picks: &'a mut [i32],
+}
+
+/// The set-up stage: checked parameters, kernels and integer thresholds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dem {
+    /// The parameters.
+    pub params: DemParams,
+    /// Their layout.
+    pub layout: DemLayout,
+    /// One kernel per carrier (the same on every level).
+    pub kernels: [Gabor; MAX_CARRIERS],
+    /// `min_energy` in `Q8` grey².
+    pub min_energy_q8: u64,
+    /// `min_margin` in `Q16`.
+    pub min_margin_q16: i64,
+    /// `lr_tolerance` in `U8F8` (`None`: no check).
+    pub lr_tolerance_q8: Option<i32>,
+}
+
+impl Dem {
+    /// Checks `params` and builds the kernels. One-time setup (floats, via
+    /// `libm`).
+    ///
+    /// # Errors
+    /// [`StereoError::BadParams`].
+    #[allow(
+        clippy::float_arithmetic,
+        clippy::cast_possible_truncation,
+        clippy::cast_sign_loss
+    )]
+    pub fn new(params: &DemParams) -> Result<Self, StereoError> {
+        params.check()?;
+        let n = usize::from(params.carriers);
+        let kernels = core::array::from_fn(|k| {
+            Gabor::new(
+                params.wavelength,
+                params.sigma_per_wavelength,
+                params.radius,
+                filters::carrier_deg(k.min(n - 1), n),
+            )
+        });
+        let lr = (params.lr_tolerance >= 0.0)
+            .then(|| libm::round(f64::from(params.lr_tolerance) * 256.0) as i32);
+        Ok(Self {
+            params: *params,
+            layout: params.layout(),
+            kernels,
+            min_energy_q8: libm::ceil(f64::from(params.min_energy) * 256.0) as u64,
+            min_margin_q16: libm::round(f64::from(params.min_margin) * 65536.0) as i64,
+            lr_tolerance_q8: lr,
+        })
+    }
+
+    /// The kernel of carrier `c`.
+    pub fn kernel(&self, c: usize) -> Option<&Gabor> {
+        self.kernels
+            .get(c)
+            .filter(|_| c < usize::from(self.params.carriers))
+    }
+
+    /// Checks the sizes of a run.
+    ///
+    /// # Errors
+    /// [`StereoError`] for mismatched or too small images, `max_disp` not
+    /// below the width, or a table of another layout.
+    pub fn check(
+        &self,
+        table: &DemTable<'_>,
+        left: (usize, usize),
+        right: (usize, usize),
+    ) -> Result<(), StereoError> {
+        if left != right {
+            return Err(StereoError::SizeMismatch { left, right });
+        }
+        if table.layout != self.layout {
+            return Err(StereoError::DecoderMismatch {
+                got: table.layout,
+                expected: self.layout,
+            });
+        }
+        let min = self.params.min_size();
+        if left.0 < min || left.1 < min {
+            return Err(StereoError::TooSmall { min, got: left });
+        }
+        if usize::from(self.params.max_disp) >= left.0 {
+            return Err(StereoError::MaxDispTooLarge {
+                max_disp: self.params.max_disp,
+                width: left.0,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// What a run found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StereoReport {
+    /// Pixels with a disparity.
+    pub on: usize,
+    /// Pixels OFF for lack of texture.
+    pub off_texture: usize,
+    /// Pixels OFF as ambiguous.
+    pub off_ambiguous: usize,
+    /// Pixels OFF by the left-right check.
+    pub off_inconsistent: usize,
+}
+
+/// The steps a [`Probe`] is told about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// Grey rows and pyramid planes.
+    Pyramid,
+    /// Gabor responses.
+    Filters,
+    /// Binocular energies (vertically pooled).
+    Energies,
+    /// Votes, pooling, argmax, OFF tests.
+    Readout,
+}
+
+/// Told when the stage enters a step (for per-step timing); `()` ignores it.
+pub trait Probe {
+    /// The stage enters `step`.
+    fn enter(&mut self, step: Step);
+}
+
+impl Probe for () {
+    fn enter(&mut self, _: Step) {}
+}
+
+/// Runs the stage on an RGB pair into `out` (left-referenced, `U8F8` px or
+/// OFF).
+///
+/// # Errors
+/// [`StereoError`] for mismatched or too small images, `max_disp` not
+/// below the width, a table of another layout, or short buffers. Nothing
+/// is written to `out` on error.
+pub fn stereo(
+    dem: &Dem,
+    table: &DemTable<'_>,
+    left: &ImageView<'_, Rgb8>,
+    right: &ImageView<'_, Rgb8>,
+    bufs: &mut StereoBuffers<'_>,
+    out: &mut ImageViewMut<'_, DisparityCell>,
+) -> Result<StereoReport, StereoError> {
+    stereo_probed(dem, table, left, right, bufs, out, &mut ())
+}
+
+/// [`stereo`], telling `probe` when each step starts.
+///
+/// # Errors
+/// As [`stereo`].
+pub fn stereo_probed(
+    dem: &Dem,
+    table: &DemTable<'_>,
+    left: &ImageView<'_, Rgb8>,
+    right: &ImageView<'_, Rgb8>,
+    bufs: &mut StereoBuffers<'_>,
+    out: &mut ImageViewMut<'_, DisparityCell>,
+    probe: &mut impl Probe,
+) -> Result<StereoReport, StereoError> {
+    dem.check(table, left.size(), right.size())?;
+    if out.size() != left.size() {
+        return Err(StereoError::Image(ImageError::SizeMismatch {
+            expected: left.size(),
+            got: out.size(),
+        }));
+    }
+    let mut sink = |x: usize, y: usize, c: DisparityCell| {
+        out.set(x, y, c);
+    };
+    readout::run(dem, table, [left, right], bufs, &mut sink, probe)
+}
+
+/// Grey rows of an input frame, on demand: a whole frame in memory, or a
+/// camera (or renderer) that produces rows as the stage asks for them.
+pub trait GreyRows {
+    /// `(width, height)`.
+    fn size(&self) -> (usize, usize);
+    /// Row `y` (`y < height`) as [`filters::grey`] (`U8F8`) into `out`
+    /// (`width` long).
+    fn grey_row(&self, y: usize, out: &mut [u16]);
+}
+
+impl GreyRows for ImageView<'_, Rgb8> {
+    fn size(&self) -> (usize, usize) {
+        ImageView::size(self)
+    }
+
+    fn grey_row(&self, y: usize, out: &mut [u16]) {
+        if let Some(row) = self.row(y) {
+            filters::grey_row(row, out);
+        }
+    }
+}
+
+/// The streaming form of [`stereo`]: rows come from `left` and `right` as
+/// needed and every output cell goes to `sink(x, y, cell)`, row by row, so
+/// neither the frames nor the map need to be in memory.
+///
+/// # Errors
+/// As [`stereo`] (before any cell is produced).
+pub fn stereo_streamed<S: GreyRows>(
+    dem: &Dem,
+    table: &DemTable<'_>,
+    left: &S,
+    right: &S,
+    bufs: &mut StereoBuffers<'_>,
+    sink: &mut impl FnMut(usize, usize, DisparityCell),
+    probe: &mut impl Probe,
+) -> Result<StereoReport, StereoError> {
+    dem.check(table, left.size(), right.size())?;
+    readout::run(dem, table, [left, right], bufs, sink, probe)
+}
