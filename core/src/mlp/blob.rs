@@ -76,6 +76,36 @@ pub enum ModelError {
     BadMeta,
 }
 
+impl core::error::Error for ModelError {}
+
+impl core::fmt::Display for ModelError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::Truncated { needed, got } => {
+                write!(f, "truncated: {got} bytes, the header needs {needed}")
+            }
+            Self::TrailingBytes { expected, got } => {
+                write!(f, "{got} bytes, the header describes {expected}")
+            }
+            Self::BadMagic => write!(f, "not a protogist model (magic is not PGML)"),
+            Self::UnsupportedVersion(v) => {
+                write!(f, "model version {v}, this build reads version {VERSION}")
+            }
+            Self::UnsupportedFormat { field, code } => {
+                write!(f, "unsupported {field} format code {code}")
+            }
+            Self::BadDims => write!(f, "zero or too large dimensions"),
+            Self::BadCrc { stored, computed } => write!(
+                f,
+                "corrupt: CRC-32 {computed:#010x}, the model stores {stored:#010x}"
+            ),
+            Self::BadRequant => write!(f, "a requantisation multiplier or shift is out of range"),
+            Self::BadClassName { index } => write!(f, "class name {index} is bad"),
+            Self::BadMeta => write!(f, "metadata is not UTF-8"),
+        }
+    }
+}
+
 /// CRC-32 (IEEE 802.3, reflected, polynomial `0xEDB88320`, initial and final
 /// XOR `0xFFFFFFFF`), the checksum of zip and PNG. `crc32(b"123456789")` is
 /// `0xCBF43926`.

@@ -38,7 +38,7 @@
 //! the model is borrowed from wherever its bytes are (flash).
 
 pub mod blob;
-mod logsig_table;
+pub mod logsig_table;
 pub mod requant;
 
 pub use blob::{crc32, Model, ModelError};
@@ -78,6 +78,26 @@ pub enum MlpError {
         /// Classes of the model.
         classes: usize,
     },
+}
+
+impl core::error::Error for MlpError {}
+
+impl core::fmt::Display for MlpError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::FeatureSize { expected, got } => {
+                write!(f, "feature vector has {got} elements, the model takes {expected}")
+            }
+            Self::ScratchTooSmall {
+                buffer,
+                needed,
+                got,
+            } => write!(f, "{buffer} scratch has {got} elements, needs {needed}"),
+            Self::ClassOutOfRange { class, classes } => {
+                write!(f, "class {class} out of range for {classes} classes")
+            }
+        }
+    }
 }
 
 /// Elements of [`Scratch::input`] for `inputs` inputs.

@@ -34,6 +34,7 @@ pub mod model;
 pub mod model_cmd;
 pub mod plots;
 pub mod probit;
+pub mod quant;
 pub mod rules;
 pub mod shapes;
 pub mod train;
@@ -92,6 +93,9 @@ pub enum ClassifyError {
     /// A vector whose elements are all equal cannot be z-normalised.
     #[error("the vector has zero variance and cannot be normalised")]
     ZeroVariance,
+    /// The integer network rejected its input.
+    #[error("integer network: {0}")]
+    Mlp(#[from] protogist::mlp::MlpError),
     /// A rate (FAR target, ...) outside `[0, 1]`.
     #[error("rate {0} is outside [0, 1]")]
     BadRate(f64),
