@@ -35,6 +35,7 @@ pub mod model_cmd;
 pub mod plots;
 pub mod probit;
 pub mod quant;
+pub mod quant_cmd;
 pub mod rules;
 pub mod shapes;
 pub mod train;
