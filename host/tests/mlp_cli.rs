@@ -111,13 +111,22 @@ fn train_and_eval_run_and_reject_bad_input() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert_eq!(fs::read(&q).unwrap(), fs::read(&model).unwrap());
     let out = protogist(
-        &["quantize", "--model", m, "--emit-rust", rs.to_str().unwrap()],
+        &[
+            "quantize",
+            "--model",
+            m,
+            "--emit-rust",
+            rs.to_str().unwrap(),
+        ],
         cwd,
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
     let src = fs::read_to_string(&rs).unwrap();
     let n = fs::read(&model).unwrap().len();
-    assert!(src.contains(&format!("pub static MODEL: [u8; {n}]")), "{src}");
+    assert!(
+        src.contains(&format!("pub static MODEL: [u8; {n}]")),
+        "{src}"
+    );
     assert_eq!(src.matches("0x").count(), n);
     assert_one_line_error(
         &protogist(&["quantize", "--model", m], cwd),
@@ -125,7 +134,13 @@ fn train_and_eval_run_and_reject_bad_input() {
     );
     assert_one_line_error(
         &protogist(
-            &["quantize", "--model", sidecar.to_str().unwrap(), "--out", "z.bin"],
+            &[
+                "quantize",
+                "--model",
+                sidecar.to_str().unwrap(),
+                "--out",
+                "z.bin",
+            ],
             cwd,
         ),
         "a float model needs its training dataset",
@@ -157,8 +172,14 @@ fn train_and_eval_run_and_reject_bad_input() {
     assert_one_line_error(&eval_blob(&blob[..blob.len() - 9]), "truncated");
     let mut v2 = blob.clone();
     v2[4] = 2;
-    assert_one_line_error(&eval_blob(&v2), "model version 2, this build reads version 1");
-    assert_one_line_error(&eval_blob(b"{\"not\": \"a model\"}"), "not a protogist model");
+    assert_one_line_error(
+        &eval_blob(&v2),
+        "model version 2, this build reads version 1",
+    );
+    assert_one_line_error(
+        &eval_blob(b"{\"not\": \"a model\"}"),
+        "not a protogist model",
+    );
     assert!(!cwd.join("ev2").exists());
 
     // A float sidecar of the wrong shape, and one that is not JSON.

@@ -266,8 +266,7 @@ impl<'a> Model<'a> {
         }
         let names_len = le_u32(blob, 32) as usize;
         let meta_len = le_u32(blob, 36) as usize;
-        let lens =
-            section_lengths(d, h, k, names_len, meta_len).ok_or(ModelError::BadDims)?;
+        let lens = section_lengths(d, h, k, names_len, meta_len).ok_or(ModelError::BadDims)?;
         let needed = blob_len(d, h, k, names_len, meta_len).ok_or(ModelError::BadDims)?;
         if got < needed {
             return Err(ModelError::Truncated { needed, got });
@@ -422,7 +421,10 @@ mod tests {
         b[4] = 1;
         assert!(matches!(
             Model::parse(&b),
-            Err(ModelError::UnsupportedFormat { field: "input", code: 0 })
+            Err(ModelError::UnsupportedFormat {
+                field: "input",
+                code: 0
+            })
         ));
     }
 }

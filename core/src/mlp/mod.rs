@@ -86,7 +86,10 @@ impl core::fmt::Display for MlpError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
             Self::FeatureSize { expected, got } => {
-                write!(f, "feature vector has {got} elements, the model takes {expected}")
+                write!(
+                    f,
+                    "feature vector has {got} elements, the model takes {expected}"
+                )
             }
             Self::ScratchTooSmall {
                 buffer,
@@ -211,14 +214,7 @@ fn dot4(w: &[u8], n: usize, x: &[i16]) -> [i32; 4] {
 }
 
 /// One fully connected layer: `out[c] = act(requantize(W[c]·x + b[c]))`.
-fn layer<T>(
-    w: &[u8],
-    b: &[u8],
-    rq: &[u8],
-    x: &[i16],
-    out: &mut [T],
-    act: impl Fn(i32) -> T,
-) {
+fn layer<T>(w: &[u8], b: &[u8], rq: &[u8], x: &[i16], out: &mut [T], act: impl Fn(i32) -> T) {
     let n = x.len();
     if n == 0 {
         return;

@@ -37,7 +37,11 @@ pub const fn doubling_high_mul(a: i32, b: i32) -> i32 {
         return i32::MAX;
     }
     let ab = a as i64 * b as i64;
-    let nudge = if ab >= 0 { 1i64 << 30 } else { 1 - (1i64 << 30) };
+    let nudge = if ab >= 0 {
+        1i64 << 30
+    } else {
+        1 - (1i64 << 30)
+    };
     // |ab| <= 2^62 - 2^31 + ..., so the sum does not overflow, and the
     // quotient fits i32 except for the case handled above.
     ((ab + nudge) / (1i64 << 31)) as i32

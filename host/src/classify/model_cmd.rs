@@ -184,7 +184,13 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
         .filter(|(_, &t)| !t)
         .map(|(s, _)| s.shape.clone())
         .collect();
-    let blob = quantize(&net, &calib, &y, &ds.classes, &train_meta(&model, &opts.dataset))?;
+    let blob = quantize(
+        &net,
+        &calib,
+        &y,
+        &ds.classes,
+        &train_meta(&model, &opts.dataset),
+    )?;
     let json = serde_json::to_vec(&model).map_err(|e| bad_model(&opts.out, e.to_string()))?;
     write_atomic(&sidecar_path(&opts.out), &json)?;
     write_atomic(&opts.out, &blob)?;
@@ -331,15 +337,29 @@ pub fn load_models(path: &std::path::Path) -> Result<(Vec<u8>, ModelFile)> {
 /// # Errors
 /// A missing or malformed model, a dataset that does not match it, I/O.
 pub fn run_eval(opts: &EvalOptions) -> Result<Summary> {
+    let (report, json) = evaluate_model(opts)?;
+    Ok(eval_summary(opts, &report, json))
+}
+
+/// The work of `protogist eval`: the report (also written, with the plots,
+/// to `--out`) and its JSON.
+///
+/// # Errors
+/// As [`run_eval`].
+pub fn evaluate_model(opts: &EvalOptions) -> Result<(EvalReport, String)> {
     let (blob, model) = load_models(&opts.model)?;
     let side = sidecar_path(&opts.model);
     let net = model.network(&side)?;
-    let qm = protogist::mlp::Model::parse(&blob).map_err(|e| bad_model(&opts.model, model_error(e)))?;
+    let qm =
+        protogist::mlp::Model::parse(&blob).map_err(|e| bad_model(&opts.model, model_error(e)))?;
     let names: Vec<&str> = (0..qm.classes()).filter_map(|c| qm.class_name(c)).collect();
     if names != model.classes || qm.hidden() != model.hidden {
         return Err(bad_model(
             &opts.model,
-            format!("the blob does not match its float sidecar {}", side.display()),
+            format!(
+                "the blob does not match its float sidecar {}",
+                side.display()
+            ),
         ));
     }
     let ds = load_dataset(&opts.dataset)?;
@@ -424,15 +444,19 @@ pub fn run_eval(opts: &EvalOptions) -> Result<Summary> {
             PlotKind::Cmc { classes: n },
             curves(cmc_points(&f_rates), cmc_points(&i_rates)),
         ),
-        ("det", PlotKind::Det, curves(det_pts(&f_det), det_pts(&i_det))),
+        (
+            "det",
+            PlotKind::Det,
+            curves(det_pts(&f_det), det_pts(&i_det)),
+        ),
         ("roc", PlotKind::Roc, curves(f_det.roc(), i_det.roc())),
     ] {
         write_plot(&opts.out, name, kind, &c, (480, 360))?;
     }
-    let json = serde_json::to_string_pretty(&report)
-        .map_err(|e| bad_model(&opts.model, e.to_string()))?;
+    let json =
+        serde_json::to_string_pretty(&report).map_err(|e| bad_model(&opts.model, e.to_string()))?;
     write_atomic(&opts.out.join("metrics.json"), json.as_bytes())?;
-    Ok(eval_summary(opts, &report, json))
+    Ok((report, json))
 }
 
 fn eval_summary(opts: &EvalOptions, r: &EvalReport, json: String) -> Summary {

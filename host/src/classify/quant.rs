@@ -104,9 +104,10 @@ fn quantize_layer(w: &ndarray::Array2<f64>, b: &ndarray::Array1<f64>, s_in: f64)
     for (row, &bias) in w.rows().into_iter().zip(b) {
         let max = row.fold(0f64, |a, &v| a.max(v.abs()));
         let s = if max > 0.0 { max / 127.0 } else { 1.0 };
-        layer
-            .w
-            .extend(row.iter().map(|&v| (v / s).round().clamp(-127.0, 127.0) as i8));
+        layer.w.extend(
+            row.iter()
+                .map(|&v| (v / s).round().clamp(-127.0, 127.0) as i8),
+        );
         layer.b.push(
             (bias / (s_in * s))
                 .round()
@@ -138,7 +139,11 @@ pub fn quantize_net(net: &Mlp, calib: &[Vec<i16>]) -> Result<QuantNet, ClassifyE
             got: calib[index].len(),
         });
     }
-    if [d, h, k].iter().any(|&n| n == 0 || n > usize::from(u16::MAX)) || k > MAX_CLASSES {
+    if [d, h, k]
+        .iter()
+        .any(|&n| n == 0 || n > usize::from(u16::MAX))
+        || k > MAX_CLASSES
+    {
         return Err(ClassifyError::Empty {
             what: "network dimensions within the model format's limits",
         });
@@ -458,6 +463,54 @@ pub fn logsig_table() -> Vec<u32> {
         .collect()
 }
 
+/// `ρ = ½ + ½·2^−right` of a requantisation pair (docs/ERROR_BOUNDS.md §7).
+fn rho((_, shift): (i32, i32)) -> f64 {
+    0.5 + 0.5 * 2f64.powi(-(-shift).max(0))
+}
+
+/// The derived bound `B_k` (docs/ERROR_BOUNDS.md §7) on
+/// `|ŷ_k − y_k|` (in units of σ, 1 = 65535 LSB) for the raw input `raw`,
+/// with the float network `net` and its quantisation `q`; also returns the
+/// float outputs `y`.
+pub fn output_error_bound(net: &Mlp, q: &QuantNet, raw: &[i16]) -> (Vec<f64>, Vec<f64>) {
+    use super::mlp::logsig;
+    let x: Vec<f64> = raw.iter().map(|&r| f64::from(r) / Z_SCALE).collect();
+    let rq_mul = 4096.0 * 2f64.powi(-31);
+    let eps_x = q.x_scale * (rho(q.input_rq) + 127.0 * 2f64.powi(-31));
+    let sum_abs_x: f64 = x.iter().map(|v| v.abs()).sum();
+    let (d, h_n, _) = q.dims;
+    let mut h = vec![0f64; h_n];
+    let mut eps_h = vec![0f64; h_n];
+    for (i, (hv, eh)) in h.iter_mut().zip(&mut eps_h).enumerate() {
+        let s = q.l1.w_scale[i];
+        let row = &q.l1.w[i * d..(i + 1) * d];
+        let sum_w: f64 = row.iter().map(|&w| s * f64::from(w).abs()).sum();
+        let z = net.w1.row(i).dot(&ndarray::ArrayView1::from(&x)) + net.b1[i];
+        let e_a = eps_x * sum_w + s / 2.0 * sum_abs_x + q.x_scale * s / 2.0;
+        let e_z = e_a + (rho(q.l1.rq[i]) + (z.abs() + e_a) * rq_mul) / Z_SCALE;
+        *hv = logsig(z);
+        *eh = e_z / 4.0 + 0.504 / 255.0;
+    }
+    let mut y = vec![];
+    let mut bound = vec![];
+    for k in 0..q.dims.2 {
+        let s = q.l2.w_scale[k];
+        let row = &q.l2.w[k * h_n..(k + 1) * h_n];
+        let z = net.w2.row(k).dot(&ndarray::ArrayView1::from(&h)) + net.b2[k];
+        let e_a: f64 = row
+            .iter()
+            .zip(&eps_h)
+            .map(|(&w, &e)| s * f64::from(w).abs() * e)
+            .sum::<f64>()
+            + s / 2.0 * h.iter().sum::<f64>()
+            + s / (2.0 * 255.0);
+        let e_z = e_a + (rho(q.l2.rq[k]) + (z.abs() + e_a) * rq_mul) / Z_SCALE;
+        y.push(logsig(z));
+        bound.push(e_z / 4.0 + 1.0 / 65535.0);
+    }
+    (y, bound)
+}
+
 /// A core model error as text.
 pub fn model_error(e: ModelError) -> String {
     e.to_string()
@@ -470,7 +523,10 @@ mod tests {
 
     #[test]
     fn logsig_table_matches_its_definition() {
-        assert_eq!(logsig_table(), protogist::mlp::logsig_table::LOGSIG_Q8.to_vec());
+        assert_eq!(
+            logsig_table(),
+            protogist::mlp::logsig_table::LOGSIG_Q8.to_vec()
+        );
     }
 
     /// Every Q12 input in [−2^16, 2^16] (|z| <= 16; beyond, σ is monotone
