@@ -3,7 +3,7 @@
 
 use proptest::prelude::*;
 use protogist::mlp::blob::{crc32, CRC_LEN};
-use protogist::mlp::{forward, top_k, Model, ModelError, MlpError, Ranked, Scratch, TOP_K};
+use protogist::mlp::{forward, top_k, MlpError, Model, ModelError, Ranked, Scratch, TOP_K};
 use protogist::shape::ShapeElem;
 use protogist_host::classify::mlp::Mlp;
 use protogist_host::classify::quant::{quantize_net, write_blob, BlobExtras};
@@ -93,7 +93,10 @@ fn valid_blob_parses_and_runs() {
     };
     assert!(matches!(
         forward(&m, &[ShapeElem::ZERO; 9], &mut s),
-        Err(MlpError::ScratchTooSmall { buffer: "hidden", .. })
+        Err(MlpError::ScratchTooSmall {
+            buffer: "hidden",
+            ..
+        })
     ));
 }
 
@@ -124,7 +127,10 @@ fn each_defect_has_its_error() {
     f[9] = 7;
     assert!(matches!(
         Model::parse(&f),
-        Err(ModelError::UnsupportedFormat { field: "output", code: 7 })
+        Err(ModelError::UnsupportedFormat {
+            field: "output",
+            code: 7
+        })
     ));
     // Zero classes; more hidden units than the bytes hold.
     let mut z = b.clone();

@@ -38,6 +38,7 @@ pub mod quant;
 pub mod quant_cmd;
 pub mod rules;
 pub mod shapes;
+pub mod shipped;
 pub mod train;
 
 /// Why a classification rule or a metric rejected its input.
