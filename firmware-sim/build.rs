@@ -38,7 +38,8 @@ fn bench_blob(hidden: u16) -> Vec<u8> {
         b.extend_from_slice(&rng.range(-4096, 4096).to_le_bytes());
     }
     for _ in 0..(usize::from(h) * usize::from(d) + usize::from(k) * usize::from(h)) {
-        b.push(rng.range(-127, 127) as i8 as u8);
+        // Excess-128 bytes of weights in -127..=127.
+        b.push((rng.range(-127, 127) + 128) as u8);
     }
     b.resize(b.len() + 2 * usize::from(k) * usize::from(k), 0);
     for n in &names {

@@ -150,7 +150,7 @@ fn run_objects(edges: &[EdgeCell]) -> Result<String, objects::ObjectError> {
 /// The classifier's checksum lines and host nanoseconds per inference.
 fn run_mlp() -> Result<String, firmware_sim::mlp_run::MlpRunError> {
     use firmware_sim::mlp_run::{self, len, MlpBuffers};
-    let (mut mask, mut input) = (vec![0u8; len::MASK], vec![0i16; len::INPUT]);
+    let (mut mask, mut input) = (vec![0u8; len::MASK], vec![0u32; len::INPUT]);
     let (mut hidden, mut output) = (vec![0u8; len::HIDDEN], vec![0u16; len::OUTPUT]);
     let mut bufs = MlpBuffers {
         mask: &mut mask,

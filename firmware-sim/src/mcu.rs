@@ -231,7 +231,7 @@ fn run_mlp(
     use firmware_sim::mlp_run::{self, len, macs, MlpBuffers};
     let mut bufs = MlpBuffers {
         mask: singleton!(: [u8; len::MASK] = [0; len::MASK]).ok_or("mlp mask taken")?,
-        input: singleton!(: [i16; len::INPUT] = [0; len::INPUT]).ok_or("mlp input taken")?,
+        input: singleton!(: [u32; len::INPUT] = [0; len::INPUT]).ok_or("mlp input taken")?,
         hidden: singleton!(: [u8; len::HIDDEN] = [0; len::HIDDEN]).ok_or("mlp hidden taken")?,
         output: singleton!(: [u16; len::OUTPUT] = [0; len::OUTPUT]).ok_or("mlp output taken")?,
     };

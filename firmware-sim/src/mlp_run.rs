@@ -16,7 +16,7 @@ use crate::pg::checksum::Fnv1a;
 use crate::pg::image::ImageView;
 use crate::pg::image::Rgb8;
 use crate::pg::mlp::{
-    forward, hidden_len, input_len, output_len, top_k, MlpError, Model, ModelError, Ranked,
+    forward, hidden_len, output_len, packed_len, top_k, MlpError, Model, ModelError, Ranked,
     Scratch, TOP_K,
 };
 use crate::pg::rng::SplitMix64;
@@ -45,12 +45,8 @@ pub mod len {
     use super::*;
     /// Mask bytes.
     pub const MASK: usize = MASK_W * MASK_H;
-    /// Quantised input (also holds the hidden layer as `i16` when it fits).
-    pub const INPUT: usize = if input_len(SHAPE_LEN) > MAX_HIDDEN {
-        input_len(SHAPE_LEN)
-    } else {
-        MAX_HIDDEN
-    };
+    /// Packed layer input (`u32` words).
+    pub const INPUT: usize = packed_len(SHAPE_LEN, MAX_HIDDEN);
     /// Hidden activations.
     pub const HIDDEN: usize = hidden_len(MAX_HIDDEN);
     /// Outputs.
@@ -62,7 +58,7 @@ pub struct MlpBuffers<'a> {
     /// A 64x48 mask.
     pub mask: &'a mut [u8],
     /// Quantised input ([`len::INPUT`]).
-    pub input: &'a mut [i16],
+    pub input: &'a mut [u32],
     /// Hidden activations ([`len::HIDDEN`]).
     pub hidden: &'a mut [u8],
     /// Outputs ([`len::OUTPUT`]).

@@ -44,7 +44,11 @@ fn exercise(blob: &[u8]) {
         if d * h > 1 << 20 {
             return;
         }
-        let (mut xi, mut hi, mut yo) = (vec![0i16; d.max(h)], vec![0u8; h], vec![0u16; k]);
+        let (mut xi, mut hi, mut yo) = (
+            vec![0u32; protogist::mlp::packed_len(d, h)],
+            vec![0u8; h],
+            vec![0u16; k],
+        );
         let input = vec![ShapeElem::from_bits(1234); d];
         let mut s = Scratch {
             input: &mut xi,
@@ -72,7 +76,7 @@ fn valid_blob_parses_and_runs() {
     assert_eq!((m.delta_q16(), m.meta()), (40_000, "test"));
     exercise(&b);
     // Feature size and scratch mismatches are typed errors.
-    let (mut xi, mut hi, mut yo) = (vec![0i16; 9], vec![0u8; 5], vec![0u16; 3]);
+    let (mut xi, mut hi, mut yo) = (vec![0u32; 5], vec![0u8; 5], vec![0u16; 3]);
     let mut s = Scratch {
         input: &mut xi,
         hidden: &mut hi,

@@ -76,7 +76,7 @@ proptest! {
             meta: "",
         }).unwrap();
         let model = Model::parse(&blob).unwrap();
-        let (mut xi, mut hi, mut yo) = (vec![0i16; d.max(h)], vec![0u8; h], vec![0u16; k]);
+        let (mut xi, mut hi, mut yo) = (vec![0u32; protogist::mlp::packed_len(d, h)], vec![0u8; h], vec![0u16; k]);
         for raw in &inputs {
             let mut s = Scratch { input: &mut xi, hidden: &mut hi, output: &mut yo };
             let out = forward(&model, &shape_elems(raw), &mut s).unwrap().to_vec();

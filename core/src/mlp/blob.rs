@@ -15,7 +15,8 @@ pub const HEADER_LEN: usize = 40;
 pub const CRC_LEN: usize = 4;
 /// Input format 1: shape elements (`I4F12`, the core `shape` stage).
 pub const INPUT_I4F12: u8 = 1;
-/// Weight format 1: int8, symmetric, one scale per output channel.
+/// Weight format 1: int8, symmetric, one scale per output channel, each
+/// stored excess-128 (byte `w + 128`, so `w = −127..=127` is `1..=255`).
 pub const WEIGHTS_I8_PER_CHANNEL: u8 = 1;
 /// Hidden activation format 1: u8, scale 1/255 (log-sigmoid).
 pub const HIDDEN_U8: u8 = 1;
@@ -155,9 +156,9 @@ pub struct Model<'a> {
     pub(crate) b1: &'a [u8],
     /// `i32` biases of the output layer.
     pub(crate) b2: &'a [u8],
-    /// `hidden × inputs` int8 weights, row-major.
+    /// `hidden × inputs` int8 weights (excess-128 bytes), row-major.
     pub(crate) w1: &'a [u8],
-    /// `classes × hidden` int8 weights, row-major.
+    /// `classes × hidden` int8 weights (excess-128 bytes), row-major.
     pub(crate) w2: &'a [u8],
     /// `classes × classes` u16 templates.
     pub(crate) templates: &'a [u8],

@@ -34,8 +34,16 @@
 //! verification accepts a claim when its score reaches `Δ`.
 //!
 //! **Memory.** Activations need [`scratch_bytes`] bytes in a caller-owned
-//! [`Scratch`] (sizes from [`input_len`], [`hidden_len`], [`output_len`]);
+//! [`Scratch`] (sizes from [`packed_len`], [`hidden_len`], [`output_len`]);
 //! the model is borrowed from wherever its bytes are (flash).
+//!
+//! **Kernel.** Each layer runs four output rows at a time; per four inputs
+//! and row it loads one weight word, splits it into even and odd bytes
+//! with two masks, and does four 16x16 multiply-accumulates that read
+//! their operands' register halves (inputs are kept packed in pairs), so
+//! the Cortex-M4 build uses `SMLABB`/`SMLABT`/`SMLATB`/`SMLATT`. Safe Rust
+//! has no `SMLAD` (two MACs per instruction): LLVM only forms it from two
+//! pairs of adjacent `i16` loads, and the weights are bytes.
 
 pub mod blob;
 pub mod logsig_table;
@@ -103,9 +111,21 @@ impl core::fmt::Display for MlpError {
     }
 }
 
-/// Elements of [`Scratch::input`] for `inputs` inputs.
-pub const fn input_len(inputs: usize) -> usize {
-    inputs
+/// Words of [`Scratch::input`] for a layer input of `n` values: the
+/// values are packed in pairs, `x[2i]` in the low and `x[2i + 1]` in the
+/// high half of word `i`.
+pub const fn input_len(n: usize) -> usize {
+    n.div_ceil(2)
+}
+
+/// Words of [`Scratch::input`] for a network: the quantised input, then the
+/// hidden activations reuse the same words.
+pub const fn packed_len(inputs: usize, hidden: usize) -> usize {
+    if input_len(inputs) > input_len(hidden) {
+        input_len(inputs)
+    } else {
+        input_len(hidden)
+    }
 }
 
 /// Elements of [`Scratch::hidden`] for `hidden` units.
@@ -118,17 +138,18 @@ pub const fn output_len(classes: usize) -> usize {
     classes
 }
 
-/// Activation RAM in bytes: the quantised input (`i16`), the hidden (`u8`)
-/// and the output (`u16`) activations.
+/// Activation RAM in bytes: the packed layer input (`u32` words), the
+/// hidden (`u8`) and the output (`u16`) activations.
 pub const fn scratch_bytes(inputs: usize, hidden: usize, classes: usize) -> usize {
-    2 * input_len(inputs) + hidden_len(hidden) + 2 * output_len(classes)
+    4 * packed_len(inputs, hidden) + hidden_len(hidden) + 2 * output_len(classes)
 }
 
 /// Caller-owned activation memory.
 #[derive(Debug)]
 pub struct Scratch<'a> {
-    /// Quantised input, int8 values widened to `i16`.
-    pub input: &'a mut [i16],
+    /// The current layer's input, `i16` values packed in pairs
+    /// ([`packed_len`] words).
+    pub input: &'a mut [u32],
     /// Hidden activations (`255 · σ`).
     pub hidden: &'a mut [u8],
     /// Outputs (`65535 · σ`).
@@ -153,25 +174,40 @@ pub enum Identity {
     Unknown,
 }
 
-/// `clamp(requantize(raw), −127, 127)` of every element into `out`.
+/// Packs `values` in pairs into `out` (a missing last high half is 0).
+fn pack(values: impl Iterator<Item = i16>, out: &mut [u32]) {
+    let mut values = values;
+    for w in out.iter_mut() {
+        let lo = values.next().unwrap_or(0);
+        let hi = values.next().unwrap_or(0);
+        *w = u32::from(lo as u16) | (u32::from(hi as u16) << 16);
+    }
+}
+
+/// `clamp(requantize(raw), −127, 127)` of every element, packed in pairs
+/// into `out` ([`input_len`] words).
 ///
 /// # Errors
-/// [`MlpError::FeatureSize`] when the lengths differ.
+/// [`MlpError::FeatureSize`] when `input` is not the model's length,
+/// [`MlpError::ScratchTooSmall`] when `out` is short.
 pub fn quantize_input(
     model: &Model<'_>,
     input: &[ShapeElem],
-    out: &mut [i16],
+    out: &mut [u32],
 ) -> Result<(), MlpError> {
-    if input.len() != model.inputs() || out.len() != input.len() {
+    if input.len() != model.inputs() {
         return Err(MlpError::FeatureSize {
             expected: model.inputs(),
             got: input.len(),
         });
     }
+    let words = input_len(input.len());
+    check_scratch("input", words, out.len())?;
     let (m, s) = model.input_requant();
-    for (q, x) in out.iter_mut().zip(input) {
-        *q = requantize(i32::from(x.to_bits()), m, s).clamp(-127, 127) as i16;
-    }
+    let q = input
+        .iter()
+        .map(|x| requantize(i32::from(x.to_bits()), m, s).clamp(-127, 127) as i16);
+    pack(q, out.get_mut(..words).unwrap_or(&mut []));
     Ok(())
 }
 
@@ -186,41 +222,153 @@ fn check_scratch(buffer: &'static str, needed: usize, got: usize) -> Result<(), 
     Ok(())
 }
 
-/// `Σ w[j] · x[j]` for int8 weight bytes and `i16` activations. With the
-/// model's limits (`|w|, |x| <= 127` or `x <= 255`, at most 65535 terms)
-/// the sum stays below `2^31`; it wraps rather than panics otherwise.
-#[inline]
-fn dot(w: &[u8], x: &[i16]) -> i32 {
-    w.iter().zip(x).fold(0i32, |a, (&w, &x)| {
-        a.wrapping_add(i32::from(w as i8) * i32::from(x))
-    })
+/// The low half of a word, sign-extended.
+#[inline(always)]
+fn lo16(v: i32) -> i32 {
+    i32::from(v as i16)
 }
 
-/// Four rows at once, sharing each input load.
+/// The high half of a word, sign-extended.
+#[inline(always)]
+fn hi16(v: i32) -> i32 {
+    v >> 16
+}
+
+/// Four multiply-accumulates: weight bytes `w` (excess-128, byte `i` for
+/// input `i`) against inputs `x0 | x1 << 16` and `x2 | x3 << 16`. `mask`
+/// is `0x00FF_00FF`: it puts bytes 0 and 2 (and 1 and 3) in the two 16-bit
+/// halves of a register, so each product reads its operands' halves
+/// directly (the Cortex-M4 `SMLAxy` forms). The caller passes the mask
+/// through `black_box` so that LLVM keeps the two-lane registers instead of
+/// extracting every byte on its own.
+#[inline(always)]
+fn mac4(acc: i32, w: u32, x01: i32, x23: i32, mask: u32) -> i32 {
+    let even = (w & mask) as i32;
+    // An arithmetic shift, so that LLVM cannot prove the top half
+    // non-negative and turn `hi16` into a logical shift (which `SMLAxT`
+    // cannot fold).
+    let odd = ((w as i32) >> 8) & mask as i32;
+    acc.wrapping_add(lo16(even).wrapping_mul(lo16(x01)))
+        .wrapping_add(lo16(odd).wrapping_mul(hi16(x01)))
+        .wrapping_add(hi16(even).wrapping_mul(lo16(x23)))
+        .wrapping_add(hi16(odd).wrapping_mul(hi16(x23)))
+}
+
+/// Four weight bytes as a little-endian word (0 if short: never, the
+/// callers pass `chunks_exact(4)`).
+#[inline(always)]
+fn word(b: &[u8]) -> u32 {
+    <[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes)
+}
+
+/// Input value `j` of packed words.
 #[inline]
-fn dot4(w: &[u8], n: usize, x: &[i16]) -> [i32; 4] {
-    let (r0, rest) = w.split_at(n.min(w.len()));
-    let (r1, rest) = rest.split_at(n.min(rest.len()));
-    let (r2, r3) = rest.split_at(n.min(rest.len()));
-    let mut s = [0i32; 4];
-    for ((((&a, &b), &c), &d), &x) in r0.iter().zip(r1).zip(r2).zip(r3).zip(x) {
-        let x = i32::from(x);
-        s[0] = s[0].wrapping_add(i32::from(a as i8) * x);
-        s[1] = s[1].wrapping_add(i32::from(b as i8) * x);
-        s[2] = s[2].wrapping_add(i32::from(c as i8) * x);
-        s[3] = s[3].wrapping_add(i32::from(d as i8) * x);
+fn x_at(x: &[u32], j: usize) -> i32 {
+    let w = x.get(j / 2).copied().unwrap_or(0) as i32;
+    if j % 2 == 0 {
+        lo16(w)
+    } else {
+        hi16(w)
+    }
+}
+
+/// The pair words of `x` covering the first `full` inputs (a multiple of 4).
+#[inline(always)]
+fn pairs(x: &[u32], full: usize) -> core::slice::ChunksExact<'_, u32> {
+    x.get(..full / 2).unwrap_or(&[]).chunks_exact(2)
+}
+
+/// `[x01, x23]` of a pair chunk.
+#[inline(always)]
+fn xpair(xs: &[u32]) -> (i32, i32) {
+    match *xs {
+        [a, b] => (a as i32, b as i32),
+        _ => (0, 0),
+    }
+}
+
+/// `Σ_j u[r][j] · x[j]` for four rows of `n` excess-128 weight bytes
+/// (consecutive in `w`), sharing each input load between the rows. Sums
+/// wrap; the caller subtracts `128 · Σx`, and the true dot products fit
+/// `i32` (see [`layer`]), so the wrapped result is exact.
+#[inline(always)]
+fn dot4(w: &[u8], n: usize, x: &[u32], mask: u32) -> [i32; 4] {
+    let full = n - n % 4;
+    let row = |r: usize| w.get(r * n..r * n + full).unwrap_or(&[]);
+    let (r0, r1, r2, r3) = (row(0), row(1), row(2), row(3));
+    let (mut a0, mut a1, mut a2, mut a3) = (0i32, 0i32, 0i32, 0i32);
+    for ((((c0, c1), c2), c3), xs) in r0
+        .chunks_exact(4)
+        .zip(r1.chunks_exact(4))
+        .zip(r2.chunks_exact(4))
+        .zip(r3.chunks_exact(4))
+        .zip(pairs(x, full))
+    {
+        let (x01, x23) = xpair(xs);
+        a0 = mac4(a0, word(c0), x01, x23, mask);
+        a1 = mac4(a1, word(c1), x01, x23, mask);
+        a2 = mac4(a2, word(c2), x01, x23, mask);
+        a3 = mac4(a3, word(c3), x01, x23, mask);
+    }
+    let mut s = [a0, a1, a2, a3];
+    for j in full..n {
+        let xj = x_at(x, j);
+        for (r, acc) in s.iter_mut().enumerate() {
+            let u = i32::from(w.get(r * n + j).copied().unwrap_or(128));
+            *acc = acc.wrapping_add(u.wrapping_mul(xj));
+        }
     }
     s
 }
 
-/// One fully connected layer: `out[c] = act(requantize(W[c]·x + b[c]))`.
-fn layer<T>(w: &[u8], b: &[u8], rq: &[u8], x: &[i16], out: &mut [T], act: impl Fn(i32) -> T) {
-    let n = x.len();
+/// [`dot4`] for one row.
+#[inline(always)]
+fn dot1(w: &[u8], n: usize, x: &[u32], mask: u32) -> i32 {
+    let full = n - n % 4;
+    let mut a = w
+        .get(..full)
+        .unwrap_or(&[])
+        .chunks_exact(4)
+        .zip(pairs(x, full))
+        .fold(0i32, |a, (c, xs)| {
+            let (x01, x23) = xpair(xs);
+            mac4(a, word(c), x01, x23, mask)
+        });
+    for j in full..n {
+        let u = i32::from(w.get(j).copied().unwrap_or(128));
+        a = a.wrapping_add(u.wrapping_mul(x_at(x, j)));
+    }
+    a
+}
+
+/// One fully connected layer: `out[c] = act(requantize(W[c]·x + b[c]))`
+/// over `n` packed inputs. Weights are stored excess-128 (`u = w + 128`),
+/// so `W·x = Σ u·x − 128·Σx`. With `|w| <= 127`, `|x| <= 255` and at most
+/// 65535 inputs, `|W·x| < 2^31`.
+fn layer<T>(
+    w: &[u8],
+    b: &[u8],
+    rq: &[u8],
+    x: &[u32],
+    n: usize,
+    out: &mut [T],
+    act: impl Fn(i32) -> T,
+) {
     if n == 0 {
         return;
     }
+    // The pad half of an odd count is 0, so summing whole words is exact.
+    let xsum = x
+        .get(..input_len(n))
+        .unwrap_or(&[])
+        .iter()
+        .fold(0i32, |a, &w| {
+            a.wrapping_add(lo16(w as i32)).wrapping_add(hi16(w as i32))
+        });
+    let offset = xsum.wrapping_mul(128);
+    let mask = core::hint::black_box(0x00FF_00FFu32);
     let finish = |acc: i32, c: usize| -> T {
-        let acc = acc.saturating_add(le_i32(b, 4 * c));
+        let acc = acc.wrapping_sub(offset).saturating_add(le_i32(b, 4 * c));
         let z = requantize(acc, le_i32(rq, 8 * c), le_i32(rq, 8 * c + 4));
         act(z)
     };
@@ -228,7 +376,7 @@ fn layer<T>(w: &[u8], b: &[u8], rq: &[u8], x: &[i16], out: &mut [T], act: impl F
     let mut outs = out.chunks_exact_mut(4);
     let mut c = 0;
     for (block, o) in (&mut blocks).zip(&mut outs) {
-        let s = dot4(block, n, x);
+        let s = dot4(block, n, x, mask);
         for (o, s) in o.iter_mut().zip(s) {
             *o = finish(s, c);
             c += 1;
@@ -239,7 +387,7 @@ fn layer<T>(w: &[u8], b: &[u8], rq: &[u8], x: &[i16], out: &mut [T], act: impl F
         .chunks_exact(n)
         .zip(outs.into_remainder())
     {
-        *o = finish(dot(row, x), c);
+        *o = finish(dot1(row, n, x, mask), c);
         c += 1;
     }
 }
@@ -262,38 +410,35 @@ pub fn forward<'s>(
             got: input.len(),
         });
     }
-    check_scratch("input", input_len(d), scratch.input.len())?;
+    check_scratch("input", packed_len(d, h), scratch.input.len())?;
     check_scratch("hidden", hidden_len(h), scratch.hidden.len())?;
     check_scratch("output", output_len(k), scratch.output.len())?;
-    let x = scratch.input.get_mut(..d).unwrap_or(&mut []);
-    quantize_input(model, input, x)?;
-    let x = &*x;
+    quantize_input(model, input, scratch.input)?;
     let hidden = scratch.hidden.get_mut(..h).unwrap_or(&mut []);
-    layer(model.w1, model.b1, model.rq1, x, hidden, logsig_u8);
-    // The output layer reads the hidden activations as i16 (0..=255): reuse
-    // the input buffer when it is long enough, else go row by row.
+    layer(
+        model.w1,
+        model.b1,
+        model.rq1,
+        scratch.input,
+        d,
+        hidden,
+        logsig_u8,
+    );
+    // The output layer reads the hidden activations packed like an input.
+    pack(
+        hidden.iter().map(|&v| i16::from(v)),
+        scratch.input.get_mut(..input_len(h)).unwrap_or(&mut []),
+    );
     let out = scratch.output.get_mut(..k).unwrap_or(&mut []);
-    if let Some(hx) = scratch.input.get_mut(..h) {
-        for (t, &v) in hx.iter_mut().zip(scratch.hidden.iter()) {
-            *t = i16::from(v);
-        }
-        layer(model.w2, model.b2, model.rq2, hx, out, logsig_q12);
-    } else {
-        for (c, (o, row)) in out.iter_mut().zip(model.w2.chunks_exact(h)).enumerate() {
-            let acc = row
-                .iter()
-                .zip(scratch.hidden.iter())
-                .fold(0i32, |a, (&w, &v)| {
-                    a.wrapping_add(i32::from(w as i8) * i32::from(v))
-                })
-                .saturating_add(le_i32(model.b2, 4 * c));
-            *o = logsig_q12(requantize(
-                acc,
-                le_i32(model.rq2, 8 * c),
-                le_i32(model.rq2, 8 * c + 4),
-            ));
-        }
-    }
+    layer(
+        model.w2,
+        model.b2,
+        model.rq2,
+        scratch.input,
+        h,
+        out,
+        logsig_q12,
+    );
     Ok(scratch.output.get(..k).unwrap_or(&[]))
 }
 

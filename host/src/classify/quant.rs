@@ -26,7 +26,7 @@ use protogist::mlp::blob::{
     blob_len, crc32, Model, ModelError, HEADER_LEN, HIDDEN_U8, INPUT_I4F12, MAGIC, MAX_CLASSES,
     MAX_NAME_LEN, OUTPUT_U16, VERSION, WEIGHTS_I8_PER_CHANNEL,
 };
-use protogist::mlp::{forward, hidden_len, input_len, output_len, scores, Scratch};
+use protogist::mlp::{forward, hidden_len, output_len, packed_len, scores, Scratch};
 use protogist::shape::ShapeElem;
 use rayon::prelude::*;
 
@@ -252,7 +252,8 @@ pub fn write_blob(q: &QuantNet, x: &BlobExtras<'_>) -> Result<Vec<u8>, ClassifyE
         }
     }
     for l in [&q.l1, &q.l2] {
-        b.extend(l.w.iter().map(|&v| v as u8));
+        // Excess-128: the byte is w + 128 (1..=255).
+        b.extend(l.w.iter().map(|&v| (i16::from(v) + 128) as u8));
     }
     for &t in x.templates {
         b.extend_from_slice(&t.to_le_bytes());
@@ -284,7 +285,7 @@ pub fn int_outputs(model: &Model<'_>, inputs: &[Vec<i16>]) -> Result<Vec<Vec<u16
         .map_init(
             || {
                 (
-                    vec![0i16; input_len(d).max(h)],
+                    vec![0u32; packed_len(d, h)],
                     vec![0u8; hidden_len(h)],
                     vec![0u16; output_len(k)],
                 )

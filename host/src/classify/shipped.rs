@@ -42,7 +42,11 @@ pub fn categorise_mask(
         return Ok(None);
     };
     let (d, h, k) = (model.inputs(), model.hidden(), model.classes());
-    let (mut xi, mut hi, mut yo) = (vec![0i16; d.max(h)], vec![0u8; h], vec![0u16; k]);
+    let (mut xi, mut hi, mut yo) = (
+        vec![0u32; protogist::mlp::packed_len(d, h)],
+        vec![0u8; h],
+        vec![0u16; k],
+    );
     let mut s = Scratch {
         input: &mut xi,
         hidden: &mut hi,
