@@ -316,6 +316,9 @@ pub struct EvalReport {
     pub top1_agreement: f64,
     /// Bytes of the blob.
     pub model_bytes: usize,
+    /// Integer inferences (`mlp::forward`) per second on one host thread,
+    /// over the test probes for at least 0.3 s.
+    pub int8_inferences_per_s: f64,
 }
 
 /// Reads and parses a model blob and its float sidecar.
@@ -422,6 +425,7 @@ pub fn evaluate_model(opts: &EvalOptions) -> Result<(EvalReport, String)> {
         int8: im,
         top1_agreement: agree as f64 / test_out.len() as f64,
         model_bytes: blob.len(),
+        int8_inferences_per_s: inferences_per_s(&qm, &test_raw)?,
     };
     let curves = |f: Vec<(f64, f64)>, i: Vec<(f64, f64)>| {
         vec![
@@ -459,6 +463,39 @@ pub fn evaluate_model(opts: &EvalOptions) -> Result<(EvalReport, String)> {
     Ok((report, json))
 }
 
+/// Single-thread `mlp::forward` rate over `inputs` (repeated for at least
+/// 0.3 s).
+fn inferences_per_s(model: &protogist::mlp::Model<'_>, inputs: &[Vec<i16>]) -> Result<f64> {
+    use protogist::mlp::{forward, hidden_len, output_len, packed_len, Scratch};
+    let (d, h, k) = (model.inputs(), model.hidden(), model.classes());
+    let elems: Vec<_> = inputs
+        .iter()
+        .map(|r| super::quant::shape_elems(r))
+        .collect();
+    let (mut xi, mut hi, mut yo) = (
+        vec![0u32; packed_len(d, h)],
+        vec![0u8; hidden_len(h)],
+        vec![0u16; output_len(k)],
+    );
+    let start = Instant::now();
+    let mut runs = 0u64;
+    while runs == 0 || start.elapsed().as_secs_f64() < 0.3 {
+        for e in &elems {
+            let mut s = Scratch {
+                input: &mut xi,
+                hidden: &mut hi,
+                output: &mut yo,
+            };
+            std::hint::black_box(forward(model, e, &mut s).map_err(super::ClassifyError::from)?);
+            runs += 1;
+        }
+        if elems.is_empty() {
+            break;
+        }
+    }
+    Ok(runs as f64 / start.elapsed().as_secs_f64().max(1e-9))
+}
+
 fn eval_summary(opts: &EvalOptions, r: &EvalReport, json: String) -> Summary {
     let pc = |r: f64| format!("{:.1} %", 100.0 * r);
     let both = |f: f64, i: f64| format!("{:>7} | {:>7}", pc(f), pc(i));
@@ -494,6 +531,10 @@ fn eval_summary(opts: &EvalOptions, r: &EvalReport, json: String) -> Summary {
     s.push("VR @ FAR 0.1 %", both(f.vr_far_01, i.vr_far_01));
     s.push("top-1 agreement", pc(r.top1_agreement));
     s.push("model", format!("{} B int8", r.model_bytes));
+    s.push(
+        "int8 inferences/s",
+        format!("{:.0} (one thread)", r.int8_inferences_per_s),
+    );
     s.push("plots", opts.out.display());
     if opts.json {
         s.raw = Some(json);
