@@ -92,6 +92,37 @@ fn train_and_eval_run_and_reject_bad_input() {
         "class folder has no PNG or JPEG image",
     );
     assert!(!cwd.join("x.json").exists());
+    // An empty dataset, and an image that does not decode.
+    let none = cwd.join("none");
+    fs::create_dir_all(&none).unwrap();
+    assert_one_line_error(
+        &protogist(
+            &[
+                "train",
+                "--dataset",
+                none.to_str().unwrap(),
+                "--out",
+                "x.bin",
+            ],
+            cwd,
+        ),
+        "no class subfolder",
+    );
+    fs::write(empty.join("b/broken.png"), b"not a png").unwrap();
+    assert_one_line_error(
+        &protogist(
+            &[
+                "train",
+                "--dataset",
+                empty.to_str().unwrap(),
+                "--out",
+                "x.bin",
+            ],
+            cwd,
+        ),
+        "cannot decode",
+    );
+    assert!(!cwd.join("x.bin").exists());
     // quantize: from the float sidecar it rebuilds train's blob bit for
     // bit; from a blob it emits the Rust source.
     let q = cwd.join("q.bin");

@@ -549,6 +549,45 @@ mod tests {
     }
 
     #[test]
+    fn bad_inputs_are_typed_errors() {
+        let net = Mlp::new(4, 3, 2, 1);
+        let calib = vec![vec![100i16, -200, 300, 0]];
+        assert!(quantize_net(&net, &calib).is_ok());
+        assert!(matches!(
+            quantize_net(&net, &[]),
+            Err(ClassifyError::Empty { .. })
+        ));
+        assert_eq!(
+            quantize_net(&net, &[vec![0; 4]]),
+            Err(ClassifyError::ZeroVariance)
+        );
+        assert!(matches!(
+            quantize_net(&net, &[vec![1; 5]]),
+            Err(ClassifyError::DimensionMismatch { .. })
+        ));
+        let mut nan = net.clone();
+        nan.w2[[1, 2]] = f64::NAN;
+        assert!(matches!(
+            quantize_net(&nan, &calib),
+            Err(ClassifyError::NonFinite { .. })
+        ));
+        let mut inf = net;
+        inf.b1[0] = f64::INFINITY;
+        assert!(matches!(
+            quantize_net(&inf, &calib),
+            Err(ClassifyError::NonFinite { .. })
+        ));
+        // NaN or infinite features are rejected before the network.
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let mut v = [1.0, bad, 2.0];
+            assert!(matches!(
+                super::super::rules::z_normalise(&mut v),
+                Err(ClassifyError::NonFinite { .. })
+            ));
+        }
+    }
+
+    #[test]
     fn multipliers_by_hand() {
         assert_eq!(quantize_multiplier(0.5), (1 << 30, 0));
         assert_eq!(quantize_multiplier(0.75), (3 << 29, 0));
