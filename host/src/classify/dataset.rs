@@ -96,11 +96,14 @@ pub fn shape_input(mask: &[u8], w: usize, h: usize) -> Result<Option<Vec<f32>>> 
     Ok(shape_inputs(mask, w, h)?.map(|(x, _)| x))
 }
 
+/// A normalised float shape vector and the core one (`I4F12` raw bits).
+pub type ShapePair = (Vec<f32>, Vec<i16>);
+
 /// [`shape_input`] and the core shape vector (`I4F12` raw bits).
 ///
 /// # Errors
 /// As [`shape_input`].
-pub fn shape_inputs(mask: &[u8], w: usize, h: usize) -> Result<Option<(Vec<f32>, Vec<i16>)>> {
+pub fn shape_inputs(mask: &[u8], w: usize, h: usize) -> Result<Option<ShapePair>> {
     let view = ImageView::packed(mask, w, h)?;
     let mut profile = RadialProfile::new();
     let mut v = [ShapeElem::ZERO; SHAPE_LEN];
@@ -151,7 +154,7 @@ pub fn load_dataset(dir: &Path) -> Result<Dataset> {
         }
         classes.push(name);
     }
-    let vectors: Vec<Result<Option<(Vec<f32>, Vec<i16>)>>> = files
+    let vectors: Vec<Result<Option<ShapePair>>> = files
         .par_iter()
         .map(|(_, _, p)| {
             let img = image::open(p).map_err(|source| HostError::Decode {
