@@ -104,6 +104,43 @@ fn valid_blob_parses_and_runs() {
     ));
 }
 
+/// Rules by hand on the small blob's templates (0, 1000, 2000),
+/// (3000, 4000, 5000), (6000, 7000, 8000) and Δ = 40000 / 65536 = 0.610.
+#[test]
+fn ranking_identification_and_verification_by_hand() {
+    let b = small_blob();
+    let m = Model::parse(&b).unwrap();
+    // v = template 0: cosines 1, 14e6 / (2236.07 · 7071.07) = 0.8854 and
+    // 23e6 / (2236.07 · 12206.56) = 0.8427.
+    let v = [0u16, 1000, 2000];
+    let mut r = [Ranked::default(); TOP_K];
+    assert_eq!(top_k(&m, &v, &mut r).unwrap(), 3);
+    let classes: Vec<u16> = r[..3].iter().map(|e| e.class).collect();
+    assert_eq!(classes, [0, 1, 2]);
+    assert_eq!(r[0].score, 65536);
+    assert!((f64::from(r[1].score) / 65536.0 - 0.8854).abs() < 1e-4);
+    assert!((f64::from(r[2].score) / 65536.0 - 0.8427).abs() < 1e-4);
+    assert_eq!(identify(&m, &v).unwrap().0, Identity::Known(0));
+    assert!(verify(&m, &v, 2).unwrap());
+    // v = (5000, 0, 0): cosines 0, 0.4243, 0.4915: all below Δ, U_{N+1}.
+    let u = [5000u16, 0, 0];
+    let (id, best) = identify(&m, &u).unwrap();
+    assert_eq!((id, best.class), (Identity::Unknown, 2));
+    assert!(!verify(&m, &u, 1).unwrap());
+    assert_eq!(
+        verify(&m, &u, 3),
+        Err(MlpError::ClassOutOfRange {
+            class: 3,
+            classes: 3
+        })
+    );
+    // Fewer slots than classes: the best ones, in order.
+    let mut two = [Ranked::default(); 2];
+    assert_eq!(top_k(&m, &v, &mut two).unwrap(), 2);
+    assert_eq!((two[0].class, two[1].class), (0, 1));
+    assert!(top_k(&m, &v[..2], &mut two).is_err());
+}
+
 #[test]
 fn each_defect_has_its_error() {
     let b = small_blob();
