@@ -3,7 +3,9 @@
 
 use proptest::prelude::*;
 use protogist::mlp::blob::{crc32, CRC_LEN};
-use protogist::mlp::{forward, top_k, MlpError, Model, ModelError, Ranked, Scratch, TOP_K};
+use protogist::mlp::{
+    forward, identify, top_k, verify, Identity, MlpError, Model, ModelError, Ranked, Scratch, TOP_K,
+};
 use protogist::shape::ShapeElem;
 use protogist_host::classify::mlp::Mlp;
 use protogist_host::classify::quant::{quantize_net, write_blob, BlobExtras};
