@@ -1,15 +1,68 @@
-//! Link setup for bare-metal (thumb*) builds only; host builds need nothing.
+//! Link setup for bare-metal (thumb*) builds; for every build, the two
+//! seeded benchmark networks of `src/mlp_run.rs` (see `bench_blob`).
 
 use std::{env, fs, path::PathBuf};
+
+/// Classes of the benchmark networks.
+const BENCH_CLASSES: u16 = 10;
+
+/// A `PGML` v1 blob (docs/MODEL_FORMAT.md) of a 720 x `hidden` x 10
+/// network: int8 weights uniform in −127..=127 and small biases from
+/// `protogist::rng::SplitMix64` seeded with `hidden`; every channel
+/// requantised by 2^−5 (multiplier 2^30, shift −4), zero templates, Δ 0.
+fn bench_blob(hidden: u16) -> Vec<u8> {
+    use protogist::mlp::blob::*;
+    let (d, h, k) = (720u16, hidden, BENCH_CLASSES);
+    let names: Vec<String> = (0..k).map(|c| format!("c{c}")).collect();
+    let names_len: usize = names.iter().map(|n| 1 + n.len()).sum();
+    let mut rng = protogist::rng::SplitMix64::new(u64::from(hidden));
+    let mut b = Vec::new();
+    b.extend_from_slice(&MAGIC);
+    b.extend_from_slice(&VERSION.to_le_bytes());
+    b.extend_from_slice(&[INPUT_I4F12, WEIGHTS_I8_PER_CHANNEL, HIDDEN_U8, OUTPUT_U16]);
+    for n in [d, h, k] {
+        b.extend_from_slice(&n.to_le_bytes());
+    }
+    // Input: I4F12 raw times 2^-7 (±3 maps to ±96; beyond ±4, clamped).
+    b.extend_from_slice(&(1i32 << 30).to_le_bytes());
+    b.extend_from_slice(&(-6i32).to_le_bytes());
+    b.extend_from_slice(&0u32.to_le_bytes());
+    b.extend_from_slice(&0u32.to_le_bytes());
+    b.extend_from_slice(&(names_len as u32).to_le_bytes());
+    b.extend_from_slice(&0u32.to_le_bytes());
+    for _ in 0..(h + k) {
+        b.extend_from_slice(&(1i32 << 30).to_le_bytes());
+        b.extend_from_slice(&(-4i32).to_le_bytes());
+    }
+    for _ in 0..(h + k) {
+        b.extend_from_slice(&rng.range(-4096, 4096).to_le_bytes());
+    }
+    for _ in 0..(usize::from(h) * usize::from(d) + usize::from(k) * usize::from(h)) {
+        // Excess-128 bytes of weights in -127..=127.
+        b.push((rng.range(-127, 127) + 128) as u8);
+    }
+    b.resize(b.len() + 2 * usize::from(k) * usize::from(k), 0);
+    for n in &names {
+        b.push(n.len() as u8);
+        b.extend_from_slice(n.as_bytes());
+    }
+    let crc = crc32(&b);
+    b.extend_from_slice(&crc.to_le_bytes());
+    b
+}
 
 fn main() {
     println!("cargo:rerun-if-changed=memory.x");
     println!("cargo:rerun-if-changed=build.rs");
+    let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    for h in [256u16, 2000] {
+        fs::write(out.join(format!("mlp_bench_{h}.bin")), bench_blob(h))
+            .expect("write a benchmark network to OUT_DIR");
+    }
     let target = env::var("TARGET").unwrap_or_default();
     if !target.starts_with("thumb") {
         return;
     }
-    let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     fs::copy("memory.x", out.join("memory.x")).expect("copy memory.x to OUT_DIR");
     println!("cargo:rustc-link-search={}", out.display());
     // cortex-m-rt's link.x includes memory.x; gcc must not add its own crt0.

@@ -39,6 +39,7 @@ pub mod conspicuity;
 pub mod disparity;
 pub mod fixed;
 pub mod image;
+pub mod mlp;
 pub mod off;
 pub mod rng;
 pub mod segment;

@@ -107,6 +107,13 @@ pub fn run() -> ExitCode {
             return ExitCode::FAILURE;
         }
     }
+    match run_mlp() {
+        Ok(lines) => print!("{lines}"),
+        Err(e) => {
+            eprintln!("firmware-sim: classifier: {e:?}");
+            return ExitCode::FAILURE;
+        }
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -181,4 +188,29 @@ fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
     );
     print!("{out}");
     Ok(())
+}
+
+/// The classifier's checksum lines and host nanoseconds per inference.
+fn run_mlp() -> Result<String, firmware_sim::mlp_run::MlpRunError> {
+    use firmware_sim::mlp_run::{self, len, MlpBuffers};
+    let (mut mask, mut input) = (vec![0u8; len::MASK], vec![0u32; len::INPUT]);
+    let (mut hidden, mut output) = (vec![0u8; len::HIDDEN], vec![0u16; len::OUTPUT]);
+    let mut bufs = MlpBuffers {
+        mask: &mut mask,
+        input: &mut input,
+        hidden: &mut hidden,
+        output: &mut output,
+    };
+    let r = mlp_run::run(&mut bufs, &mut WallTicks(Instant::now()))?;
+    let mut lines = String::new();
+    // Writing into a String cannot fail.
+    let _ = mlp_run::write_checksums(&mut lines, &r);
+    for b in &r.bench {
+        let _ = writeln!(
+            lines,
+            "host-ns mlp 720x{}x{} {}",
+            b.hidden, b.classes, b.ticks
+        );
+    }
+    Ok(lines)
 }

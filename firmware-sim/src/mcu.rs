@@ -218,6 +218,7 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
         })
         .map_err(|_| "semihosting write failed")?;
     run_stereo(out, &mut ticks, &to_instructions)?;
+    run_mlp(out, &mut ticks, &to_instructions)?;
     writeln!(out, "stack peak {} bytes", stack_peak_bytes()).map_err(|_| "semihosting write failed")
 }
 
@@ -240,6 +241,40 @@ fn run_stereo(
     };
     let r = stereo_run::run(&mut bufs, ticks).map_err(|_| "stereo stage failed")?;
     stereo_run::write_report(out, &r, to_instructions).map_err(|_| "semihosting write failed")
+}
+
+/// The classifier: checksums, then instructions per multiply-accumulate of
+/// the two benchmark networks (`ipm mlp 720xHxK <instr/MAC> ...`).
+fn run_mlp(
+    out: &mut impl Write,
+    ticks: &mut SysTicks,
+    to_instructions: &dyn Fn(u64) -> u64,
+) -> Result<(), &'static str> {
+    use firmware_sim::mlp_run::{self, len, macs, MlpBuffers};
+    let mut bufs = MlpBuffers {
+        mask: singleton!(: [u8; len::MASK] = [0; len::MASK]).ok_or("mlp mask taken")?,
+        input: singleton!(: [u32; len::INPUT] = [0; len::INPUT]).ok_or("mlp input taken")?,
+        hidden: singleton!(: [u8; len::HIDDEN] = [0; len::HIDDEN]).ok_or("mlp hidden taken")?,
+        output: singleton!(: [u16; len::OUTPUT] = [0; len::OUTPUT]).ok_or("mlp output taken")?,
+    };
+    let r = mlp_run::run(&mut bufs, ticks).map_err(|_| "classifier failed")?;
+    mlp_run::write_checksums(out, &r).map_err(|_| "semihosting write failed")?;
+    for b in &r.bench {
+        let instructions = to_instructions(b.ticks);
+        let m = macs(b.hidden, b.classes);
+        let hundredths = (instructions * 100 + m / 2) / m.max(1);
+        writeln!(
+            out,
+            "ipm mlp 720x{}x{} {}.{:02} instructions={instructions} macs={m} flash={}",
+            b.hidden,
+            b.classes,
+            hundredths / 100,
+            hundredths % 100,
+            b.bytes
+        )
+        .map_err(|_| "semihosting write failed")?;
+    }
+    Ok(())
 }
 
 #[entry]

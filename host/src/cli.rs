@@ -85,11 +85,16 @@ pub enum Command {
     /// white on black), one subfolder per class.
     GenShapes(crate::classify::shapes::GenShapesOptions),
     /// Train the float network (section 4.4) on the shape vectors of an
-    /// image-folder dataset and write the model as JSON.
+    /// image-folder dataset; write the int8 model blob and its float JSON
+    /// sidecar (`<out>.json`).
     Train(crate::classify::model_cmd::TrainOptions),
-    /// Evaluate a trained model on its test split: ROR, CMC, EER, HTER_min,
-    /// AUC, verification rates; CMC, DET and ROC plots.
+    /// Evaluate a trained model on its test split, float and int8 side by
+    /// side: ROR, CMC, EER, HTER_min, AUC, verification rates; CMC, DET and
+    /// ROC plots.
     Eval(crate::classify::model_cmd::EvalOptions),
+    /// Quantise a float model to the int8 blob, or emit a blob as a Rust
+    /// `static` for firmware (`--emit-rust`).
+    Quantize(crate::classify::quant_cmd::QuantizeOptions),
     /// Print the core's working memory per stage and frame size, from its
     /// `const fn`s (`scratch <stage> <W>x<H> <bytes>` lines).
     Scratch,
@@ -134,6 +139,7 @@ pub fn run(cli: Cli) -> Result<Summary> {
         Some(Command::GenShapes(opts)) => crate::classify::shapes::gen_shapes(&opts),
         Some(Command::Train(opts)) => crate::classify::model_cmd::run_train(&opts),
         Some(Command::Eval(opts)) => crate::classify::model_cmd::run_eval(&opts),
+        Some(Command::Quantize(opts)) => crate::classify::quant_cmd::run_quantize(&opts),
         Some(Command::Scratch) => Ok(scratch_summary()),
         Some(Command::SegmentEval {
             scenes,

@@ -184,6 +184,10 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
         out.extend(shape.panels(w, h));
         shape.summarise(&mut summary);
     }
+    // Stage 5: each object's category with the shipped int8 model, on the
+    // masks from the model's disparity and from ground-truth disparity.
+    crate::classify::shipped::summarise_objects(&seg, "", &mut summary)?;
+    crate::classify::shipped::summarise_objects(&seg_gt, ", GT disparity", &mut summary)?;
 
     finish(&opts.out, out, &mut summary, start)?;
     Ok(summary)

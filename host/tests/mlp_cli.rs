@@ -1,5 +1,5 @@
-//! `protogist train` and `protogist eval` through the binary: a tiny run,
-//! and bad input (non-zero exit, one `error:` line, no panic).
+//! `protogist train`, `eval` and `quantize` through the binary: a tiny
+//! run, and bad input (non-zero exit, one `error:` line, no panic).
 
 use std::fs;
 use std::path::Path;
@@ -28,7 +28,8 @@ fn train_and_eval_run_and_reject_bad_input() {
         cwd,
     );
     assert!(gen.status.success(), "{}", text(&gen.stderr));
-    let model = cwd.join("m/model.json");
+    let model = cwd.join("m/model.bin");
+    let sidecar = cwd.join("m/model.bin.json");
     let m = model.to_str().unwrap();
     let train = |extra: &[&str]| {
         let mut a = vec!["train", "--dataset", d, "--epochs", "5", "--out", m];
@@ -50,7 +51,9 @@ fn train_and_eval_run_and_reject_bad_input() {
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(json["classes"], 3);
+    assert_eq!(json["float"]["classes"], 3);
+    assert_eq!(json["int8"]["classes"], 3);
+    assert!(json["top1_agreement"].as_f64().unwrap() > 0.0);
     for f in ["cmc.png", "det.svg", "roc.png", "metrics.json"] {
         assert!(ev.join(f).is_file(), "{f}");
     }
@@ -89,11 +92,134 @@ fn train_and_eval_run_and_reject_bad_input() {
         "class folder has no PNG or JPEG image",
     );
     assert!(!cwd.join("x.json").exists());
-    // A model of the wrong shape, and one that is not JSON.
-    let mut v: serde_json::Value = serde_json::from_slice(&fs::read(&model).unwrap()).unwrap();
+    // An empty dataset, and an image that does not decode.
+    let none = cwd.join("none");
+    fs::create_dir_all(&none).unwrap();
+    assert_one_line_error(
+        &protogist(
+            &[
+                "train",
+                "--dataset",
+                none.to_str().unwrap(),
+                "--out",
+                "x.bin",
+            ],
+            cwd,
+        ),
+        "no class subfolder",
+    );
+    fs::write(empty.join("b/broken.png"), b"not a png").unwrap();
+    assert_one_line_error(
+        &protogist(
+            &[
+                "train",
+                "--dataset",
+                empty.to_str().unwrap(),
+                "--out",
+                "x.bin",
+            ],
+            cwd,
+        ),
+        "cannot decode",
+    );
+    assert!(!cwd.join("x.bin").exists());
+    // quantize: from the float sidecar it rebuilds train's blob bit for
+    // bit; from a blob it emits the Rust source.
+    let q = cwd.join("q.bin");
+    let rs = cwd.join("fw/model.rs");
+    let out = protogist(
+        &[
+            "quantize",
+            "--model",
+            sidecar.to_str().unwrap(),
+            "--dataset",
+            d,
+            "--out",
+            q.to_str().unwrap(),
+        ],
+        cwd,
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(fs::read(&q).unwrap(), fs::read(&model).unwrap());
+    let out = protogist(
+        &[
+            "quantize",
+            "--model",
+            m,
+            "--emit-rust",
+            rs.to_str().unwrap(),
+        ],
+        cwd,
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let src = fs::read_to_string(&rs).unwrap();
+    let n = fs::read(&model).unwrap().len();
+    assert!(
+        src.contains(&format!("pub static MODEL: [u8; {n}]")),
+        "{src}"
+    );
+    assert_eq!(src.matches("0x").count(), n);
+    assert_one_line_error(
+        &protogist(&["quantize", "--model", m], cwd),
+        "give --out, --emit-rust or both",
+    );
+    assert_one_line_error(
+        &protogist(
+            &[
+                "quantize",
+                "--model",
+                sidecar.to_str().unwrap(),
+                "--out",
+                "z.bin",
+            ],
+            cwd,
+        ),
+        "a float model needs its training dataset",
+    );
+
+    // Bad blobs: corrupt, truncated, wrong version, not a model.
+    let blob = fs::read(&model).unwrap();
+    let bad_blob = cwd.join("badm/model.bin");
+    fs::create_dir_all(bad_blob.parent().unwrap()).unwrap();
+    fs::copy(&sidecar, cwd.join("badm/model.bin.json")).unwrap();
+    let eval_blob = |bytes: &[u8]| {
+        fs::write(&bad_blob, bytes).unwrap();
+        protogist(
+            &[
+                "eval",
+                "--model",
+                bad_blob.to_str().unwrap(),
+                "--dataset",
+                d,
+                "--out",
+                "ev2",
+            ],
+            cwd,
+        )
+    };
+    let mut corrupt = blob.clone();
+    corrupt[100] ^= 0x10;
+    assert_one_line_error(&eval_blob(&corrupt), "corrupt: CRC-32");
+    assert_one_line_error(&eval_blob(&blob[..blob.len() - 9]), "truncated");
+    let mut v2 = blob.clone();
+    v2[4] = 2;
+    assert_one_line_error(
+        &eval_blob(&v2),
+        "model version 2, this build reads version 1",
+    );
+    assert_one_line_error(
+        &eval_blob(b"{\"not\": \"a model\"}"),
+        "not a protogist model",
+    );
+    assert!(!cwd.join("ev2").exists());
+
+    // A float sidecar of the wrong shape, and one that is not JSON.
+    let mut v: serde_json::Value = serde_json::from_slice(&fs::read(&sidecar).unwrap()).unwrap();
     v["b2"].as_array_mut().unwrap().pop();
-    let bad = cwd.join("bad.json");
-    fs::write(&bad, serde_json::to_vec(&v).unwrap()).unwrap();
+    let bad = cwd.join("bad.bin");
+    fs::copy(&model, &bad).unwrap();
+    let bad_side = cwd.join("bad.bin.json");
+    fs::write(&bad_side, serde_json::to_vec(&v).unwrap()).unwrap();
     let eval_bad = |p: &Path| {
         protogist(
             &[
@@ -109,7 +235,9 @@ fn train_and_eval_run_and_reject_bad_input() {
         )
     };
     assert_one_line_error(&eval_bad(&bad), "b2 has 2 values, expected 3");
-    fs::write(&bad, b"{ not json").unwrap();
-    assert_one_line_error(&eval_bad(&bad), "bad.json");
-    assert_one_line_error(&eval_bad(&cwd.join("nope.json")), "nope.json");
+    fs::write(&bad_side, b"{ not json").unwrap();
+    assert_one_line_error(&eval_bad(&bad), "bad.bin.json");
+    fs::remove_file(&bad_side).unwrap();
+    assert_one_line_error(&eval_bad(&bad), "bad.bin.json");
+    assert_one_line_error(&eval_bad(&cwd.join("nope.bin")), "nope.bin");
 }

@@ -1,7 +1,9 @@
 //! Issue 5, section 1: the float network trained on generated silhouettes
 //! through `train` and `eval`, end to end.
 
-use protogist_host::classify::model_cmd::{run_eval, run_train, EvalOptions, TrainOptions};
+use protogist_host::classify::model_cmd::{
+    run_eval, run_train, EvalOptions, Features, TrainOptions,
+};
 use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
 
 /// 8 classes x 12 images at 64 px, half held out; H = 32, 200 epochs.
@@ -18,7 +20,7 @@ fn float_network_on_generated_shapes() {
         size: 64,
     })
     .unwrap();
-    let model = tmp.path().join("model.json");
+    let model = tmp.path().join("model.bin");
     for gamma in [0.2, 0.9] {
         let t = run_train(&TrainOptions {
             dataset: ds.clone(),
@@ -28,6 +30,7 @@ fn float_network_on_generated_shapes() {
             test_fraction: 0.5,
             seed: 7,
             gamma,
+            features: Features::Shape,
         })
         .unwrap();
         print!("{t}");
@@ -40,8 +43,13 @@ fn float_network_on_generated_shapes() {
         .unwrap();
         print!("{s}");
         let pc = |k: &str| -> f64 {
+            // "float | int8": the float column.
             s.get(k)
                 .unwrap()
+                .split('|')
+                .next()
+                .unwrap()
+                .trim()
                 .trim_end_matches(" %")
                 .parse::<f64>()
                 .unwrap()

@@ -35,6 +35,9 @@ pub struct Sample {
     pub label: usize,
     /// The normalised 720-element shape vector.
     pub x: Vec<f32>,
+    /// The core shape vector itself (`I4F12` raw bits), the integer
+    /// network's input.
+    pub shape: Vec<i16>,
 }
 
 /// A loaded dataset.
@@ -90,6 +93,17 @@ pub fn mask_of(img: &image::DynamicImage) -> (Vec<u8>, usize, usize) {
 /// # Errors
 /// [`HostError::Image`] for a size the core rejects.
 pub fn shape_input(mask: &[u8], w: usize, h: usize) -> Result<Option<Vec<f32>>> {
+    Ok(shape_inputs(mask, w, h)?.map(|(x, _)| x))
+}
+
+/// A normalised float shape vector and the core one (`I4F12` raw bits).
+pub type ShapePair = (Vec<f32>, Vec<i16>);
+
+/// [`shape_input`] and the core shape vector (`I4F12` raw bits).
+///
+/// # Errors
+/// As [`shape_input`].
+pub fn shape_inputs(mask: &[u8], w: usize, h: usize) -> Result<Option<ShapePair>> {
     let view = ImageView::packed(mask, w, h)?;
     let mut profile = RadialProfile::new();
     let mut v = [ShapeElem::ZERO; SHAPE_LEN];
@@ -99,7 +113,8 @@ pub fn shape_input(mask: &[u8], w: usize, h: usize) -> Result<Option<Vec<f32>>> 
         Err(e) => return Err(e.into()),
     }
     let mut x: Vec<f32> = v.iter().map(|e| e.to_num::<f32>()).collect();
-    Ok(rules::z_normalise(&mut x).ok().map(|()| x))
+    let raw = v.iter().map(|e| e.to_bits()).collect();
+    Ok(rules::z_normalise(&mut x).ok().map(|()| (x, raw)))
 }
 
 /// Loads `dir`: every class folder must hold at least one usable image.
@@ -139,7 +154,7 @@ pub fn load_dataset(dir: &Path) -> Result<Dataset> {
         }
         classes.push(name);
     }
-    let vectors: Vec<Result<Option<Vec<f32>>>> = files
+    let vectors: Vec<Result<Option<ShapePair>>> = files
         .par_iter()
         .map(|(_, _, p)| {
             let img = image::open(p).map_err(|source| HostError::Decode {
@@ -147,14 +162,19 @@ pub fn load_dataset(dir: &Path) -> Result<Dataset> {
                 source,
             })?;
             let (m, w, h) = mask_of(&img);
-            shape_input(&m, w, h)
+            shape_inputs(&m, w, h)
         })
         .collect();
     let mut samples = vec![];
     let mut skipped = 0;
     for ((key, label, _), v) in files.into_iter().zip(vectors) {
         match v? {
-            Some(x) => samples.push(Sample { key, label, x }),
+            Some((x, shape)) => samples.push(Sample {
+                key,
+                label,
+                x,
+                shape,
+            }),
             None => skipped += 1,
         }
     }

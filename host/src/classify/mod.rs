@@ -34,8 +34,11 @@ pub mod model;
 pub mod model_cmd;
 pub mod plots;
 pub mod probit;
+pub mod quant;
+pub mod quant_cmd;
 pub mod rules;
 pub mod shapes;
+pub mod shipped;
 pub mod train;
 
 /// Why a classification rule or a metric rejected its input.
@@ -92,6 +95,9 @@ pub enum ClassifyError {
     /// A vector whose elements are all equal cannot be z-normalised.
     #[error("the vector has zero variance and cannot be normalised")]
     ZeroVariance,
+    /// The integer network rejected its input.
+    #[error("integer network: {0}")]
+    Mlp(#[from] protogist::mlp::MlpError),
     /// A rate (FAR target, ...) outside `[0, 1]`.
     #[error("rate {0} is outside [0, 1]")]
     BadRate(f64),

@@ -1,13 +1,20 @@
 //! `protogist train` and `protogist eval`: the float network on an
-//! image-folder dataset, its JSON model file, and the section 5.1
-//! measures on the held-out split.
+//! image-folder dataset, its quantised model blob and JSON float sidecar,
+//! and the section 5.1 measures on the held-out split, float and int8 side
+//! by side.
+//!
+//! **Files.** `train --out model.bin` writes two files: `model.bin`, the
+//! int8 `PGML` blob the core runs (docs/MODEL_FORMAT.md), and
+//! `model.bin.json` ([`sidecar_path`]), the float network with its class
+//! names, training parameters and split. `eval` reads both.
 
 use super::dataset::{load_dataset, stratified_split, Dataset};
 use super::metrics::{cmc, Det};
 use super::mlp::{Mlp, GAMMA};
 use super::model::{bad_model, ModelFile, MODEL_FORMAT};
-use super::plots::{cmc_points, write_plot, Curve, PlotKind, SHAPE_BLUE};
-use super::rules::{evaluate, Templates};
+use super::plots::{cmc_points, write_plot, Curve, PlotKind, MAGENTA, SHAPE_BLUE};
+use super::quant::{int_outputs, int_scores, model_error, quantize, score_sets};
+use super::rules::{evaluate, ranked, Evaluation, Templates};
 use super::train::{train, TrainParams};
 use crate::error::{HostError, Result};
 use crate::io::{ensure_dir, write_atomic};
@@ -31,9 +38,13 @@ pub struct TrainOptions {
     /// Maximum epochs (the paper: 1000).
     #[arg(long, default_value_t = 1000)]
     pub epochs: usize,
-    /// Model file to write (JSON).
+    /// Model blob to write (int8, PGML); the float network goes to
+    /// `<out>.json` beside it.
     #[arg(long)]
     pub out: PathBuf,
+    /// Input features: the 720-element shape vector (the only kind).
+    #[arg(long, value_enum, default_value_t = Features::Shape)]
+    pub features: Features,
     /// Fraction of each class held out for testing.
     #[arg(long, default_value_t = 0.5)]
     pub test_fraction: f64,
@@ -45,10 +56,26 @@ pub struct TrainOptions {
     pub gamma: f64,
 }
 
+/// Input features of the network.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Features {
+    /// The centroidal profile of section 3.5 (720 values).
+    #[default]
+    Shape,
+}
+
+/// The float sidecar of a model blob: `<blob>.json`.
+pub fn sidecar_path(blob: &std::path::Path) -> PathBuf {
+    let mut s = blob.as_os_str().to_owned();
+    s.push(".json");
+    PathBuf::from(s)
+}
+
 /// Options of `protogist eval`.
 #[derive(Clone, Debug, PartialEq, Eq, clap::Args)]
 pub struct EvalOptions {
-    /// Model file written by `protogist train`.
+    /// Model blob written by `protogist train` (its float sidecar
+    /// `<model>.json` must be beside it).
     #[arg(long)]
     pub model: PathBuf,
     /// The dataset the model was trained on.
@@ -150,8 +177,23 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
     if let Some(parent) = opts.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         ensure_dir(parent)?;
     }
+    let calib: Vec<Vec<i16>> = ds
+        .samples
+        .iter()
+        .zip(&is_test)
+        .filter(|(_, &t)| !t)
+        .map(|(s, _)| s.shape.clone())
+        .collect();
+    let blob = quantize(
+        &net,
+        &calib,
+        &y,
+        &ds.classes,
+        &train_meta(&model, &opts.dataset),
+    )?;
     let json = serde_json::to_vec(&model).map_err(|e| bad_model(&opts.out, e.to_string()))?;
-    write_atomic(&opts.out, &json)?;
+    write_atomic(&sidecar_path(&opts.out), &json)?;
+    write_atomic(&opts.out, &blob)?;
     let mut s = Summary::new(format!("protogist train: {}", opts.dataset.display()));
     s.push("classes", n);
     s.push(
@@ -188,9 +230,29 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
         "train accuracy (argmax)",
         format!("{:.1} %", 100.0 * correct as f64 / y.len().max(1) as f64),
     );
-    s.push("model", opts.out.display());
+    s.push(
+        "model",
+        format!(
+            "{} ({} B int8), {}",
+            opts.out.display(),
+            blob.len(),
+            sidecar_path(&opts.out).display()
+        ),
+    );
     s.push("time", format!("{:.1} s", start.elapsed().as_secs_f64()));
     Ok(s)
+}
+
+/// The metadata string a blob records: how `train` made it (the dataset
+/// folder's name and the sidecar's parameters; `epochs` is the number run).
+pub fn train_meta(model: &ModelFile, dataset: &std::path::Path) -> String {
+    let name = dataset
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    format!(
+        "protogist train --dataset {name} --features shape --hidden {} --epochs {} --test-fraction {} --seed {} --gamma {}",
+        model.hidden, model.epochs, model.test_fraction, model.seed, model.gamma
+    )
 }
 
 /// The measures `protogist eval` reports (rates in `[0, 1]`).
@@ -218,15 +280,91 @@ pub struct EvalMetrics {
     pub vr_far_01: f64,
 }
 
+impl EvalMetrics {
+    /// The measures of one evaluation.
+    ///
+    /// # Errors
+    /// [`ClassifyError`](super::ClassifyError) for empty score sets.
+    pub fn of(ev: &Evaluation, train: usize) -> Result<(Self, Vec<f64>, Det)> {
+        let n = ev.classes;
+        let rates = cmc(&ev.ranks, n)?;
+        let det = Det::sweep(&ev.genuine, &ev.impostor)?;
+        let m = Self {
+            classes: n,
+            train,
+            test: ev.ranks.len(),
+            ror: rates[0],
+            cmc: rates.iter().take(10).copied().collect(),
+            eer: det.eer(),
+            hter_min: det.hter_min().0,
+            auc: det.auc(),
+            vr_far_1: det.verification_rate_at(0.01)?,
+            vr_far_01: det.verification_rate_at(0.001)?,
+        };
+        Ok((m, rates, det))
+    }
+}
+
+/// What `protogist eval --json` prints and writes to `metrics.json`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EvalReport {
+    /// The float network.
+    pub float: EvalMetrics,
+    /// The int8 blob, run by the core.
+    pub int8: EvalMetrics,
+    /// Fraction of test probes whose rank-1 class is the same for both.
+    pub top1_agreement: f64,
+    /// Bytes of the blob.
+    pub model_bytes: usize,
+    /// Integer inferences (`mlp::forward`) per second on one host thread,
+    /// over the test probes for at least 0.3 s.
+    pub int8_inferences_per_s: f64,
+}
+
+/// Reads and parses a model blob and its float sidecar.
+///
+/// # Errors
+/// I/O errors, a malformed blob or sidecar.
+pub fn load_models(path: &std::path::Path) -> Result<(Vec<u8>, ModelFile)> {
+    let blob = std::fs::read(path).map_err(|e| HostError::io(path, e))?;
+    protogist::mlp::Model::parse(&blob).map_err(|e| bad_model(path, model_error(e)))?;
+    let side = sidecar_path(path);
+    let text = std::fs::read(&side).map_err(|e| HostError::io(&side, e))?;
+    let model: ModelFile =
+        serde_json::from_slice(&text).map_err(|e| bad_model(&side, e.to_string()))?;
+    Ok((blob, model))
+}
+
 /// `protogist eval`.
 ///
 /// # Errors
 /// A missing or malformed model, a dataset that does not match it, I/O.
 pub fn run_eval(opts: &EvalOptions) -> Result<Summary> {
-    let text = std::fs::read(&opts.model).map_err(|e| HostError::io(&opts.model, e))?;
-    let model: ModelFile =
-        serde_json::from_slice(&text).map_err(|e| bad_model(&opts.model, e.to_string()))?;
-    let net = model.network(&opts.model)?;
+    let (report, json) = evaluate_model(opts)?;
+    Ok(eval_summary(opts, &report, json))
+}
+
+/// The work of `protogist eval`: the report (also written, with the plots,
+/// to `--out`) and its JSON.
+///
+/// # Errors
+/// As [`run_eval`].
+pub fn evaluate_model(opts: &EvalOptions) -> Result<(EvalReport, String)> {
+    let (blob, model) = load_models(&opts.model)?;
+    let side = sidecar_path(&opts.model);
+    let net = model.network(&side)?;
+    let qm =
+        protogist::mlp::Model::parse(&blob).map_err(|e| bad_model(&opts.model, model_error(e)))?;
+    let names: Vec<&str> = (0..qm.classes()).filter_map(|c| qm.class_name(c)).collect();
+    if names != model.classes || qm.hidden() != model.hidden {
+        return Err(bad_model(
+            &opts.model,
+            format!(
+                "the blob does not match its float sidecar {}",
+                side.display()
+            ),
+        ));
+    }
     let ds = load_dataset(&opts.dataset)?;
     if ds.classes != model.classes {
         return Err(HostError::Dataset {
@@ -262,71 +400,144 @@ pub fn run_eval(opts: &EvalOptions) -> Result<Summary> {
     let n = ds.classes.len();
     let templates = Templates::from_outputs(&train_out, &train_y, n)?;
     let ev = evaluate(&templates, &test_out, &test_y)?;
-    let rates = cmc(&ev.ranks, n)?;
-    let det = Det::sweep(&ev.genuine, &ev.impostor)?;
-    let m = EvalMetrics {
-        classes: n,
-        train: train_out.len(),
-        test: test_out.len(),
-        ror: rates[0],
-        cmc: rates.iter().take(10).copied().collect(),
-        eer: det.eer(),
-        hter_min: det.hter_min().0,
-        auc: det.auc(),
-        vr_far_1: det.verification_rate_at(0.01)?,
-        vr_far_01: det.verification_rate_at(0.001)?,
+    let (fm, f_rates, f_det) = EvalMetrics::of(&ev, train_out.len())?;
+    // The int8 network on the same probes, with the blob's templates.
+    let test_raw: Vec<Vec<i16>> = ds
+        .samples
+        .iter()
+        .filter(|s| test_set.contains(s.key.as_str()))
+        .map(|s| s.shape.clone())
+        .collect();
+    let int_s = int_scores(&qm, &int_outputs(&qm, &test_raw)?)?;
+    let iev = score_sets(&int_s, &test_y);
+    let (im, i_rates, i_det) = EvalMetrics::of(&iev, train_out.len())?;
+    let agree = test_out
+        .iter()
+        .zip(&int_s)
+        .filter(|(f, i)| {
+            let fs = templates.scores(f).unwrap_or_default();
+            let is: Vec<f64> = i.iter().map(|&v| f64::from(v)).collect();
+            ranked(&fs).first() == ranked(&is).first()
+        })
+        .count();
+    let report = EvalReport {
+        float: fm,
+        int8: im,
+        top1_agreement: agree as f64 / test_out.len() as f64,
+        model_bytes: blob.len(),
+        int8_inferences_per_s: inferences_per_s(&qm, &test_raw)?,
     };
-    let curve = |points| Curve {
-        points,
-        colour: SHAPE_BLUE,
-        dashed: false,
+    let curves = |f: Vec<(f64, f64)>, i: Vec<(f64, f64)>| {
+        vec![
+            Curve {
+                points: f,
+                colour: SHAPE_BLUE,
+                dashed: false,
+            },
+            Curve {
+                points: i,
+                colour: MAGENTA,
+                dashed: true,
+            },
+        ]
     };
-    let det_pts = det.points().iter().map(|p| (p.far, p.frr)).collect();
+    let det_pts = |d: &Det| d.points().iter().map(|p| (p.far, p.frr)).collect();
     for (name, kind, c) in [
         (
             "cmc",
             PlotKind::Cmc { classes: n },
-            curve(cmc_points(&rates)),
+            curves(cmc_points(&f_rates), cmc_points(&i_rates)),
         ),
-        ("det", PlotKind::Det, curve(det_pts)),
-        ("roc", PlotKind::Roc, curve(det.roc())),
+        (
+            "det",
+            PlotKind::Det,
+            curves(det_pts(&f_det), det_pts(&i_det)),
+        ),
+        ("roc", PlotKind::Roc, curves(f_det.roc(), i_det.roc())),
     ] {
-        write_plot(&opts.out, name, kind, &[c], (480, 360))?;
+        write_plot(&opts.out, name, kind, &c, (480, 360))?;
     }
     let json =
-        serde_json::to_string_pretty(&m).map_err(|e| bad_model(&opts.model, e.to_string()))?;
+        serde_json::to_string_pretty(&report).map_err(|e| bad_model(&opts.model, e.to_string()))?;
     write_atomic(&opts.out.join("metrics.json"), json.as_bytes())?;
+    Ok((report, json))
+}
+
+/// Single-thread `mlp::forward` rate over `inputs` (repeated for at least
+/// 0.3 s).
+fn inferences_per_s(model: &protogist::mlp::Model<'_>, inputs: &[Vec<i16>]) -> Result<f64> {
+    use protogist::mlp::{forward, hidden_len, output_len, packed_len, Scratch};
+    let (d, h, k) = (model.inputs(), model.hidden(), model.classes());
+    let elems: Vec<_> = inputs
+        .iter()
+        .map(|r| super::quant::shape_elems(r))
+        .collect();
+    let (mut xi, mut hi, mut yo) = (
+        vec![0u32; packed_len(d, h)],
+        vec![0u8; hidden_len(h)],
+        vec![0u16; output_len(k)],
+    );
+    let start = Instant::now();
+    let mut runs = 0u64;
+    while runs == 0 || start.elapsed().as_secs_f64() < 0.3 {
+        for e in &elems {
+            let mut s = Scratch {
+                input: &mut xi,
+                hidden: &mut hi,
+                output: &mut yo,
+            };
+            std::hint::black_box(forward(model, e, &mut s).map_err(super::ClassifyError::from)?);
+            runs += 1;
+        }
+        if elems.is_empty() {
+            break;
+        }
+    }
+    Ok(runs as f64 / start.elapsed().as_secs_f64().max(1e-9))
+}
+
+fn eval_summary(opts: &EvalOptions, r: &EvalReport, json: String) -> Summary {
     let pc = |r: f64| format!("{:.1} %", 100.0 * r);
+    let both = |f: f64, i: f64| format!("{:>7} | {:>7}", pc(f), pc(i));
+    let (f, i) = (&r.float, &r.int8);
     let mut s = Summary::new(format!(
         "protogist eval: {} on {}",
         opts.model.display(),
         opts.dataset.display()
     ));
-    s.push("classes", n);
+    s.push("classes", f.classes);
     s.push(
         "probes",
         format!(
             "{} test, templates from {} training images",
-            m.test, m.train
+            f.test, f.train
         ),
     );
-    s.push("ROR", pc(m.ror));
-    s.push(
-        "CMC 1..",
+    s.push("measure", format!("{:>7} | {:>7}", "float", "int8"));
+    s.push("ROR", both(f.ror, i.ror));
+    let cmc = |m: &EvalMetrics| {
         m.cmc
             .iter()
             .map(|&r| format!("{:.1}", 100.0 * r))
             .collect::<Vec<_>>()
-            .join(" "),
+            .join(" ")
+    };
+    s.push("CMC 1.. float", cmc(f));
+    s.push("CMC 1.. int8", cmc(i));
+    s.push("EER", both(f.eer, i.eer));
+    s.push("HTER_min", both(f.hter_min, i.hter_min));
+    s.push("AUC", both(f.auc, i.auc));
+    s.push("VR @ FAR 1 %", both(f.vr_far_1, i.vr_far_1));
+    s.push("VR @ FAR 0.1 %", both(f.vr_far_01, i.vr_far_01));
+    s.push("top-1 agreement", pc(r.top1_agreement));
+    s.push("model", format!("{} B int8", r.model_bytes));
+    s.push(
+        "int8 inferences/s",
+        format!("{:.0} (one thread)", r.int8_inferences_per_s),
     );
-    s.push("EER", pc(m.eer));
-    s.push("HTER_min", pc(m.hter_min));
-    s.push("AUC", pc(m.auc));
-    s.push("VR @ FAR 1 %", pc(m.vr_far_1));
-    s.push("VR @ FAR 0.1 %", pc(m.vr_far_01));
     s.push("plots", opts.out.display());
     if opts.json {
         s.raw = Some(json);
     }
-    Ok(s)
+    s
 }

@@ -1,0 +1,560 @@
+//! Integer inference of the proto-object classifier (paper sections 4.1 and
+//! 4.4): the two-layer log-sigmoid network, quantised to int8, and the
+//! classification rules on its outputs.
+//!
+//! ```text
+//! shape vector (I4F12) ─► int8 input ─► W1·x + b1 (i32) ─► requantise ─► σ LUT ─► u8 hidden
+//!                      ─► W2·h + b2 (i32) ─► requantise ─► σ LUT ─► u16 outputs
+//!                      ─► integer cosine with u16 templates ─► top-k, Δ, unknown class
+//! ```
+//!
+//! **Formats.** Weights are int8, symmetric (zero point 0, values in
+//! `−127..=127`), one scale per output channel; biases are int32 at the
+//! scale `s_in · s_w[c]`; each channel's accumulator is requantised to a
+//! pre-activation `z` in Q12 by its own multiplier and shift
+//! ([`requant::requantize`], TFLM's `MultiplyByQuantizedMultiplier`) and
+//! goes through the log-sigmoid table ([`requant::logsig_q12`], at most
+//! 1 LSB off). Hidden activations are u8 (`255 · σ`), outputs u16
+//! (`65535 · σ`). No float anywhere.
+//!
+//! **Input.** The shape stage gives `I4F12` elements (`raw / 4096`,
+//! z-normalised). The host calibrates an input scale `s_x` on the training
+//! data (largest `|x|` over all training vectors, divided by 127) and stores
+//! `1 / (4096 · s_x)` as a multiplier and shift; [`quantize_input`] applies
+//! it to the raw `i16` and clamps to `−127..=127`, so
+//! `q = clamp(round(x / s_x))` (rounding as in the requantisation).
+//!
+//! **Rules.** Templates `v_c` are u16 vectors (the class-mean outputs on the
+//! training data). The score of class `c` is the cosine
+//! `v·v_c / (‖v‖ ‖v_c‖)` in Q16 ([`cosine_q16`]): exact integer dot
+//! products, one `u128` integer square root, one rounded division. The
+//! ranked list orders by score, ties to the lower class. Identification
+//! returns the best class if its score reaches the model's `Δ`
+//! ([`Model::delta_q16`]), else [`Identity::Unknown`] (`U_{N+1}`);
+//! verification accepts a claim when its score reaches `Δ`.
+//!
+//! **Memory.** Activations need [`scratch_bytes`] bytes in a caller-owned
+//! [`Scratch`] (sizes from [`packed_len`], [`hidden_len`], [`output_len`]);
+//! the model is borrowed from wherever its bytes are (flash).
+//!
+//! **Kernel.** Each layer runs four output rows at a time; per four inputs
+//! and row it loads one weight word, splits it into even and odd bytes
+//! with two masks, and does four 16x16 multiply-accumulates that read
+//! their operands' register halves (inputs are kept packed in pairs), so
+//! the Cortex-M4 build uses `SMLABB`/`SMLABT`/`SMLATB`/`SMLATT`. Safe Rust
+//! has no `SMLAD` (two MACs per instruction): LLVM only forms it from two
+//! pairs of adjacent `i16` loads, and the weights are bytes.
+
+pub mod blob;
+pub mod logsig_table;
+pub mod requant;
+
+pub use blob::{crc32, Model, ModelError};
+
+use crate::fixed::isqrt_floor_u128;
+use crate::shape::ShapeElem;
+use blob::{le_i32, le_u16};
+use requant::{logsig_q12, logsig_u8, requantize};
+
+/// Ranked classes the demo prints.
+pub const TOP_K: usize = 5;
+
+/// Why inference failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum MlpError {
+    /// The input vector does not have the model's input length.
+    FeatureSize {
+        /// The model's input length.
+        expected: usize,
+        /// The vector's length.
+        got: usize,
+    },
+    /// A scratch buffer is shorter than the model needs.
+    ScratchTooSmall {
+        /// Which buffer.
+        buffer: &'static str,
+        /// Elements needed.
+        needed: usize,
+        /// Elements given.
+        got: usize,
+    },
+    /// A class index (claim) out of range.
+    ClassOutOfRange {
+        /// The class.
+        class: usize,
+        /// Classes of the model.
+        classes: usize,
+    },
+}
+
+impl core::error::Error for MlpError {}
+
+impl core::fmt::Display for MlpError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::FeatureSize { expected, got } => {
+                write!(
+                    f,
+                    "feature vector has {got} elements, the model takes {expected}"
+                )
+            }
+            Self::ScratchTooSmall {
+                buffer,
+                needed,
+                got,
+            } => write!(f, "{buffer} scratch has {got} elements, needs {needed}"),
+            Self::ClassOutOfRange { class, classes } => {
+                write!(f, "class {class} out of range for {classes} classes")
+            }
+        }
+    }
+}
+
+/// Words of [`Scratch::input`] for a layer input of `n` values: the
+/// values are packed in pairs, `x[2i]` in the low and `x[2i + 1]` in the
+/// high half of word `i`.
+pub const fn input_len(n: usize) -> usize {
+    n.div_ceil(2)
+}
+
+/// Words of [`Scratch::input`] for a network: the quantised input, then the
+/// hidden activations reuse the same words.
+pub const fn packed_len(inputs: usize, hidden: usize) -> usize {
+    if input_len(inputs) > input_len(hidden) {
+        input_len(inputs)
+    } else {
+        input_len(hidden)
+    }
+}
+
+/// Elements of [`Scratch::hidden`] for `hidden` units.
+pub const fn hidden_len(hidden: usize) -> usize {
+    hidden
+}
+
+/// Elements of [`Scratch::output`] for `classes` outputs.
+pub const fn output_len(classes: usize) -> usize {
+    classes
+}
+
+/// Activation RAM in bytes: the packed layer input (`u32` words), the
+/// hidden (`u8`) and the output (`u16`) activations.
+pub const fn scratch_bytes(inputs: usize, hidden: usize, classes: usize) -> usize {
+    4 * packed_len(inputs, hidden) + hidden_len(hidden) + 2 * output_len(classes)
+}
+
+/// Caller-owned activation memory.
+#[derive(Debug)]
+pub struct Scratch<'a> {
+    /// The current layer's input, `i16` values packed in pairs
+    /// ([`packed_len`] words).
+    pub input: &'a mut [u32],
+    /// Hidden activations (`255 · σ`).
+    pub hidden: &'a mut [u8],
+    /// Outputs (`65535 · σ`).
+    pub output: &'a mut [u16],
+}
+
+/// One entry of a ranked list.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Ranked {
+    /// Class index.
+    pub class: u16,
+    /// Cosine in Q16 (65536 = 1).
+    pub score: u32,
+}
+
+/// The outcome of identification.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Identity {
+    /// Class `U_c`, `c` from 0.
+    Known(u16),
+    /// `U_{N+1}`: no template reaches `Δ`.
+    Unknown,
+}
+
+/// Packs `values` in pairs into `out` (a missing last high half is 0).
+fn pack(values: impl Iterator<Item = i16>, out: &mut [u32]) {
+    let mut values = values;
+    for w in out.iter_mut() {
+        let lo = values.next().unwrap_or(0);
+        let hi = values.next().unwrap_or(0);
+        *w = u32::from(lo as u16) | (u32::from(hi as u16) << 16);
+    }
+}
+
+/// `clamp(requantize(raw), −127, 127)` of every element, packed in pairs
+/// into `out` ([`input_len`] words).
+///
+/// # Errors
+/// [`MlpError::FeatureSize`] when `input` is not the model's length,
+/// [`MlpError::ScratchTooSmall`] when `out` is short.
+pub fn quantize_input(
+    model: &Model<'_>,
+    input: &[ShapeElem],
+    out: &mut [u32],
+) -> Result<(), MlpError> {
+    if input.len() != model.inputs() {
+        return Err(MlpError::FeatureSize {
+            expected: model.inputs(),
+            got: input.len(),
+        });
+    }
+    let words = input_len(input.len());
+    check_scratch("input", words, out.len())?;
+    let (m, s) = model.input_requant();
+    let q = input
+        .iter()
+        .map(|x| requantize(i32::from(x.to_bits()), m, s).clamp(-127, 127) as i16);
+    pack(q, out.get_mut(..words).unwrap_or(&mut []));
+    Ok(())
+}
+
+fn check_scratch(buffer: &'static str, needed: usize, got: usize) -> Result<(), MlpError> {
+    if got < needed {
+        return Err(MlpError::ScratchTooSmall {
+            buffer,
+            needed,
+            got,
+        });
+    }
+    Ok(())
+}
+
+/// The low half of a word, sign-extended.
+#[inline(always)]
+fn lo16(v: i32) -> i32 {
+    i32::from(v as i16)
+}
+
+/// The high half of a word, sign-extended.
+#[inline(always)]
+fn hi16(v: i32) -> i32 {
+    v >> 16
+}
+
+/// Four multiply-accumulates: weight bytes `w` (excess-128, byte `i` for
+/// input `i`) against inputs `x0 | x1 << 16` and `x2 | x3 << 16`. `mask`
+/// is `0x00FF_00FF`: it puts bytes 0 and 2 (and 1 and 3) in the two 16-bit
+/// halves of a register, so each product reads its operands' halves
+/// directly (the Cortex-M4 `SMLAxy` forms). The caller passes the mask
+/// through `black_box` so that LLVM keeps the two-lane registers instead of
+/// extracting every byte on its own.
+#[inline(always)]
+fn mac4(acc: i32, w: u32, x01: i32, x23: i32, mask: u32) -> i32 {
+    let even = (w & mask) as i32;
+    // An arithmetic shift, so that LLVM cannot prove the top half
+    // non-negative and turn `hi16` into a logical shift (which `SMLAxT`
+    // cannot fold).
+    let odd = ((w as i32) >> 8) & mask as i32;
+    acc.wrapping_add(lo16(even).wrapping_mul(lo16(x01)))
+        .wrapping_add(lo16(odd).wrapping_mul(hi16(x01)))
+        .wrapping_add(hi16(even).wrapping_mul(lo16(x23)))
+        .wrapping_add(hi16(odd).wrapping_mul(hi16(x23)))
+}
+
+/// Four weight bytes as a little-endian word (0 if short: never, the
+/// callers pass `chunks_exact(4)`).
+#[inline(always)]
+fn word(b: &[u8]) -> u32 {
+    <[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes)
+}
+
+/// Input value `j` of packed words.
+#[inline]
+fn x_at(x: &[u32], j: usize) -> i32 {
+    let w = x.get(j / 2).copied().unwrap_or(0) as i32;
+    if j % 2 == 0 {
+        lo16(w)
+    } else {
+        hi16(w)
+    }
+}
+
+/// The pair words of `x` covering the first `full` inputs (a multiple of 4).
+#[inline(always)]
+fn pairs(x: &[u32], full: usize) -> core::slice::ChunksExact<'_, u32> {
+    x.get(..full / 2).unwrap_or(&[]).chunks_exact(2)
+}
+
+/// `[x01, x23]` of a pair chunk.
+#[inline(always)]
+fn xpair(xs: &[u32]) -> (i32, i32) {
+    match *xs {
+        [a, b] => (a as i32, b as i32),
+        _ => (0, 0),
+    }
+}
+
+/// `Σ_j u[r][j] · x[j]` for four rows of `n` excess-128 weight bytes
+/// (consecutive in `w`), sharing each input load between the rows. Sums
+/// wrap; the caller subtracts `128 · Σx`, and the true dot products fit
+/// `i32` (see [`layer`]), so the wrapped result is exact.
+#[inline(always)]
+fn dot4(w: &[u8], n: usize, x: &[u32], mask: u32) -> [i32; 4] {
+    let full = n - n % 4;
+    let row = |r: usize| w.get(r * n..r * n + full).unwrap_or(&[]);
+    let (r0, r1, r2, r3) = (row(0), row(1), row(2), row(3));
+    let (mut a0, mut a1, mut a2, mut a3) = (0i32, 0i32, 0i32, 0i32);
+    for ((((c0, c1), c2), c3), xs) in r0
+        .chunks_exact(4)
+        .zip(r1.chunks_exact(4))
+        .zip(r2.chunks_exact(4))
+        .zip(r3.chunks_exact(4))
+        .zip(pairs(x, full))
+    {
+        let (x01, x23) = xpair(xs);
+        a0 = mac4(a0, word(c0), x01, x23, mask);
+        a1 = mac4(a1, word(c1), x01, x23, mask);
+        a2 = mac4(a2, word(c2), x01, x23, mask);
+        a3 = mac4(a3, word(c3), x01, x23, mask);
+    }
+    let mut s = [a0, a1, a2, a3];
+    for j in full..n {
+        let xj = x_at(x, j);
+        for (r, acc) in s.iter_mut().enumerate() {
+            let u = i32::from(w.get(r * n + j).copied().unwrap_or(128));
+            *acc = acc.wrapping_add(u.wrapping_mul(xj));
+        }
+    }
+    s
+}
+
+/// [`dot4`] for one row.
+#[inline(always)]
+fn dot1(w: &[u8], n: usize, x: &[u32], mask: u32) -> i32 {
+    let full = n - n % 4;
+    let mut a = w
+        .get(..full)
+        .unwrap_or(&[])
+        .chunks_exact(4)
+        .zip(pairs(x, full))
+        .fold(0i32, |a, (c, xs)| {
+            let (x01, x23) = xpair(xs);
+            mac4(a, word(c), x01, x23, mask)
+        });
+    for j in full..n {
+        let u = i32::from(w.get(j).copied().unwrap_or(128));
+        a = a.wrapping_add(u.wrapping_mul(x_at(x, j)));
+    }
+    a
+}
+
+/// One fully connected layer: `out[c] = act(requantize(W[c]·x + b[c]))`
+/// over `n` packed inputs. Weights are stored excess-128 (`u = w + 128`),
+/// so `W·x = Σ u·x − 128·Σx`. With `|w| <= 127`, `|x| <= 255` and at most
+/// 65535 inputs, `|W·x| < 2^31`.
+fn layer<T>(
+    w: &[u8],
+    b: &[u8],
+    rq: &[u8],
+    x: &[u32],
+    n: usize,
+    out: &mut [T],
+    act: impl Fn(i32) -> T,
+) {
+    if n == 0 {
+        return;
+    }
+    // The pad half of an odd count is 0, so summing whole words is exact.
+    let xsum = x
+        .get(..input_len(n))
+        .unwrap_or(&[])
+        .iter()
+        .fold(0i32, |a, &w| {
+            a.wrapping_add(lo16(w as i32)).wrapping_add(hi16(w as i32))
+        });
+    let offset = xsum.wrapping_mul(128);
+    let mask = core::hint::black_box(0x00FF_00FFu32);
+    let finish = |acc: i32, c: usize| -> T {
+        let acc = acc.wrapping_sub(offset).saturating_add(le_i32(b, 4 * c));
+        let z = requantize(acc, le_i32(rq, 8 * c), le_i32(rq, 8 * c + 4));
+        act(z)
+    };
+    let mut blocks = w.chunks_exact(4 * n);
+    let mut outs = out.chunks_exact_mut(4);
+    let mut c = 0;
+    for (block, o) in (&mut blocks).zip(&mut outs) {
+        let s = dot4(block, n, x, mask);
+        for (o, s) in o.iter_mut().zip(s) {
+            *o = finish(s, c);
+            c += 1;
+        }
+    }
+    for (row, o) in blocks
+        .remainder()
+        .chunks_exact(n)
+        .zip(outs.into_remainder())
+    {
+        *o = finish(dot1(row, n, x, mask), c);
+        c += 1;
+    }
+}
+
+/// Runs the network on a shape vector; the outputs (`65535 · σ`, one per
+/// class) are in `scratch.output[..model.classes()]` and returned.
+///
+/// # Errors
+/// [`MlpError::FeatureSize`] for an input of another length than the
+/// model's, [`MlpError::ScratchTooSmall`].
+pub fn forward<'s>(
+    model: &Model<'_>,
+    input: &[ShapeElem],
+    scratch: &'s mut Scratch<'_>,
+) -> Result<&'s [u16], MlpError> {
+    let (d, h, k) = (model.inputs(), model.hidden(), model.classes());
+    if input.len() != d {
+        return Err(MlpError::FeatureSize {
+            expected: d,
+            got: input.len(),
+        });
+    }
+    check_scratch("input", packed_len(d, h), scratch.input.len())?;
+    check_scratch("hidden", hidden_len(h), scratch.hidden.len())?;
+    check_scratch("output", output_len(k), scratch.output.len())?;
+    quantize_input(model, input, scratch.input)?;
+    let hidden = scratch.hidden.get_mut(..h).unwrap_or(&mut []);
+    layer(
+        model.w1,
+        model.b1,
+        model.rq1,
+        scratch.input,
+        d,
+        hidden,
+        logsig_u8,
+    );
+    // The output layer reads the hidden activations packed like an input.
+    pack(
+        hidden.iter().map(|&v| i16::from(v)),
+        scratch.input.get_mut(..input_len(h)).unwrap_or(&mut []),
+    );
+    let out = scratch.output.get_mut(..k).unwrap_or(&mut []);
+    layer(
+        model.w2,
+        model.b2,
+        model.rq2,
+        scratch.input,
+        h,
+        out,
+        logsig_q12,
+    );
+    Ok(scratch.output.get(..k).unwrap_or(&[]))
+}
+
+/// The cosine of `v` and a template given as little-endian u16 bytes, in
+/// Q16 (65536 = 1), rounded; 0 when either is all zero.
+pub fn cosine_q16(v: &[u16], template_le: &[u8]) -> u32 {
+    let (mut vt, mut vv, mut tt) = (0u64, 0u64, 0u64);
+    for (&a, t) in v.iter().zip(template_le.chunks_exact(2)) {
+        let (a, t) = (u64::from(a), u64::from(le_u16(t, 0)));
+        vt += a * t;
+        vv += a * a;
+        tt += t * t;
+    }
+    // Each sum is below 2^32 · MAX_CLASSES = 2^42: the product fits u128.
+    let norm = isqrt_floor_u128(u128::from(vv) * u128::from(tt));
+    if norm == 0 {
+        return 0;
+    }
+    let q = ((u128::from(vt) << 16) + norm / 2) / norm;
+    q.min(1 << 16) as u32
+}
+
+/// The Q16 cosine of `outputs` with every class template, in `scores`.
+///
+/// # Errors
+/// [`MlpError::FeatureSize`] when `outputs` or `scores` is not one per class.
+pub fn scores(model: &Model<'_>, outputs: &[u16], scores: &mut [u32]) -> Result<(), MlpError> {
+    let k = model.classes();
+    for len in [outputs.len(), scores.len()] {
+        if len != k {
+            return Err(MlpError::FeatureSize {
+                expected: k,
+                got: len,
+            });
+        }
+    }
+    for (c, s) in scores.iter_mut().enumerate() {
+        *s = model.template(c).map_or(0, |t| cosine_q16(outputs, t));
+    }
+    Ok(())
+}
+
+/// The best `ranked.len()` classes by score, best first, ties to the lower
+/// class; returns how many entries were filled (`min(len, classes)`).
+///
+/// # Errors
+/// [`MlpError::FeatureSize`] when `outputs` is not one per class.
+pub fn top_k(model: &Model<'_>, outputs: &[u16], ranked: &mut [Ranked]) -> Result<usize, MlpError> {
+    let k = model.classes();
+    if outputs.len() != k {
+        return Err(MlpError::FeatureSize {
+            expected: k,
+            got: outputs.len(),
+        });
+    }
+    let mut filled = 0usize;
+    for c in 0..k {
+        let score = model.template(c).map_or(0, |t| cosine_q16(outputs, t));
+        let entry = Ranked {
+            class: c as u16,
+            score,
+        };
+        // Insert after every entry with a score >= this one (stable).
+        let pos = ranked
+            .iter()
+            .take(filled)
+            .position(|r| r.score < score)
+            .unwrap_or(filled);
+        if pos >= ranked.len() {
+            continue;
+        }
+        let end = filled.min(ranked.len().saturating_sub(1));
+        if let Some(tail) = ranked.get_mut(pos..=end) {
+            tail.rotate_right(1);
+            if let Some(first) = tail.first_mut() {
+                *first = entry;
+            }
+        }
+        filled = (filled + 1).min(ranked.len());
+    }
+    Ok(filled)
+}
+
+/// Identification: the best class if its score reaches `Δ`, else
+/// [`Identity::Unknown`].
+///
+/// # Errors
+/// As [`top_k`].
+pub fn identify(model: &Model<'_>, outputs: &[u16]) -> Result<(Identity, Ranked), MlpError> {
+    let mut best = [Ranked::default()];
+    top_k(model, outputs, &mut best)?;
+    let [b] = best;
+    let id = if b.score >= model.delta_q16() {
+        Identity::Known(b.class)
+    } else {
+        Identity::Unknown
+    };
+    Ok((id, b))
+}
+
+/// Verification: accept the claim "class `claim`" when its score reaches
+/// `Δ`.
+///
+/// # Errors
+/// [`MlpError::ClassOutOfRange`], or as [`top_k`].
+pub fn verify(model: &Model<'_>, outputs: &[u16], claim: usize) -> Result<bool, MlpError> {
+    let k = model.classes();
+    if outputs.len() != k {
+        return Err(MlpError::FeatureSize {
+            expected: k,
+            got: outputs.len(),
+        });
+    }
+    let t = model.template(claim).ok_or(MlpError::ClassOutOfRange {
+        class: claim,
+        classes: k,
+    })?;
+    Ok(cosine_q16(outputs, t) >= model.delta_q16())
+}

@@ -1,0 +1,109 @@
+//! `protogist quantize`: the int8 blob of a float model, and optionally a
+//! Rust source file holding it as a `static` byte array for firmware.
+//!
+//! `--model` is either a float model (the JSON sidecar `train` writes, with
+//! `--dataset` for calibration, templates and Δ on its training split) or
+//! an existing blob (checked, then re-emitted as is). From the sidecar and
+//! the same dataset it rebuilds the blob `train` wrote, bit for bit.
+
+use super::dataset::load_dataset;
+use super::model::{bad_model, ModelFile};
+use super::quant::{emit_rust, model_error, quantize};
+use crate::error::{HostError, Result};
+use crate::io::{ensure_dir, write_atomic};
+use crate::summary::Summary;
+use protogist::mlp::blob::MAGIC;
+use protogist::mlp::Model;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// Options of `protogist quantize`.
+#[derive(Clone, Debug, PartialEq, Eq, clap::Args)]
+pub struct QuantizeOptions {
+    /// A float model (`model.bin.json`) or an int8 blob (`model.bin`).
+    #[arg(long)]
+    pub model: PathBuf,
+    /// The dataset the float model was trained on (calibration, templates,
+    /// Δ); not needed for a blob.
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
+    /// Blob to write.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Rust source to write: `pub static MODEL: [u8; N]`.
+    #[arg(long)]
+    pub emit_rust: Option<PathBuf>,
+}
+
+fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        ensure_dir(parent)?;
+    }
+    write_atomic(path, bytes)
+}
+
+/// `protogist quantize`.
+///
+/// # Errors
+/// Neither `--out` nor `--emit-rust`; a malformed model; a float model
+/// without `--dataset`; dataset and I/O errors.
+pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
+    if opts.out.is_none() && opts.emit_rust.is_none() {
+        return Err(HostError::InvalidArgument {
+            name: "out",
+            reason: "give --out, --emit-rust or both".into(),
+        });
+    }
+    let bytes = std::fs::read(&opts.model).map_err(|e| HostError::io(&opts.model, e))?;
+    let blob = if bytes.starts_with(&MAGIC) {
+        Model::parse(&bytes).map_err(|e| bad_model(&opts.model, model_error(e)))?;
+        bytes
+    } else {
+        let file: ModelFile =
+            serde_json::from_slice(&bytes).map_err(|e| bad_model(&opts.model, e.to_string()))?;
+        let net = file.network(&opts.model)?;
+        let dir = opts.dataset.as_ref().ok_or(HostError::InvalidArgument {
+            name: "dataset",
+            reason: "a float model needs its training dataset".into(),
+        })?;
+        let ds = load_dataset(dir)?;
+        if ds.classes != file.classes {
+            return Err(HostError::Dataset {
+                path: dir.clone(),
+                reason: "its classes are not the model's".into(),
+            });
+        }
+        let train: HashSet<&str> = file.train.iter().map(String::as_str).collect();
+        let (calib, labels): (Vec<Vec<i16>>, Vec<usize>) = ds
+            .samples
+            .iter()
+            .filter(|s| train.contains(s.key.as_str()))
+            .map(|s| (s.shape.clone(), s.label))
+            .unzip();
+        let meta = super::model_cmd::train_meta(&file, dir);
+        quantize(&net, &calib, &labels, &file.classes, &meta)?
+    };
+    let model = Model::parse(&blob).map_err(|e| bad_model(&opts.model, model_error(e)))?;
+    let mut s = Summary::new(format!("protogist quantize: {}", opts.model.display()));
+    s.push(
+        "network",
+        format!(
+            "{}-{}-{} int8, {} classes",
+            model.inputs(),
+            model.hidden(),
+            model.classes(),
+            model.classes()
+        ),
+    );
+    s.push("blob", format!("{} B", blob.len()));
+    if let Some(out) = &opts.out {
+        write_file(out, &blob)?;
+        s.push("wrote", out.display());
+    }
+    if let Some(rs) = &opts.emit_rust {
+        let what = format!("{} ({})", opts.model.display(), model.meta());
+        write_file(rs, emit_rust(&blob, &what).as_bytes())?;
+        s.push("wrote", rs.display());
+    }
+    Ok(s)
+}

@@ -1,0 +1,57 @@
+//! The shipped model (`host/data/shapes_model.bin`, issue 5 §9): it parses,
+//! records how it was made, and the documented seeded commands regenerate
+//! it bit for bit.
+//!
+//! The regeneration is exact on one machine: training is deterministic
+//! whatever the thread count, but the float GEMM (`matrixmultiply`) picks
+//! its SIMD kernel by CPU feature, so a CPU without the same features may
+//! round some products differently and produce another model.
+
+use protogist::mlp::Model;
+use protogist_host::classify::model_cmd::{run_train, Features, TrainOptions};
+use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
+use protogist_host::classify::shipped::SHIPPED_MODEL;
+
+const META: &str = "protogist train --dataset shapes --features shape --hidden 128 --epochs 300 --test-fraction 0.5 --seed 1 --gamma 0.2";
+
+#[test]
+fn shipped_model_parses_and_records_its_parameters() {
+    let m = Model::parse(SHIPPED_MODEL).unwrap();
+    assert_eq!((m.inputs(), m.hidden(), m.classes()), (720, 128, 19));
+    assert_eq!(m.meta(), META);
+    assert_eq!(m.class_name(0), Some("00_square"));
+    assert_eq!(m.class_name(18), Some("18_d-shape"));
+    assert!(m.delta_q16() > 0 && m.delta_q16() < 65536);
+}
+
+/// `gen-shapes --out shapes --classes 19 --per-class 40 --seed 1 --size 64`
+/// then `train --dataset shapes --hidden 128 --epochs 300 --seed 1 --out
+/// shapes_model.bin`.
+#[test]
+fn documented_commands_regenerate_the_shipped_model() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("shapes");
+    gen_shapes(&GenShapesOptions {
+        out: ds.clone(),
+        classes: 19,
+        per_class: 40,
+        seed: 1,
+        size: 64,
+    })
+    .unwrap();
+    let out = tmp.path().join("shapes_model.bin");
+    run_train(&TrainOptions {
+        dataset: ds,
+        hidden: 128,
+        epochs: 300,
+        out: out.clone(),
+        test_fraction: 0.5,
+        seed: 1,
+        gamma: 0.2,
+        features: Features::Shape,
+    })
+    .unwrap();
+    let fresh = std::fs::read(&out).unwrap();
+    assert_eq!(fresh.len(), SHIPPED_MODEL.len());
+    assert!(fresh == SHIPPED_MODEL, "the regenerated model differs");
+}
