@@ -70,6 +70,7 @@
 
 use crate::fixed::{div_round_i64, isqrt_floor_u128, isqrt_round_u64};
 use crate::image::{ImageError, ImageView};
+use crate::segment::BitView;
 use core::fmt;
 
 pub use fixed::types::I4F12;
@@ -331,9 +332,19 @@ pub fn radial_profile(
     c: &Centroid,
     profile: &mut RadialProfile,
 ) -> ProfileReport {
+    profile_from(c, profile, |f| for_each_contour_pixel(mask, f))
+}
+
+/// [`radial_profile`] over the contour pixels `contour` calls its argument
+/// with.
+fn profile_from(
+    c: &Centroid,
+    profile: &mut RadialProfile,
+    contour: impl FnOnce(&mut dyn FnMut(usize, usize)),
+) -> ProfileReport {
     *profile = RadialProfile::new();
     let mut contour_pixels = 0u32;
-    for_each_contour_pixel(mask, |x, y| {
+    contour(&mut |x, y| {
         // x, y < 2^13: Q8 fits i32.
         let dx = ((x as i32) << FRAC_BITS) - c.x_q8;
         let dy = ((y as i32) << FRAC_BITS) - c.y_q8;
@@ -360,6 +371,98 @@ pub fn radial_profile(
         contour_pixels,
         empty_bins: empty as u16,
     }
+}
+
+/// [`centroid`] of a bit mask ([`BitView`]).
+///
+/// # Errors
+/// [`ShapeError::EmptyMask`] when no pixel is set.
+pub fn centroid_bits(mask: &BitView<'_>) -> Result<Centroid, ShapeError> {
+    let (w, _) = mask.size();
+    let (mut n, mut sx, mut sy) = (0u64, 0u64, 0u64);
+    // Bit i of a word sits at x = 32 k + i: the sum of x over a word is
+    // 32 k · ones + Σ 2^j · ones(word & M_j), M_j the bits whose index has
+    // bit j set.
+    const M: [u32; 5] = [
+        0xAAAA_AAAA,
+        0xCCCC_CCCC,
+        0xF0F0_F0F0,
+        0xFF00_FF00,
+        0xFFFF_0000,
+    ];
+    for (y, row) in mask.words().chunks_exact(w.div_ceil(32).max(1)).enumerate() {
+        let (mut rn, mut rsx) = (0u64, 0u64);
+        for (k, &v) in row.iter().enumerate().filter(|(_, &v)| v != 0) {
+            let ones = u64::from(v.count_ones());
+            rn += ones;
+            rsx += 32 * k as u64 * ones;
+            for (j, m) in M.iter().enumerate() {
+                rsx += u64::from((v & m).count_ones()) << j;
+            }
+        }
+        n += rn;
+        sx += rsx;
+        sy += rn * y as u64;
+    }
+    if n == 0 {
+        return Err(ShapeError::EmptyMask);
+    }
+    let q8 = |s: u64| ((2 * (s << FRAC_BITS) + n) / (2 * n)) as i32;
+    Ok(Centroid {
+        x_q8: q8(sx),
+        y_q8: q8(sy),
+        area: n as u32,
+    })
+}
+
+/// [`for_each_contour_pixel`] of a bit mask: the object pixels with a
+/// background or outside 4-neighbour, row by row.
+pub fn for_each_contour_bit(mask: &BitView<'_>, mut f: impl FnMut(usize, usize)) {
+    let (w, h) = mask.size();
+    let stride = w.div_ceil(32).max(1);
+    let words = mask.words();
+    let row = |y: usize| words.get(y * stride..(y + 1) * stride);
+    for y in 0..h {
+        let (Some(cur), up, down) = (row(y), y.checked_sub(1).and_then(row), row(y + 1)) else {
+            continue;
+        };
+        let at = |r: Option<&[u32]>, i: usize| r.and_then(|r| r.get(i)).copied().unwrap_or(0);
+        for (i, &c) in cur.iter().enumerate() {
+            if c == 0 {
+                continue;
+            }
+            let left = c << 1 | i.checked_sub(1).map_or(0, |j| at(Some(cur), j) >> 31);
+            let right = c >> 1 | at(Some(cur), i + 1) << 31;
+            // Interior: all four neighbours set (outside counts as unset).
+            let interior = left & right & at(up, i) & at(down, i);
+            let mut edge = c & !interior;
+            while edge != 0 {
+                f(i * 32 + edge.trailing_zeros() as usize, y);
+                edge &= edge - 1;
+            }
+        }
+    }
+}
+
+/// [`shape_vector`] of a bit mask (as [`segment`](crate::segment) leaves
+/// it in [`SegmentBuffers::mask`](crate::segment::SegmentBuffers::mask)):
+/// the same result as on the mask's bytes.
+///
+/// # Errors
+/// [`ShapeError::EmptyMask`] or [`ShapeError::ZeroVariance`].
+pub fn shape_vector_bits(
+    mask: &BitView<'_>,
+    profile: &mut RadialProfile,
+    out: &mut ShapeVector,
+) -> Result<ShapeReport, ShapeError> {
+    let c = centroid_bits(mask)?;
+    let report = profile_from(&c, profile, |f| for_each_contour_bit(mask, f));
+    let saturated = normalise(profile, out)?;
+    Ok(ShapeReport {
+        centroid: c,
+        profile: report,
+        saturated,
+    })
 }
 
 /// Circular linear interpolation of the bins not `filled`; at least one is.
@@ -405,11 +508,12 @@ pub fn normalise(profile: &RadialProfile, out: &mut ShapeVector) -> Result<u16, 
     // Radii are below 2^22 (Q8 of 8192·√2): sums below 2^32.
     let sum: i64 = profile.values().map(i64::from).sum();
     let dev = |s: u32| N * i64::from(s) - sum;
+    // |d| < 2^32: each square fits u64.
     let s2: u128 = profile
         .values()
         .map(|s| {
             let d = dev(s).unsigned_abs();
-            u128::from(d) * u128::from(d)
+            u128::from(d.wrapping_mul(d))
         })
         .sum();
     if s2 == 0 {
@@ -418,12 +522,13 @@ pub fn normalise(profile: &RadialProfile, out: &mut ShapeVector) -> Result<u16, 
     // |d| < 720 · 2^22 < 2^32 so S < 2^74; S · 2^32 < 2^106. R = floor(2^16 sqrt(S / 720)),
     // at least 2^16 · sqrt(719) since S >= 720 · 719 for unequal integers.
     let r = isqrt_floor_u128((s2 << (2 * SIGMA_FRAC_BITS)) / SHAPE_LEN as u128);
-    let r = i128::try_from(r).unwrap_or(i128::MAX);
-    let (lo, hi) = (i128::from(i16::MIN), i128::from(i16::MAX));
+    // R < 2^16 · sqrt(2^74 / 720) < 2^48: i64 holds 2R and 2 · d · 2^28 + R.
+    let r = i64::try_from(r).unwrap_or(i64::MAX >> 2);
+    let (lo, hi) = (i64::from(i16::MIN), i64::from(i16::MAX));
     let mut saturated = 0u16;
     for (o, s) in out.iter_mut().zip(profile.values()) {
         // z in Q12: d · 2^(12 + 16) / R, rounded; |d · 2^28| < 2^60.
-        let num = i128::from(dev(s)) << (ShapeElem::FRAC_NBITS + SIGMA_FRAC_BITS);
+        let num = dev(s) << (ShapeElem::FRAC_NBITS + SIGMA_FRAC_BITS);
         let z = (2 * num + r).div_euclid(2 * r);
         if z < lo || z > hi {
             saturated += 1;

@@ -273,8 +273,13 @@ proptest! {
 fn segment_on_bits_matches_the_steps_on_seeded_scenes() {
     let (w, h) = (160, 120);
     let tables = LuvTables::new();
-    for seed in 0..24u64 {
-        let spec = SceneSpec::random(seed, w, h);
+    // The 24 scenes of the IoU check, and the demo scene the firmware runs.
+    for seed in 0..25u64 {
+        let spec = if seed < 24 {
+            SceneSpec::random(seed, w, h)
+        } else {
+            SceneSpec::demo(w, h)
+        };
         let mut rgb = vec![Rgb8::default(); w * h];
         render_left(&spec, &mut ImageViewMut::packed(&mut rgb, w, h).unwrap()).unwrap();
         let edges =
@@ -290,5 +295,53 @@ fn segment_on_bits_matches_the_steps_on_seeded_scenes() {
             };
             check(&p, &d, &edges.edges, w, h).unwrap();
         }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The shape stage on a bit mask against the same stage on its bytes.
+
+use protogist::shape::{self as sh, RadialProfile, ShapeElem, SHAPE_LEN};
+
+fn pack(m: &[u8], w: usize) -> Vec<u32> {
+    let stride = sg::words_per_row(w);
+    let mut out = vec![0u32; stride * (m.len() / w)];
+    for (i, &v) in m.iter().enumerate() {
+        if v != 0 {
+            let (x, y) = (i % w, i / w);
+            out[y * stride + x / 32] |= 1 << (x % 32);
+        }
+    }
+    out
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn shape_on_bits_matches_shape_on_bytes(
+        (m, w, h) in (prop_oneof![1usize..=8, 28usize..=36, 60usize..=70], 1usize..=40, 0u32..=100)
+            .prop_flat_map(|(w, h, pct)| (
+                proptest::collection::vec(proptest::bool::weighted(f64::from(pct) / 100.0), w * h),
+                Just(w),
+                Just(h),
+            ))
+            .prop_map(|(m, w, h)| (m.into_iter().map(u8::from).collect::<Vec<u8>>(), w, h))
+    ) {
+        let words = pack(&m, w);
+        let bits = sg::BitView::new(&words, w, h).unwrap();
+        let bytes = ImageView::packed(&m, w, h).unwrap();
+        prop_assert_eq!(sh::centroid_bits(&bits), sh::centroid(&bytes));
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        sh::for_each_contour_bit(&bits, |x, y| a.push((x, y)));
+        sh::for_each_contour_pixel(&bytes, |x, y| b.push((x, y)));
+        prop_assert_eq!(a, b);
+        let (mut pa, mut pb) = (RadialProfile::new(), RadialProfile::new());
+        let (mut va, mut vb) = ([ShapeElem::ZERO; SHAPE_LEN], [ShapeElem::ZERO; SHAPE_LEN]);
+        let ra = sh::shape_vector_bits(&bits, &mut pa, &mut va);
+        let rb = sh::shape_vector(&bytes, &mut pb, &mut vb);
+        prop_assert_eq!(ra, rb);
+        prop_assert_eq!(pa, pb);
+        prop_assert!(va == vb);
     }
 }

@@ -102,8 +102,26 @@ pub struct BitView<'a> {
 }
 
 impl<'a> BitView<'a> {
-    pub(super) fn new(words: &'a [u32], g: Geom) -> Self {
+    pub(super) fn with_geom(words: &'a [u32], g: Geom) -> Self {
         Self { words, g }
+    }
+
+    /// A view of `words` (the layout of the module docs) as a `width` x
+    /// `height` map. Bits past the width must be 0.
+    ///
+    /// # Errors
+    /// [`SegmentError::Image`] for a bad size or too few words.
+    pub fn new(words: &'a [u32], width: usize, height: usize) -> Result<Self, SegmentError> {
+        crate::image::buffer_len(width, height, width)?;
+        let g = Geom::new(width, height);
+        if words.len() < g.len() {
+            return Err(crate::image::ImageError::BufferTooSmall {
+                needed: g.len(),
+                got: words.len(),
+            }
+            .into());
+        }
+        Ok(Self { words, g })
     }
 
     /// `(width, height)`.

@@ -127,7 +127,7 @@ impl<'a> SegmentBuffers<'a> {
     }
 
     fn view<'s>(&'s self, m: &'s [u32]) -> BitView<'s> {
-        BitView::new(m, self.g)
+        BitView::with_geom(m, self.g)
     }
 
     /// D_fg, ON where D is kept as foreground (after
