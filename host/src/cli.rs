@@ -203,6 +203,10 @@ pub fn scratch_summary() -> Summary {
             format!("scratch conspicuity {w}x{h}"),
             protogist::conspicuity::scratch_bytes(w, h),
         );
+        s.push(
+            format!("scratch segment {w}x{h}"),
+            protogist::segment::scratch_bytes(w, h),
+        );
     }
     s
 }
