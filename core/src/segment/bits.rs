@@ -179,54 +179,98 @@ pub(super) fn row_range(g: Geom, m: &[u32]) -> Option<(usize, usize)> {
     r
 }
 
-/// One dilation (`inv == 0`, outside OFF) or, through
-/// `erode(m) = !dilate(!m)`, one erosion (`inv == !0`, outside ON).
-fn morph_step(g: Geom, disk: Disk, src: &[u32], dst: &mut [u32], inv: u32) {
-    let erode = inv != 0;
-    let Some((a, b)) = row_range(g, src) else {
+/// First and last rows, and first and last words of a row, holding an ON
+/// pixel.
+fn extent(g: Geom, m: &[u32]) -> Option<(usize, usize, usize, usize)> {
+    let mut r: Option<(usize, usize, usize, usize)> = None;
+    for (y, row) in g.rows(m).take(g.height).enumerate() {
+        for (i, &w) in row.iter().enumerate() {
+            if w != 0 {
+                r = Some(r.map_or((y, y, i, i), |(a, _, c, d)| (a, y, c.min(i), d.max(i))));
+            }
+        }
+    }
+    r
+}
+
+/// One dilation (`E == false`: any element pixel ON, outside OFF) or
+/// erosion (`E == true`: every element pixel ON, outside ON). Only the rows
+/// and words the result can reach are computed.
+fn morph_step<const E: bool>(g: Geom, disk: Disk, src: &[u32], dst: &mut [u32]) {
+    let Some((a, b, ca, cb)) = extent(g, src) else {
         dst.fill(0);
         return;
     };
-    // Dilation reaches one row further; erosion stays inside the set.
-    let (y0, y1) = if erode {
-        (a, b)
+    // Dilation reaches one pixel further; erosion stays inside the set.
+    let (y0, y1, c0, c1) = if E {
+        (a, b, ca, cb)
     } else {
-        (a.saturating_sub(1), (b + 1).min(g.height.saturating_sub(1)))
+        (
+            a.saturating_sub(1),
+            (b + 1).min(g.height.saturating_sub(1)),
+            ca.saturating_sub(1),
+            (cb + 1).min(g.stride.saturating_sub(1)),
+        )
     };
+    // Outside the image: ON for an erosion, OFF for a dilation.
+    let pad = if E { u32::MAX } else { 0 };
+    let op = |x: u32, y: u32| if E { x & y } else { x | y };
+    let last = g.stride.saturating_sub(1);
     let square = disk == Disk::Square;
-    let load = |r: Option<&[u32]>, i: usize| -> u32 {
-        r.and_then(|r| r.get(i))
-            .map_or(0, |&w| (w ^ inv) & g.valid(i))
-    };
     for (y, out) in g.rows_mut(dst).take(g.height).enumerate() {
         if y < y0 || y > y1 {
             out.fill(0);
             continue;
         }
-        let cur = g.row(src, y);
-        let up = y.checked_sub(1).and_then(|u| g.row(src, u));
-        let down = g.row(src, y + 1);
-        // (centre word, vertical union) of words i - 1, i, i + 1.
-        let word = |i: usize| {
-            let c = load(cur, i);
-            (c, c | load(up, i) | load(down, i))
+        let Some(cur) = g.row(src, y) else {
+            continue;
         };
-        let (mut hp, mut here) = (0u32, word(0));
-        for (i, o) in out.iter_mut().enumerate() {
-            let next = if i + 1 < g.stride {
-                word(i + 1)
-            } else {
-                (0, 0)
+        // A missing row (`um`, `dm` all ones) reads as `pad`.
+        let (up, um) = y
+            .checked_sub(1)
+            .and_then(|u| g.row(src, u))
+            .map_or((cur, u32::MAX), |r| (r, 0));
+        let (down, dm) = g.row(src, y + 1).map_or((cur, u32::MAX), |r| (r, 0));
+        // (centre, vertical combination) of word i; the bits past the
+        // width read as outside.
+        let word = |i: usize| -> (u32, u32) {
+            let (Some(&c), Some(&u), Some(&d)) = (cur.get(i), up.get(i), down.get(i)) else {
+                return (pad, pad);
             };
-            let (h, hn) = if square {
-                (here.1, next.1)
+            let c = if i == last { c | (pad & !g.last) } else { c };
+            let (u, d) = if E {
+                (u | um, d | dm)
             } else {
-                (here.0, next.0)
+                (u & !um, d & !dm)
             };
-            let d = here.1 | (h << 1 | hp >> 31) | (h >> 1 | hn << 31);
-            *o = (d ^ inv) & g.valid(i);
-            hp = h;
+            let (u, d) = if i == last {
+                (u | (pad & !g.last), d | (pad & !g.last))
+            } else {
+                (u, d)
+            };
+            (c, op(c, op(u, d)))
+        };
+        let mut prev = c0.checked_sub(1).map_or((pad, pad), word);
+        let mut here = word(c0);
+        let words = out.iter_mut().enumerate().take(c1 + 1);
+        for (i, o) in words {
+            if i < c0 {
+                *o = 0;
+                continue;
+            }
+            let next = word(i + 1);
+            let (hp, h, hn) = if square {
+                (prev.1, here.1, next.1)
+            } else {
+                (prev.0, here.0, next.0)
+            };
+            let d = op(here.1, op(h << 1 | hp >> 31, h >> 1 | hn << 31));
+            *o = d & g.valid(i);
+            prev = here;
             here = next;
+        }
+        if let Some(rest) = out.get_mut(c1 + 1..) {
+            rest.fill(0);
         }
     }
 }
@@ -240,9 +284,12 @@ pub(super) fn morph_n(
     n: u8,
     erode: bool,
 ) {
-    let inv = if erode { u32::MAX } else { 0 };
     for _ in 0..n {
-        morph_step(g, disk, map, scratch, inv);
+        if erode {
+            morph_step::<true>(g, disk, map, scratch);
+        } else {
+            morph_step::<false>(g, disk, map, scratch);
+        }
         map.copy_from_slice(scratch);
     }
 }

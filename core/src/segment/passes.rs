@@ -35,8 +35,11 @@ pub(super) fn foreground(
 ) -> u32 {
     let (x0, y0, y1) = selected_bounds(params, g.width, g.height);
     // low < b·2^EXTRA < high  <=>  lo <= b < hi.
+    // Valid bits are below u16::MAX, the OFF value: capping `hi` there
+    // changes no valid decision and leaves OFF out, so one comparison
+    // decides both.
     let lo = (t.low >> EXTRA) + 1;
-    let hi = t.high.div_ceil(1 << EXTRA);
+    let hi = t.high.div_ceil(1 << EXTRA).min(u32::from(u16::MAX));
     let span = hi.saturating_sub(lo);
     let mut n = 0;
     let rows = d.rows().zip(fg.chunks_exact_mut(g.stride.max(1)));
@@ -44,10 +47,10 @@ pub(super) fn foreground(
         for (i, (cells, o)) in row.chunks(32).zip(out.iter_mut()).enumerate() {
             let mut word = 0u32;
             for (b, c) in cells.iter().enumerate() {
-                let keep = c
+                let raw = c
                     .get()
-                    .is_some_and(|v| u32::from(v.to_bits()).wrapping_sub(lo) < span);
-                word |= u32::from(keep) << b;
+                    .map_or(u32::from(u16::MAX), |v| u32::from(v.to_bits()));
+                word |= u32::from(raw.wrapping_sub(lo) < span) << b;
             }
             // Columns left of S.
             let first = i * 32;
