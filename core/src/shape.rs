@@ -481,7 +481,7 @@ fn interpolate(v: &mut [u32; BINS], filled: &[bool; BINS]) {
         let gap = i - last;
         let (a, b) = (i64::from(at(v, last)), i64::from(at(v, i)));
         for t in 1..gap {
-            let value = a + div_round_i64((b - a) * t as i64, gap as i64);
+            let value = a + div_round_small((b - a) * t as i64, gap as i64);
             if let Some(cell) = v.get_mut((last + t) % BINS) {
                 // Between two u32 values: fits.
                 *cell = value as u32;
@@ -489,6 +489,35 @@ fn interpolate(v: &mut [u32; BINS], filled: &[bool; BINS]) {
         }
         last = i;
     }
+}
+
+/// [`div_round_i64`], in 32-bit arithmetic (the Cortex-M4 divides those in
+/// hardware) when the operands fit, as they do for every interpolation.
+fn div_round_small(x: i64, d: i64) -> i64 {
+    match (i32::try_from(2 * x + d), i32::try_from(2 * d)) {
+        (Ok(n), Ok(dd)) if dd > 0 => i64::from(n.div_euclid(dd)),
+        _ => div_round_i64(x, d),
+    }
+}
+
+/// `floor(n / d)` for `d > 0` and `|n| < 2^62` whose quotient is below
+/// 2^16 in magnitude, or `None` when it is not (the caller saturates):
+/// `inv = floor(2^64 / d)` gives a quotient estimate at most 1 short
+/// (`|n| · (2^64 / d − inv) / 2^64 < 1/4`), corrected with one product.
+fn div_floor_small(n: i64, d: u64, inv: u64) -> Option<i64> {
+    let a = n.unsigned_abs();
+    if a >> 16 >= d {
+        return None;
+    }
+    let mut q = ((u128::from(a) * u128::from(inv)) >> 64) as u64;
+    // q <= a / d < 2^16 and d < 2^62 / 2^13: no overflow.
+    let mut rem = a - q * d;
+    if rem >= d {
+        q += 1;
+        rem -= d;
+    }
+    let q = q as i64;
+    Some(if n >= 0 { q } else { -q - i64::from(rem != 0) })
 }
 
 /// Fraction bits of the scaled standard deviation in [`normalise`].
@@ -524,12 +553,16 @@ pub fn normalise(profile: &RadialProfile, out: &mut ShapeVector) -> Result<u16, 
     let r = isqrt_floor_u128((s2 << (2 * SIGMA_FRAC_BITS)) / SHAPE_LEN as u128);
     // R < 2^16 · sqrt(2^74 / 720) < 2^48: i64 holds 2R and 2 · d · 2^28 + R.
     let r = i64::try_from(r).unwrap_or(i64::MAX >> 2);
+    let d2 = (2 * r).unsigned_abs().max(1);
+    let inv = u64::try_from((1u128 << 64) / u128::from(d2)).unwrap_or(u64::MAX);
     let (lo, hi) = (i64::from(i16::MIN), i64::from(i16::MAX));
     let mut saturated = 0u16;
     for (o, s) in out.iter_mut().zip(profile.values()) {
         // z in Q12: d · 2^(12 + 16) / R, rounded; |d · 2^28| < 2^60.
         let num = dev(s) << (ShapeElem::FRAC_NBITS + SIGMA_FRAC_BITS);
-        let z = (2 * num + r).div_euclid(2 * r);
+        let n = 2 * num + r;
+        // Beyond 2^16 in magnitude z saturates either way.
+        let z = div_floor_small(n, d2, inv).unwrap_or(if n < 0 { lo - 1 } else { hi + 1 });
         if z < lo || z > hi {
             saturated += 1;
         }
@@ -834,6 +867,40 @@ mod tests {
         f[7] = true;
         interpolate(&mut w, &f);
         assert!(w.iter().all(|&x| x == 9));
+    }
+
+    #[test]
+    fn small_divisions_match_the_wide_ones() {
+        let mut rng = crate::rng::SplitMix64::new(7);
+        for i in 0..200_000u32 {
+            // Divisors up to 2^49, numerators up to 2^61, both signs.
+            let d = 2 * ((rng.next_u64() >> (15 + i % 48)) + 1);
+            let n = (rng.next_u64() >> (3 + (i / 7) % 60)) as i64;
+            let n = if i % 2 == 0 { n } else { -n };
+            let inv = u64::try_from((1u128 << 64) / u128::from(d)).unwrap();
+            let want = i128::from(n).div_euclid(i128::from(d));
+            match div_floor_small(n, d, inv) {
+                Some(q) => assert_eq!(i128::from(q), want, "{n} / {d}"),
+                None => assert!(want.abs() >= 1 << 16, "{n} / {d}"),
+            }
+            // Quotients near 2^16 and exact multiples.
+            let q = (rng.next_u64() % (1 << 17)) as i64 - (1 << 16);
+            let m = q
+                .checked_mul(d as i64)
+                .filter(|m| m.unsigned_abs() < 1 << 61);
+            for n in m.into_iter().flat_map(|m| [m, m - 1, m + 1]) {
+                let want = i128::from(n).div_euclid(i128::from(d));
+                match div_floor_small(n, d, inv) {
+                    Some(got) => assert_eq!(i128::from(got), want, "{n} / {d}"),
+                    None => assert!(want.abs() >= 1 << 16, "{n} / {d}"),
+                }
+            }
+            let (x, g) = (
+                (rng.next_u64() >> 40) as i64 - (1 << 23),
+                1 + (i % 360) as i64,
+            );
+            assert_eq!(div_round_small(x, g), div_round_i64(x, g));
+        }
     }
 
     #[test]
