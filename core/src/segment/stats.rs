@@ -147,7 +147,7 @@ pub fn selected_stats(
                 rn += 1;
                 // A row is under 2^13 cells of under 2^16: no overflow.
                 rsum += b;
-                sum2 += u64::from(b * b);
+                sum2 += u64::from(b) * u64::from(b);
             }
         }
         n += u64::from(rn);
