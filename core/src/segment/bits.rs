@@ -195,12 +195,21 @@ fn extent(g: Geom, m: &[u32]) -> Option<(usize, usize, usize, usize)> {
 
 /// One dilation (`E == false`: any element pixel ON, outside OFF) or
 /// erosion (`E == true`: every element pixel ON, outside ON). Only the rows
-/// and words the result can reach are computed.
-fn morph_step<const E: bool>(g: Geom, disk: Disk, src: &[u32], dst: &mut [u32]) {
+/// and words the result can reach are computed. `cw` and `vw` are row
+/// scratch, `stride + 2` words each.
+fn morph_step<const E: bool>(
+    g: Geom,
+    disk: Disk,
+    src: &[u32],
+    dst: &mut [u32],
+    cw: &mut [u32],
+    vw: &mut [u32],
+) {
     let Some((a, b, ca, cb)) = extent(g, src) else {
         dst.fill(0);
         return;
     };
+    let s = g.stride;
     // Dilation reaches one pixel further; erosion stays inside the set.
     let (y0, y1, c0, c1) = if E {
         (a, b, ca, cb)
@@ -209,14 +218,22 @@ fn morph_step<const E: bool>(g: Geom, disk: Disk, src: &[u32], dst: &mut [u32]) 
             a.saturating_sub(1),
             (b + 1).min(g.height.saturating_sub(1)),
             ca.saturating_sub(1),
-            (cb + 1).min(g.stride.saturating_sub(1)),
+            (cb + 1).min(s.saturating_sub(1)),
         )
     };
     // Outside the image: ON for an erosion, OFF for a dilation.
     let pad = if E { u32::MAX } else { 0 };
     let op = |x: u32, y: u32| if E { x & y } else { x | y };
-    let last = g.stride.saturating_sub(1);
-    let square = disk == Disk::Square;
+    // Words c0 − 1 ..= c1 + 1 of the centre row and of the vertical
+    // combination, at index word + 1; indices 0 and s + 1 are outside.
+    for k in [0, s + 1] {
+        if let (Some(c), Some(v)) = (cw.get_mut(k), vw.get_mut(k)) {
+            (*c, *v) = (pad, pad);
+        }
+    }
+    let (wa, wb) = (c0.saturating_sub(1), (c1 + 1).min(s.saturating_sub(1)));
+    let tail = pad & !g.last;
+    let h = if disk == Disk::Square { 1 } else { 0 };
     for (y, out) in g.rows_mut(dst).take(g.height).enumerate() {
         if y < y0 || y > y1 {
             out.fill(0);
@@ -225,49 +242,57 @@ fn morph_step<const E: bool>(g: Geom, disk: Disk, src: &[u32], dst: &mut [u32]) 
         let Some(cur) = g.row(src, y) else {
             continue;
         };
-        // A missing row (`um`, `dm` all ones) reads as `pad`.
+        // A missing row (mask all ones) reads as `pad`.
         let (up, um) = y
             .checked_sub(1)
             .and_then(|u| g.row(src, u))
             .map_or((cur, u32::MAX), |r| (r, 0));
         let (down, dm) = g.row(src, y + 1).map_or((cur, u32::MAX), |r| (r, 0));
-        // (centre, vertical combination) of word i; the bits past the
-        // width read as outside.
-        let word = |i: usize| -> (u32, u32) {
-            let (Some(&c), Some(&u), Some(&d)) = (cur.get(i), up.get(i), down.get(i)) else {
-                return (pad, pad);
-            };
-            let c = if i == last { c | (pad & !g.last) } else { c };
-            let (u, d) = if E {
-                (u | um, d | dm)
-            } else {
-                (u & !um, d & !dm)
-            };
-            let (u, d) = if i == last {
-                (u | (pad & !g.last), d | (pad & !g.last))
-            } else {
-                (u, d)
-            };
-            (c, op(c, op(u, d)))
-        };
-        let mut prev = c0.checked_sub(1).map_or((pad, pad), word);
-        let mut here = word(c0);
-        let words = out.iter_mut().enumerate().take(c1 + 1);
-        for (i, o) in words {
-            if i < c0 {
-                *o = 0;
-                continue;
+        let loads = (
+            cur.get(wa..=wb),
+            up.get(wa..=wb),
+            down.get(wa..=wb),
+            cw.get_mut(wa + 1..=wb + 1),
+            vw.get_mut(wa + 1..=wb + 1),
+        );
+        if let (Some(c), Some(u), Some(d), Some(co), Some(vo)) = loads {
+            let words = c.iter().zip(u).zip(d).zip(co.iter_mut().zip(vo.iter_mut()));
+            for (((&c, &u), &d), (co, vo)) in words {
+                let (u, d) = if E {
+                    (u | um, d | dm)
+                } else {
+                    (u & !um, d & !dm)
+                };
+                *co = c;
+                *vo = op(c, op(u, d));
             }
-            let next = word(i + 1);
-            let (hp, h, hn) = if square {
-                (prev.1, here.1, next.1)
-            } else {
-                (prev.0, here.0, next.0)
-            };
-            let d = op(here.1, op(h << 1 | hp >> 31, h >> 1 | hn << 31));
-            *o = d & g.valid(i);
-            prev = here;
-            here = next;
+        }
+        // Bits past the width are outside.
+        if wb + 1 == s {
+            for m in [&mut *cw, &mut *vw] {
+                if let Some(w) = m.get_mut(s) {
+                    *w |= tail;
+                }
+            }
+        }
+        let hw: &[u32] = if h == 1 { vw } else { cw };
+        let (Some(o), Some(hs), Some(vs)) = (
+            out.get_mut(c0..=c1),
+            hw.get(c0..=c1 + 2),
+            vw.get(c0 + 1..=c1 + 1),
+        ) else {
+            continue;
+        };
+        for ((o, w3), &v) in o.iter_mut().zip(hs.windows(3)).zip(vs) {
+            if let [hp, hc, hn] = *w3 {
+                *o = op(v, op(hc << 1 | hp >> 31, hc >> 1 | hn << 31));
+            }
+        }
+        if let Some(l) = out.get_mut(s.saturating_sub(1)) {
+            *l &= g.last;
+        }
+        if let Some(lead) = out.get_mut(..c0) {
+            lead.fill(0);
         }
         if let Some(rest) = out.get_mut(c1 + 1..) {
             rest.fill(0);
@@ -275,29 +300,50 @@ fn morph_step<const E: bool>(g: Geom, disk: Disk, src: &[u32], dst: &mut [u32]) 
     }
 }
 
-/// `n` dilations (`erode == false`) or erosions of `map` in place.
+/// Row scratch words of the morphology: two rows and an outside word at
+/// either end of each.
+pub const fn morph_rows_len(width: usize) -> usize {
+    2 * (words_per_row(width) + 2)
+}
+
+/// `n` dilations (`erode == false`) or erosions of `map` in place;
+/// `scratch` is a map, `rows` [`morph_rows_len`] words.
 pub(super) fn morph_n(
     g: Geom,
     disk: Disk,
     map: &mut [u32],
     scratch: &mut [u32],
+    rows: &mut [u32],
     n: u8,
     erode: bool,
 ) {
+    let (cw, vw) = rows.split_at_mut(rows.len() / 2);
+    // Ping-pong between the two maps; one copy at the end when n is odd.
+    let (mut a, mut b): (&mut [u32], &mut [u32]) = (&mut *map, &mut *scratch);
     for _ in 0..n {
         if erode {
-            morph_step::<true>(g, disk, map, scratch);
+            morph_step::<true>(g, disk, a, b, cw, vw);
         } else {
-            morph_step::<false>(g, disk, map, scratch);
+            morph_step::<false>(g, disk, a, b, cw, vw);
         }
+        core::mem::swap(&mut a, &mut b);
+    }
+    if n % 2 == 1 {
         map.copy_from_slice(scratch);
     }
 }
 
 /// The closing: `n` dilations then `n` erosions, in place.
-pub(super) fn close(g: Geom, disk: Disk, map: &mut [u32], scratch: &mut [u32], n: u8) {
-    morph_n(g, disk, map, scratch, n, false);
-    morph_n(g, disk, map, scratch, n, true);
+pub(super) fn close(
+    g: Geom,
+    disk: Disk,
+    map: &mut [u32],
+    scratch: &mut [u32],
+    rows: &mut [u32],
+    n: u8,
+) {
+    morph_n(g, disk, map, scratch, rows, n, false);
+    morph_n(g, disk, map, scratch, rows, n, true);
 }
 
 /// Calls `f(x, y)` for every ON pixel, raster order.

@@ -5,7 +5,7 @@
 //! ([`BitView::masked`]). Components are labelled by runs, so the label
 //! memory is one table entry per run, not a label per pixel.
 
-use super::bits::{bit_map_len, row_runs, run_capacity, BitView, Geom};
+use super::bits::{bit_map_len, morph_rows_len, row_runs, run_capacity, BitView, Geom};
 use super::SegmentError;
 use crate::image::ImageError;
 
@@ -14,9 +14,10 @@ use crate::image::ImageError;
 pub const BIT_MAPS: usize = 10;
 
 /// `u32` words of the `maps` buffer of [`SegmentBuffers`]: [`BIT_MAPS`] bit
-/// maps and two rows of runs for the labelling.
+/// maps, two rows of runs for the labelling and two rows of words for the
+/// morphology.
 pub const fn maps_len(width: usize, height: usize) -> usize {
-    BIT_MAPS * bit_map_len(width, height) + 4 * row_runs(width)
+    BIT_MAPS * bit_map_len(width, height) + 4 * row_runs(width) + morph_rows_len(width)
 }
 
 /// Entries of the `table` buffer of [`SegmentBuffers`] that label any map
@@ -48,6 +49,7 @@ pub struct SegmentBuffers<'a> {
     pub(super) mask: &'a mut [u32],
     pub(super) scratch: &'a mut [u32],
     pub(super) rows: &'a mut [u32],
+    pub(super) morph_rows: &'a mut [u32],
     pub(super) table: &'a mut [u32],
 }
 
@@ -95,6 +97,7 @@ impl<'a> SegmentBuffers<'a> {
             mask: take(len),
             scratch: take(len),
             rows: take(4 * row_runs(width)),
+            morph_rows: take(morph_rows_len(width)),
             table,
         })
     }

@@ -277,6 +277,7 @@ pub fn segment_timed(
             params.disk,
             bufs.region,
             bufs.scratch,
+            bufs.morph_rows,
             params.refine_dilations,
             false,
         );
@@ -303,6 +304,7 @@ pub fn segment_timed(
             params.disk,
             bufs.closed,
             bufs.scratch,
+            bufs.morph_rows,
             params.closing_steps,
         );
         probe(Step::Close);
