@@ -170,13 +170,16 @@ pub struct Centroid {
 /// # Errors
 /// [`ShapeError::EmptyMask`] when no pixel is set.
 pub fn centroid(mask: &ImageView<'_, u8>) -> Result<Centroid, ShapeError> {
+    centroid_of_rows(mask.rows().map(|row| {
+        let xs = row.iter().enumerate().filter(|(_, &p)| p != 0);
+        xs.fold((0, 0), |(n, sx), (x, _)| (n + 1, sx + x as u64))
+    }))
+}
+
+/// The centroid from `(pixels, sum of x)` per row, top row first.
+fn centroid_of_rows(rows: impl Iterator<Item = (u64, u64)>) -> Result<Centroid, ShapeError> {
     let (mut n, mut sx, mut sy) = (0u64, 0u64, 0u64);
-    for (y, row) in mask.rows().enumerate() {
-        let (mut rn, mut rsx) = (0u64, 0u64);
-        for (x, _) in row.iter().enumerate().filter(|(_, &p)| p != 0) {
-            rn += 1;
-            rsx += x as u64;
-        }
+    for (y, (rn, rsx)) in rows.enumerate() {
         n += rn;
         sx += rsx;
         sy += rn * y as u64;
@@ -379,8 +382,7 @@ fn profile_from(
 /// [`ShapeError::EmptyMask`] when no pixel is set.
 pub fn centroid_bits(mask: &BitView<'_>) -> Result<Centroid, ShapeError> {
     let (w, _) = mask.size();
-    let (mut n, mut sx, mut sy) = (0u64, 0u64, 0u64);
-    // Bit i of a word sits at x = 32 k + i: the sum of x over a word is
+    // Bit i of word k sits at x = 32 k + i: the sum of x over a word is
     // 32 k · ones + Σ 2^j · ones(word & M_j), M_j the bits whose index has
     // bit j set.
     const M: [u32; 5] = [
@@ -390,29 +392,15 @@ pub fn centroid_bits(mask: &BitView<'_>) -> Result<Centroid, ShapeError> {
         0xFF00_FF00,
         0xFFFF_0000,
     ];
-    for (y, row) in mask.words().chunks_exact(w.div_ceil(32).max(1)).enumerate() {
-        let (mut rn, mut rsx) = (0u64, 0u64);
-        for (k, &v) in row.iter().enumerate().filter(|(_, &v)| v != 0) {
+    centroid_of_rows(mask.words().chunks_exact(w.div_ceil(32).max(1)).map(|row| {
+        let words = row.iter().enumerate().filter(|(_, &v)| v != 0);
+        words.fold((0, 0), |(n, sx), (k, &v)| {
             let ones = u64::from(v.count_ones());
-            rn += ones;
-            rsx += 32 * k as u64 * ones;
-            for (j, m) in M.iter().enumerate() {
-                rsx += u64::from((v & m).count_ones()) << j;
-            }
-        }
-        n += rn;
-        sx += rsx;
-        sy += rn * y as u64;
-    }
-    if n == 0 {
-        return Err(ShapeError::EmptyMask);
-    }
-    let q8 = |s: u64| ((2 * (s << FRAC_BITS) + n) / (2 * n)) as i32;
-    Ok(Centroid {
-        x_q8: q8(sx),
-        y_q8: q8(sy),
-        area: n as u32,
-    })
+            let bits = M.iter().enumerate();
+            let within = bits.fold(0, |a, (j, m)| a + (u64::from((v & m).count_ones()) << j));
+            (n + ones, sx + 32 * k as u64 * ones + within)
+        })
+    }))
 }
 
 /// [`for_each_contour_pixel`] of a bit mask: the object pixels with a
