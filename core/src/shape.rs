@@ -70,6 +70,7 @@
 
 use crate::fixed::{div_round_i64, isqrt_floor_u128, isqrt_round_u64};
 use crate::image::{ImageError, ImageView};
+use crate::segment::BitView;
 use core::fmt;
 
 pub use fixed::types::I4F12;
@@ -169,13 +170,16 @@ pub struct Centroid {
 /// # Errors
 /// [`ShapeError::EmptyMask`] when no pixel is set.
 pub fn centroid(mask: &ImageView<'_, u8>) -> Result<Centroid, ShapeError> {
+    centroid_of_rows(mask.rows().map(|row| {
+        let xs = row.iter().enumerate().filter(|(_, &p)| p != 0);
+        xs.fold((0, 0), |(n, sx), (x, _)| (n + 1, sx + x as u64))
+    }))
+}
+
+/// The centroid from `(pixels, sum of x)` per row, top row first.
+fn centroid_of_rows(rows: impl Iterator<Item = (u64, u64)>) -> Result<Centroid, ShapeError> {
     let (mut n, mut sx, mut sy) = (0u64, 0u64, 0u64);
-    for (y, row) in mask.rows().enumerate() {
-        let (mut rn, mut rsx) = (0u64, 0u64);
-        for (x, _) in row.iter().enumerate().filter(|(_, &p)| p != 0) {
-            rn += 1;
-            rsx += x as u64;
-        }
+    for (y, (rn, rsx)) in rows.enumerate() {
         n += rn;
         sx += rsx;
         sy += rn * y as u64;
@@ -331,9 +335,19 @@ pub fn radial_profile(
     c: &Centroid,
     profile: &mut RadialProfile,
 ) -> ProfileReport {
+    profile_from(c, profile, |f| for_each_contour_pixel(mask, f))
+}
+
+/// [`radial_profile`] over the contour pixels `contour` calls its argument
+/// with.
+fn profile_from(
+    c: &Centroid,
+    profile: &mut RadialProfile,
+    contour: impl FnOnce(&mut dyn FnMut(usize, usize)),
+) -> ProfileReport {
     *profile = RadialProfile::new();
     let mut contour_pixels = 0u32;
-    for_each_contour_pixel(mask, |x, y| {
+    contour(&mut |x, y| {
         // x, y < 2^13: Q8 fits i32.
         let dx = ((x as i32) << FRAC_BITS) - c.x_q8;
         let dy = ((y as i32) << FRAC_BITS) - c.y_q8;
@@ -362,6 +376,83 @@ pub fn radial_profile(
     }
 }
 
+/// [`centroid`] of a bit mask ([`BitView`]).
+///
+/// # Errors
+/// [`ShapeError::EmptyMask`] when no pixel is set.
+pub fn centroid_bits(mask: &BitView<'_>) -> Result<Centroid, ShapeError> {
+    let (w, _) = mask.size();
+    // Bit i of word k sits at x = 32 k + i: the sum of x over a word is
+    // 32 k · ones + Σ 2^j · ones(word & M_j), M_j the bits whose index has
+    // bit j set.
+    const M: [u32; 5] = [
+        0xAAAA_AAAA,
+        0xCCCC_CCCC,
+        0xF0F0_F0F0,
+        0xFF00_FF00,
+        0xFFFF_0000,
+    ];
+    centroid_of_rows(mask.words().chunks_exact(w.div_ceil(32).max(1)).map(|row| {
+        let words = row.iter().enumerate().filter(|(_, &v)| v != 0);
+        words.fold((0, 0), |(n, sx), (k, &v)| {
+            let ones = u64::from(v.count_ones());
+            let bits = M.iter().enumerate();
+            let within = bits.fold(0, |a, (j, m)| a + (u64::from((v & m).count_ones()) << j));
+            (n + ones, sx + 32 * k as u64 * ones + within)
+        })
+    }))
+}
+
+/// [`for_each_contour_pixel`] of a bit mask: the object pixels with a
+/// background or outside 4-neighbour, row by row.
+pub fn for_each_contour_bit(mask: &BitView<'_>, mut f: impl FnMut(usize, usize)) {
+    let (w, h) = mask.size();
+    let stride = w.div_ceil(32).max(1);
+    let words = mask.words();
+    let row = |y: usize| words.get(y * stride..(y + 1) * stride);
+    for y in 0..h {
+        let (Some(cur), up, down) = (row(y), y.checked_sub(1).and_then(row), row(y + 1)) else {
+            continue;
+        };
+        let at = |r: Option<&[u32]>, i: usize| r.and_then(|r| r.get(i)).copied().unwrap_or(0);
+        for (i, &c) in cur.iter().enumerate() {
+            if c == 0 {
+                continue;
+            }
+            let left = c << 1 | i.checked_sub(1).map_or(0, |j| at(Some(cur), j) >> 31);
+            let right = c >> 1 | at(Some(cur), i + 1) << 31;
+            // Interior: all four neighbours set (outside counts as unset).
+            let interior = left & right & at(up, i) & at(down, i);
+            let mut edge = c & !interior;
+            while edge != 0 {
+                f(i * 32 + edge.trailing_zeros() as usize, y);
+                edge &= edge - 1;
+            }
+        }
+    }
+}
+
+/// [`shape_vector`] of a bit mask (as [`segment`](crate::segment) leaves
+/// it in [`SegmentBuffers::mask`](crate::segment::SegmentBuffers::mask)):
+/// the same result as on the mask's bytes.
+///
+/// # Errors
+/// [`ShapeError::EmptyMask`] or [`ShapeError::ZeroVariance`].
+pub fn shape_vector_bits(
+    mask: &BitView<'_>,
+    profile: &mut RadialProfile,
+    out: &mut ShapeVector,
+) -> Result<ShapeReport, ShapeError> {
+    let c = centroid_bits(mask)?;
+    let report = profile_from(&c, profile, |f| for_each_contour_bit(mask, f));
+    let saturated = normalise(profile, out)?;
+    Ok(ShapeReport {
+        centroid: c,
+        profile: report,
+        saturated,
+    })
+}
+
 /// Circular linear interpolation of the bins not `filled`; at least one is.
 fn interpolate(v: &mut [u32; BINS], filled: &[bool; BINS]) {
     let Some(first) = filled.iter().position(|&f| f) else {
@@ -378,7 +469,7 @@ fn interpolate(v: &mut [u32; BINS], filled: &[bool; BINS]) {
         let gap = i - last;
         let (a, b) = (i64::from(at(v, last)), i64::from(at(v, i)));
         for t in 1..gap {
-            let value = a + div_round_i64((b - a) * t as i64, gap as i64);
+            let value = a + div_round_small((b - a) * t as i64, gap as i64);
             if let Some(cell) = v.get_mut((last + t) % BINS) {
                 // Between two u32 values: fits.
                 *cell = value as u32;
@@ -386,6 +477,35 @@ fn interpolate(v: &mut [u32; BINS], filled: &[bool; BINS]) {
         }
         last = i;
     }
+}
+
+/// [`div_round_i64`], in 32-bit arithmetic (the Cortex-M4 divides those in
+/// hardware) when the operands fit, as they do for every interpolation.
+fn div_round_small(x: i64, d: i64) -> i64 {
+    match (i32::try_from(2 * x + d), i32::try_from(2 * d)) {
+        (Ok(n), Ok(dd)) if dd > 0 => i64::from(n.div_euclid(dd)),
+        _ => div_round_i64(x, d),
+    }
+}
+
+/// `floor(n / d)` for `d > 0` and `|n| < 2^62` whose quotient is below
+/// 2^16 in magnitude, or `None` when it is not (the caller saturates):
+/// `inv = floor(2^64 / d)` gives a quotient estimate at most 1 short
+/// (`|n| · (2^64 / d − inv) / 2^64 < 1/4`), corrected with one product.
+fn div_floor_small(n: i64, d: u64, inv: u64) -> Option<i64> {
+    let a = n.unsigned_abs();
+    if a >> 16 >= d {
+        return None;
+    }
+    let mut q = ((u128::from(a) * u128::from(inv)) >> 64) as u64;
+    // q <= a / d < 2^16 and d < 2^62 / 2^13: no overflow.
+    let mut rem = a - q * d;
+    if rem >= d {
+        q += 1;
+        rem -= d;
+    }
+    let q = q as i64;
+    Some(if n >= 0 { q } else { -q - i64::from(rem != 0) })
 }
 
 /// Fraction bits of the scaled standard deviation in [`normalise`].
@@ -405,11 +525,12 @@ pub fn normalise(profile: &RadialProfile, out: &mut ShapeVector) -> Result<u16, 
     // Radii are below 2^22 (Q8 of 8192·√2): sums below 2^32.
     let sum: i64 = profile.values().map(i64::from).sum();
     let dev = |s: u32| N * i64::from(s) - sum;
+    // |d| < 2^32: each square fits u64.
     let s2: u128 = profile
         .values()
         .map(|s| {
             let d = dev(s).unsigned_abs();
-            u128::from(d) * u128::from(d)
+            u128::from(d.wrapping_mul(d))
         })
         .sum();
     if s2 == 0 {
@@ -418,13 +539,18 @@ pub fn normalise(profile: &RadialProfile, out: &mut ShapeVector) -> Result<u16, 
     // |d| < 720 · 2^22 < 2^32 so S < 2^74; S · 2^32 < 2^106. R = floor(2^16 sqrt(S / 720)),
     // at least 2^16 · sqrt(719) since S >= 720 · 719 for unequal integers.
     let r = isqrt_floor_u128((s2 << (2 * SIGMA_FRAC_BITS)) / SHAPE_LEN as u128);
-    let r = i128::try_from(r).unwrap_or(i128::MAX);
-    let (lo, hi) = (i128::from(i16::MIN), i128::from(i16::MAX));
+    // R < 2^16 · sqrt(2^74 / 720) < 2^48: i64 holds 2R and 2 · d · 2^28 + R.
+    let r = i64::try_from(r).unwrap_or(i64::MAX >> 2);
+    let d2 = (2 * r).unsigned_abs().max(1);
+    let inv = u64::try_from((1u128 << 64) / u128::from(d2)).unwrap_or(u64::MAX);
+    let (lo, hi) = (i64::from(i16::MIN), i64::from(i16::MAX));
     let mut saturated = 0u16;
     for (o, s) in out.iter_mut().zip(profile.values()) {
         // z in Q12: d · 2^(12 + 16) / R, rounded; |d · 2^28| < 2^60.
-        let num = i128::from(dev(s)) << (ShapeElem::FRAC_NBITS + SIGMA_FRAC_BITS);
-        let z = (2 * num + r).div_euclid(2 * r);
+        let num = dev(s) << (ShapeElem::FRAC_NBITS + SIGMA_FRAC_BITS);
+        let n = 2 * num + r;
+        // Beyond 2^16 in magnitude z saturates either way.
+        let z = div_floor_small(n, d2, inv).unwrap_or(if n < 0 { lo - 1 } else { hi + 1 });
         if z < lo || z > hi {
             saturated += 1;
         }
@@ -729,6 +855,40 @@ mod tests {
         f[7] = true;
         interpolate(&mut w, &f);
         assert!(w.iter().all(|&x| x == 9));
+    }
+
+    #[test]
+    fn small_divisions_match_the_wide_ones() {
+        let mut rng = crate::rng::SplitMix64::new(7);
+        for i in 0..200_000u32 {
+            // Divisors up to 2^49, numerators up to 2^61, both signs.
+            let d = 2 * ((rng.next_u64() >> (15 + i % 48)) + 1);
+            let n = (rng.next_u64() >> (3 + (i / 7) % 60)) as i64;
+            let n = if i % 2 == 0 { n } else { -n };
+            let inv = u64::try_from((1u128 << 64) / u128::from(d)).unwrap();
+            let want = i128::from(n).div_euclid(i128::from(d));
+            match div_floor_small(n, d, inv) {
+                Some(q) => assert_eq!(i128::from(q), want, "{n} / {d}"),
+                None => assert!(want.abs() >= 1 << 16, "{n} / {d}"),
+            }
+            // Quotients near 2^16 and exact multiples.
+            let q = (rng.next_u64() % (1 << 17)) as i64 - (1 << 16);
+            let m = q
+                .checked_mul(d as i64)
+                .filter(|m| m.unsigned_abs() < 1 << 61);
+            for n in m.into_iter().flat_map(|m| [m, m - 1, m + 1]) {
+                let want = i128::from(n).div_euclid(i128::from(d));
+                match div_floor_small(n, d, inv) {
+                    Some(got) => assert_eq!(i128::from(got), want, "{n} / {d}"),
+                    None => assert!(want.abs() >= 1 << 16, "{n} / {d}"),
+                }
+            }
+            let (x, g) = (
+                (rng.next_u64() >> 40) as i64 - (1 << 23),
+                1 + (i % 360) as i64,
+            );
+            assert_eq!(div_round_small(x, g), div_round_i64(x, g));
+        }
     }
 
     #[test]

@@ -84,12 +84,7 @@ pub fn run() -> ExitCode {
             )
         },
     );
-    let result = result.and_then(|()| {
-        // The object stages on a 64x48 frame: its conspicuity map first.
-        let (ow, oh) = (objects::OBJ_WIDTH, objects::OBJ_HEIGHT);
-        app.process(ow, oh, &mut bufs, &mut WallTicks(Instant::now()))?;
-        Ok(())
-    });
+    // The object stages run on the last frame's (160x120) conspicuity map.
     let objects = result.as_ref().ok().map(|()| run_objects(&conspicuity));
     print!("{out}");
     if let Some(r) = objects {
@@ -123,28 +118,20 @@ pub fn run() -> ExitCode {
     }
 }
 
-/// The object stages on the 64x48 conspicuity map; the line to print.
+/// The object stages on the 160x120 conspicuity map; the line to print.
 fn run_objects(edges: &[EdgeCell]) -> Result<String, objects::ObjectError> {
     use objects::len;
     let mut depth = vec![0u8; len::INPUT];
     let mut input = vec![DisparityCell::OFF; len::INPUT];
-    let mut disparity = vec![DisparityCell::OFF; len::DISPARITY];
-    let mut edge_maps = vec![EdgeCell::OFF; len::EDGES];
-    let mut binary = vec![false; len::BINARY];
-    let mut labels = vec![0u16; len::LABELS];
-    let mut area = vec![0u32; len::AREA];
+    let mut maps = vec![0u32; len::MAPS];
+    let mut table = vec![0u32; len::TABLE];
     let mut mask = vec![false; len::INPUT];
-    let mut mask_u8 = vec![0u8; len::INPUT];
     let mut bufs = objects::ObjectBuffers {
         depth: &mut depth,
         input: &mut input,
-        disparity: &mut disparity,
-        edges: &mut edge_maps,
-        binary: &mut binary,
-        labels: &mut labels,
-        area: &mut area,
+        maps: &mut maps,
+        table: &mut table,
         mask: &mut mask,
-        mask_u8: &mut mask_u8,
     };
     let r = objects::detect(edges, &mut bufs, &mut WallTicks(Instant::now()))?;
     let mut line = String::new();

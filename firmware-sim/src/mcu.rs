@@ -185,29 +185,26 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
     })
     .map_err(|_| "firmware app failed")?;
 
-    // The object stages on a 64x48 frame, after its conspicuity map.
+    // The object stages on the last frame's (160x120) conspicuity map.
     let (ow, oh) = (objects::OBJ_WIDTH, objects::OBJ_HEIGHT);
-    app.process(ow, oh, &mut bufs, &mut ticks)
-        .map_err(|_| "firmware app failed")?;
     let mut obj = objects::ObjectBuffers {
         depth: singleton!(: [u8; len::INPUT] = [0; len::INPUT]).ok_or("depth taken")?,
         input: singleton!(: [DisparityCell; len::INPUT] = [DisparityCell::OFF; len::INPUT])
             .ok_or("input taken")?,
-        disparity:
-            singleton!(: [DisparityCell; len::DISPARITY] = [DisparityCell::OFF; len::DISPARITY])
-                .ok_or("disparity taken")?,
-        edges: singleton!(: [EdgeCell; len::EDGES] = [EdgeCell::OFF; len::EDGES])
-            .ok_or("edges taken")?,
-        binary: singleton!(: [bool; len::BINARY] = [false; len::BINARY]).ok_or("binary taken")?,
-        labels: singleton!(: [u16; len::LABELS] = [0; len::LABELS]).ok_or("labels taken")?,
-        area: singleton!(: [u32; len::AREA] = [0; len::AREA]).ok_or("area taken")?,
+        maps: singleton!(: [u32; len::MAPS] = [0; len::MAPS]).ok_or("maps taken")?,
+        table: singleton!(: [u32; len::TABLE] = [0; len::TABLE]).ok_or("table taken")?,
         mask: singleton!(: [bool; len::INPUT] = [false; len::INPUT]).ok_or("mask taken")?,
-        mask_u8: singleton!(: [u8; len::INPUT] = [0; len::INPUT]).ok_or("mask bytes taken")?,
     };
     let r = objects::detect(bufs.conspicuity, &mut obj, &mut ticks)
         .map_err(|_| "object stages failed")?;
     objects::write_result(out, &r).map_err(|_| "semihosting write failed")?;
     write_ipp(out, "segment", ow, oh, to_instructions(r.segment))
+        .and_then(|()| {
+            objects::SEGMENT_STEPS
+                .iter()
+                .zip(r.steps)
+                .try_for_each(|((_, name), t)| write_ipp(out, name, ow, oh, to_instructions(t)))
+        })
         .and_then(|()| write_ipp(out, "shape", ow, oh, to_instructions(r.shape)))
         .and_then(|()| {
             writeln!(

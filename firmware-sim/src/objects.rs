@@ -1,6 +1,7 @@
 //! The object stages on the board: figure-ground, the object mask and its
 //! shape vector, after the conspicuity stage of the same frame.
 //!
+//! They run at 160x120 on the conspicuity map of the app's last frame.
 //! Until the fixed-point disparity energy model is in core, disparity comes
 //! from the simulated camera's ground truth (a stand-in for a depth source),
 //! so these runs measure segmentation and shape, not stereo.
@@ -10,36 +11,28 @@ use crate::pg::conspicuity::EdgeCell;
 use crate::pg::disparity::{from_pixels, DisparityCell};
 use crate::pg::image::{ImageView, ImageViewMut};
 use crate::pg::segment::{
-    binary_maps_len, disparity_maps_len, edge_maps_len, label_capacity, label_maps_len, segment,
-    SegmentBuffers, SegmentError, SegmentParams,
+    maps_len, segment_timed, table_len, SegmentBuffers, SegmentError, SegmentParams, Step,
 };
-use crate::pg::shape::{shape_vector, RadialProfile, ShapeElem, ShapeError, SHAPE_LEN};
+use crate::pg::shape::{shape_vector_bits, RadialProfile, ShapeElem, ShapeError, SHAPE_LEN};
 use crate::pg::synth::{render_disparity, SceneSpec, SynthError};
 use crate::Ticks;
 
-/// Frame size of the object stages on the board: segmentation keeps every
-/// intermediate map, which at 160x120 would not fit beside the conspicuity
-/// buffers in the board's 512 KB (see docs/BENCHMARKS.md).
-pub const OBJ_WIDTH: usize = 64;
+/// Frame size of the object stages on the board: the largest frame of the
+/// conspicuity stage, whose map they take.
+pub const OBJ_WIDTH: usize = 160;
 /// See [`OBJ_WIDTH`].
-pub const OBJ_HEIGHT: usize = 48;
+pub const OBJ_HEIGHT: usize = 120;
 const N: usize = OBJ_WIDTH * OBJ_HEIGHT;
 
 /// Buffer lengths at [`OBJ_WIDTH`] x [`OBJ_HEIGHT`].
 pub mod len {
     use super::*;
-    /// Disparity input.
+    /// Disparity input (and the depth source's bytes).
     pub const INPUT: usize = N;
-    /// D_fg and D_ObjReg.
-    pub const DISPARITY: usize = disparity_maps_len(OBJ_WIDTH, OBJ_HEIGHT);
-    /// C_fg, ψ, C_ObjReg, C_Obj.
-    pub const EDGES: usize = edge_maps_len(OBJ_WIDTH, OBJ_HEIGHT);
-    /// Binary maps.
-    pub const BINARY: usize = binary_maps_len(OBJ_WIDTH, OBJ_HEIGHT);
-    /// Labels and parents.
-    pub const LABELS: usize = label_maps_len(OBJ_WIDTH, OBJ_HEIGHT);
-    /// Component areas.
-    pub const AREA: usize = label_capacity(OBJ_WIDTH, OBJ_HEIGHT);
+    /// The segmentation's bit maps and run rows.
+    pub const MAPS: usize = maps_len(OBJ_WIDTH, OBJ_HEIGHT);
+    /// The segmentation's component table (one entry per run: any input).
+    pub const TABLE: usize = table_len(OBJ_WIDTH, OBJ_HEIGHT);
 }
 
 /// Caller-owned memory of the object stages.
@@ -48,21 +41,25 @@ pub struct ObjectBuffers<'a> {
     pub depth: &'a mut [u8],
     /// The disparity map fed to segmentation.
     pub input: &'a mut [DisparityCell],
-    /// Segmentation maps.
-    pub disparity: &'a mut [DisparityCell],
-    /// Segmentation edge maps.
-    pub edges: &'a mut [EdgeCell],
-    /// Segmentation binary maps.
-    pub binary: &'a mut [bool],
-    /// Label map and parents.
-    pub labels: &'a mut [u16],
-    /// Component areas.
-    pub area: &'a mut [u32],
+    /// Segmentation bit maps.
+    pub maps: &'a mut [u32],
+    /// Segmentation component table.
+    pub table: &'a mut [u32],
     /// The object mask (K = 1).
     pub mask: &'a mut [bool],
-    /// The mask as bytes, for the shape stage.
-    pub mask_u8: &'a mut [u8],
 }
+
+/// The segmentation steps timed one by one, in [`Step`] order.
+pub const SEGMENT_STEPS: [(Step, &str); 8] = [
+    (Step::Foreground, "seg-foreground"),
+    (Step::Slice, "seg-slice"),
+    (Step::Region, "seg-region"),
+    (Step::Refine, "seg-refine"),
+    (Step::Nms, "seg-nms"),
+    (Step::Close, "seg-close"),
+    (Step::Fill, "seg-fill"),
+    (Step::Mask, "seg-mask"),
+];
 
 /// What the object stages found in one frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -73,6 +70,9 @@ pub struct ObjectResult {
     pub area: u32,
     /// Ticks in segmentation.
     pub segment: u64,
+    /// Ticks per segmentation step, [`SEGMENT_STEPS`] order (the rest of
+    /// `segment` is setup: parameter and size checks, clearing).
+    pub steps: [u64; 8],
     /// Ticks in the shape stage.
     pub shape: u64,
 }
@@ -113,34 +113,35 @@ pub fn detect<T: Ticks>(
     let input = ImageView::packed(&*bufs.input, w, h).map_err(ObjectError::Image)?;
 
     let t0 = ticks.now();
-    let mut seg = SegmentBuffers::new(
-        w,
-        h,
-        bufs.disparity,
-        bufs.edges,
-        bufs.binary,
-        bufs.labels,
-        bufs.area,
-    )
-    .map_err(ObjectError::Segment)?;
-    let report = segment(
+    let mut seg = SegmentBuffers::new(w, h, bufs.maps, bufs.table).map_err(ObjectError::Segment)?;
+    let mut steps = [0u64; 8];
+    let mut last = ticks.now();
+    let mut probe = |step: Step| {
+        let now = ticks.now();
+        if let Some((_, t)) = SEGMENT_STEPS
+            .iter()
+            .zip(steps.iter_mut())
+            .find(|((s, _), _)| *s == step)
+        {
+            *t += now - last;
+        }
+        last = ticks.now();
+    };
+    let report = segment_timed(
         &SegmentParams::default(),
         &input,
         &edges,
         &mut seg,
         bufs.mask,
+        &mut probe,
     )
     .map_err(ObjectError::Segment)?;
     let t1 = ticks.now();
     let area = report.objects.first().map_or(0, |d| d.area);
 
-    for (b, &m) in bufs.mask_u8.iter_mut().zip(bufs.mask.iter()) {
-        *b = u8::from(m);
-    }
     let mut profile = RadialProfile::new();
     let mut vector = [ShapeElem::ZERO; SHAPE_LEN];
-    let mask = ImageView::packed(&*bufs.mask_u8, w, h).map_err(ObjectError::Image)?;
-    match shape_vector(&mask, &mut profile, &mut vector) {
+    match shape_vector_bits(&seg.mask(), &mut profile, &mut vector) {
         Ok(_) | Err(ShapeError::EmptyMask | ShapeError::ZeroVariance) => {}
         Err(e) => return Err(ObjectError::Shape(e)),
     }
@@ -155,6 +156,7 @@ pub fn detect<T: Ticks>(
         checksum: hash.finish(),
         area,
         segment: t1 - t0,
+        steps,
         shape: t2 - t1,
     })
 }
@@ -170,3 +172,9 @@ pub fn write_result(out: &mut impl core::fmt::Write, r: &ObjectResult) -> core::
         r.checksum, r.area
     )
 }
+
+// The object stages take the conspicuity map the app computed last.
+const _: () = {
+    let (w, h) = crate::FRAME_SIZES[crate::FRAME_SIZES.len() - 1];
+    assert!(w == OBJ_WIDTH && h == OBJ_HEIGHT);
+};

@@ -213,6 +213,10 @@ pub fn scratch_summary() -> Summary {
             format!("scratch complete {w}x{h}"),
             protogist::complete::scratch_bytes(w, h, protogist::complete::DEFAULT_REGION_CAPACITY),
         );
+        s.push(
+            format!("scratch segment {w}x{h}"),
+            protogist::segment::scratch_bytes(w, h),
+        );
     }
     s
 }

@@ -397,15 +397,19 @@ pub fn run_segment(
         &mut bufs,
         &mut masks,
     )?;
-    let copy = |v: ImageView<'_, EdgeCell>| v.pixels().collect::<Vec<_>>();
+    let (dv, cv) = (
+        ImageView::packed(disparity, width, height)?,
+        ImageView::packed(edges, width, height)?,
+    );
+    let (d_off, c_off) = (protogist::disparity::DisparityCell::OFF, EdgeCell::OFF);
     Ok(SegmentResult {
         width,
         height,
-        d_fg: bufs.d_fg().pixels().collect(),
-        c_fg: copy(bufs.c_fg()),
-        d_obj_reg: bufs.d_obj_reg().pixels().collect(),
-        c_obj_reg: copy(bufs.c_obj_reg()),
-        c_obj: copy(bufs.c_obj()),
+        d_fg: bufs.d_fg().masked(&dv, d_off).collect(),
+        c_fg: bufs.d_fg().masked(&cv, c_off).collect(),
+        d_obj_reg: bufs.d_obj_reg().masked(&dv, d_off).collect(),
+        c_obj_reg: bufs.c_obj_reg().masked(&cv, c_off).collect(),
+        c_obj: bufs.c_obj().masked(&cv, c_off).collect(),
         report,
         masks,
     })

@@ -56,15 +56,9 @@ pub struct SegmentStorage {
     pub width: usize,
     /// Height.
     pub height: usize,
-    /// D_fg, D_ObjReg.
-    pub disparity: Vec<protogist::disparity::DisparityCell>,
-    /// C_fg, ψ, C_ObjReg, C_Obj.
-    pub edges: Vec<protogist::conspicuity::EdgeCell>,
-    /// Binary maps.
-    pub binary: Vec<bool>,
-    /// Label map and parent table.
-    pub labels: Vec<u16>,
-    /// Area table.
+    /// The bit maps and the run rows.
+    pub maps: Vec<u32>,
+    /// The component table (an entry per run: its root, or a root's area).
     pub area: Vec<u32>,
 }
 
@@ -75,11 +69,8 @@ impl SegmentStorage {
         Self {
             width,
             height,
-            disparity: vec![Default::default(); s::disparity_maps_len(width, height)],
-            edges: vec![Default::default(); s::edge_maps_len(width, height)],
-            binary: vec![false; s::binary_maps_len(width, height)],
-            labels: vec![0; s::label_maps_len(width, height)],
-            area: vec![0; s::label_capacity(width, height)],
+            maps: vec![0; s::maps_len(width, height)],
+            area: vec![0; s::table_len(width, height)],
         }
     }
 
@@ -93,10 +84,7 @@ impl SegmentStorage {
         protogist::segment::SegmentBuffers::new(
             self.width,
             self.height,
-            &mut self.disparity,
-            &mut self.edges,
-            &mut self.binary,
-            &mut self.labels,
+            &mut self.maps,
             &mut self.area,
         )
     }

@@ -1,207 +1,183 @@
 //! The caller-provided buffers of [`segment`](super::segment), validated once.
+//!
+//! Every map of the stage is a bit map ([`BitView`]): a cell map such as D_fg
+//! or ψ is its source (D or C) where the bit is ON, OFF elsewhere
+//! ([`BitView::masked`]). Components are labelled by runs, so the label
+//! memory is one table entry per run, not a label per pixel.
 
-use super::label::{label_capacity, Labeller};
+use super::bits::{bit_map_len, morph_rows_len, row_runs, run_capacity, BitView, Geom};
 use super::SegmentError;
-use crate::conspicuity::EdgeCell;
-use crate::disparity::DisparityCell;
-use crate::image::{ImageError, ImageView, ImageViewMut};
+use crate::image::ImageError;
 
-/// Disparity cells [`SegmentBuffers`] needs: D_fg and D_ObjReg.
-pub const fn disparity_maps_len(width: usize, height: usize) -> usize {
-    2 * width * height
+/// Bit maps [`SegmentBuffers`] holds: D_fg, D_ObjReg, C_ObjReg, the refined
+/// region, C_Obj, C_Obj^M, F_Obj, the filled map, the mask and a scratch map.
+pub const BIT_MAPS: usize = 10;
+
+/// `u32` words of the `maps` buffer of [`SegmentBuffers`]: [`BIT_MAPS`] bit
+/// maps, two rows of runs for the labelling and two rows of words for the
+/// morphology.
+pub const fn maps_len(width: usize, height: usize) -> usize {
+    BIT_MAPS * bit_map_len(width, height) + 4 * row_runs(width) + morph_rows_len(width)
 }
 
-/// Conspicuity cells [`SegmentBuffers`] needs: C_fg, ψ, C_ObjReg, C_Obj.
-pub const fn edge_maps_len(width: usize, height: usize) -> usize {
-    4 * width * height
+/// Entries of the `table` buffer of [`SegmentBuffers`] that label any map
+/// of this size (one per run); a shorter table is a smaller capacity, and
+/// running out of it is [`SegmentError::LabelCapacity`].
+pub const fn table_len(width: usize, height: usize) -> usize {
+    run_capacity(width, height)
 }
 
-/// Binary cells [`SegmentBuffers`] needs: the refined region, C_Obj^M,
-/// F_Obj, the filled map and a morphology scratch.
-pub const fn binary_maps_len(width: usize, height: usize) -> usize {
-    5 * width * height
-}
-
-/// `u16`s [`SegmentBuffers`] needs: the label map plus the label
-/// equivalence table ([`label_capacity`] entries).
-pub const fn label_maps_len(width: usize, height: usize) -> usize {
-    width * height + label_capacity(width, height)
-}
-
-/// Bytes of all buffers of [`SegmentBuffers`] at this size (masks excluded:
-/// one `bool` per pixel per object).
+/// Bytes of all buffers of [`SegmentBuffers`] at this size (the masks,
+/// one `bool` per pixel per object, are the caller's output and not
+/// counted).
 pub const fn scratch_bytes(width: usize, height: usize) -> usize {
-    disparity_maps_len(width, height) * core::mem::size_of::<DisparityCell>()
-        + edge_maps_len(width, height) * core::mem::size_of::<EdgeCell>()
-        + binary_maps_len(width, height)
-        + label_maps_len(width, height) * 2
-        + label_capacity(width, height) * 4
+    (maps_len(width, height) + table_len(width, height)) * core::mem::size_of::<u32>()
 }
 
 /// Every intermediate map of the stage, over caller buffers.
 #[derive(Debug)]
 pub struct SegmentBuffers<'a> {
-    pub(super) d_fg: ImageViewMut<'a, DisparityCell>,
-    pub(super) d_obj_reg: ImageViewMut<'a, DisparityCell>,
-    pub(super) c_fg: ImageViewMut<'a, EdgeCell>,
-    pub(super) psi: ImageViewMut<'a, EdgeCell>,
-    pub(super) c_obj_reg: ImageViewMut<'a, EdgeCell>,
-    pub(super) c_obj: ImageViewMut<'a, EdgeCell>,
-    pub(super) region: ImageViewMut<'a, bool>,
-    pub(super) nms: ImageViewMut<'a, bool>,
-    pub(super) closed: ImageViewMut<'a, bool>,
-    pub(super) filled: ImageViewMut<'a, bool>,
-    pub(super) scratch: ImageViewMut<'a, bool>,
-    pub(super) labeller: Labeller<'a>,
-}
-
-/// Splits `n` maps of `len` elements off the front of `buf`.
-fn split<'a, P, const N: usize>(
-    buf: &'a mut [P],
-    len: usize,
-) -> Result<([&'a mut [P]; N], &'a mut [P]), SegmentError> {
-    let needed = N * len;
-    if buf.len() < needed {
-        return Err(ImageError::BufferTooSmall {
-            needed,
-            got: buf.len(),
-        }
-        .into());
-    }
-    let mut rest = buf;
-    let mut out: [&'a mut [P]; N] = core::array::from_fn(|_| <&mut [P]>::default());
-    for o in out.iter_mut() {
-        let (head, tail) = core::mem::take(&mut rest).split_at_mut(len);
-        *o = head;
-        rest = tail;
-    }
-    Ok((out, rest))
+    pub(super) g: Geom,
+    pub(super) d_fg: &'a mut [u32],
+    pub(super) d_obj_reg: &'a mut [u32],
+    pub(super) c_obj_reg: &'a mut [u32],
+    pub(super) region: &'a mut [u32],
+    pub(super) c_obj: &'a mut [u32],
+    pub(super) nms: &'a mut [u32],
+    pub(super) closed: &'a mut [u32],
+    pub(super) filled: &'a mut [u32],
+    pub(super) mask: &'a mut [u32],
+    pub(super) scratch: &'a mut [u32],
+    pub(super) rows: &'a mut [u32],
+    pub(super) morph_rows: &'a mut [u32],
+    pub(super) table: &'a mut [u32],
 }
 
 impl<'a> SegmentBuffers<'a> {
-    /// Checks every buffer against the `width` x `height` working size; the
-    /// lengths come from [`disparity_maps_len`], [`edge_maps_len`],
-    /// [`binary_maps_len`], [`label_maps_len`] and [`label_capacity`]
-    /// (`area`; a shorter table means a smaller label capacity).
+    /// Checks the buffers against the `width` x `height` working size:
+    /// `maps` needs [`maps_len`] words, `table` [`table_len`] entries for
+    /// any input (fewer make a smaller label capacity).
     ///
     /// # Errors
-    /// [`SegmentError::Image`] for a bad size or a short buffer.
+    /// [`SegmentError::Image`] for a bad size or a short `maps`.
     pub fn new(
         width: usize,
         height: usize,
-        disparity: &'a mut [DisparityCell],
-        edges: &'a mut [EdgeCell],
-        binary: &'a mut [bool],
-        labels: &'a mut [u16],
-        area: &'a mut [u32],
+        maps: &'a mut [u32],
+        table: &'a mut [u32],
     ) -> Result<Self, SegmentError> {
-        let len = crate::image::buffer_len(width, height, width)?;
-        let ([d0, d1], _) = split(disparity, len)?;
-        let ([c0, c1, c2, c3], _) = split(edges, len)?;
-        let ([b0, b1, b2, b3, b4], _) = split(binary, len)?;
-        let ([lm], parent) = split(labels, len)?;
-        let p = |s| ImageViewMut::packed(s, width, height);
-        let b = |s| ImageViewMut::packed(s, width, height);
-        let e = |s| ImageViewMut::packed(s, width, height);
+        crate::image::buffer_len(width, height, width)?;
+        let g = Geom::new(width, height);
+        let needed = maps_len(width, height);
+        if maps.len() < needed {
+            return Err(ImageError::BufferTooSmall {
+                needed,
+                got: maps.len(),
+            }
+            .into());
+        }
+        let mut rest: &'a mut [u32] = maps;
+        let mut take = |n: usize| -> &'a mut [u32] {
+            let r = core::mem::take(&mut rest);
+            let (head, tail) = r.split_at_mut(n.min(r.len()));
+            rest = tail;
+            head
+        };
+        let len = g.len();
         Ok(Self {
-            d_fg: p(d0)?,
-            d_obj_reg: p(d1)?,
-            c_fg: e(c0)?,
-            psi: e(c1)?,
-            c_obj_reg: e(c2)?,
-            c_obj: e(c3)?,
-            region: b(b0)?,
-            nms: b(b1)?,
-            closed: b(b2)?,
-            filled: b(b3)?,
-            scratch: b(b4)?,
-            labeller: Labeller::new(width, height, lm, parent, area)?,
+            g,
+            d_fg: take(len),
+            d_obj_reg: take(len),
+            c_obj_reg: take(len),
+            region: take(len),
+            c_obj: take(len),
+            nms: take(len),
+            closed: take(len),
+            filled: take(len),
+            mask: take(len),
+            scratch: take(len),
+            rows: take(4 * row_runs(width)),
+            morph_rows: take(morph_rows_len(width)),
+            table,
         })
     }
 
-    /// Sets every map OFF (binary maps false).
+    /// Clears every map.
     pub fn clear(&mut self) {
-        for m in [&mut self.d_fg, &mut self.d_obj_reg] {
-            m.fill(DisparityCell::OFF);
-        }
         for m in [
-            &mut self.c_fg,
-            &mut self.psi,
+            &mut self.d_fg,
+            &mut self.d_obj_reg,
             &mut self.c_obj_reg,
-            &mut self.c_obj,
-        ] {
-            m.fill(EdgeCell::OFF);
-        }
-        for m in [
             &mut self.region,
+            &mut self.c_obj,
             &mut self.nms,
             &mut self.closed,
             &mut self.filled,
-            &mut self.scratch,
+            &mut self.mask,
         ] {
-            m.fill(false);
+            m.fill(0);
         }
-    }
-
-    /// The labeller (label map and tables) of the last labelling.
-    pub fn labeller(&self) -> &Labeller<'a> {
-        &self.labeller
     }
 
     /// `(width, height)`.
     pub fn size(&self) -> (usize, usize) {
-        self.d_fg.size()
+        (self.g.width, self.g.height)
     }
 
-    /// D_fg (after [`segment`](super::segment): with the extracted objects
-    /// inhibited).
-    pub fn d_fg(&self) -> ImageView<'_, DisparityCell> {
-        self.d_fg.as_view()
+    /// Entries of the component table (the label capacity, in runs).
+    pub fn label_capacity(&self) -> usize {
+        self.table.len()
     }
 
-    /// C_fg of the last object search.
-    pub fn c_fg(&self) -> ImageView<'_, EdgeCell> {
-        self.c_fg.as_view()
+    fn view<'s>(&'s self, m: &'s [u32]) -> BitView<'s> {
+        BitView::with_geom(m, self.g)
     }
 
-    /// D_ObjReg of the last object.
-    pub fn d_obj_reg(&self) -> ImageView<'_, DisparityCell> {
-        self.d_obj_reg.as_view()
+    /// D_fg, ON where D is kept as foreground (after
+    /// [`segment`](super::segment): with the extracted objects inhibited but
+    /// the last). C_fg of the last search is C where it is ON.
+    pub fn d_fg(&self) -> BitView<'_> {
+        self.view(self.d_fg)
     }
 
-    /// ψ of the last object.
-    pub fn psi(&self) -> ImageView<'_, EdgeCell> {
-        self.psi.as_view()
+    /// D_ObjReg of the last object; ψ is C where it is ON.
+    pub fn d_obj_reg(&self) -> BitView<'_> {
+        self.view(self.d_obj_reg)
     }
 
-    /// C_ObjReg of the last object.
-    pub fn c_obj_reg(&self) -> ImageView<'_, EdgeCell> {
-        self.c_obj_reg.as_view()
-    }
-
-    /// C_Obj of the last object.
-    pub fn c_obj(&self) -> ImageView<'_, EdgeCell> {
-        self.c_obj.as_view()
+    /// C_ObjReg of the last object (C where ON).
+    pub fn c_obj_reg(&self) -> BitView<'_> {
+        self.view(self.c_obj_reg)
     }
 
     /// The refined region (largest component of the dilated ψ map) of the
     /// last object.
-    pub fn region(&self) -> ImageView<'_, bool> {
-        self.region.as_view()
+    pub fn region(&self) -> BitView<'_> {
+        self.view(self.region)
+    }
+
+    /// C_Obj of the last object (C where ON).
+    pub fn c_obj(&self) -> BitView<'_> {
+        self.view(self.c_obj)
     }
 
     /// C_Obj^M of the last object.
-    pub fn nms(&self) -> ImageView<'_, bool> {
-        self.nms.as_view()
+    pub fn nms(&self) -> BitView<'_> {
+        self.view(self.nms)
     }
 
     /// F_Obj (the closed C_Obj^M) of the last object.
-    pub fn closed(&self) -> ImageView<'_, bool> {
-        self.closed.as_view()
+    pub fn closed(&self) -> BitView<'_> {
+        self.view(self.closed)
     }
 
     /// F_Obj with its holes filled, before the area filter.
-    pub fn filled(&self) -> ImageView<'_, bool> {
-        self.filled.as_view()
+    pub fn filled(&self) -> BitView<'_> {
+        self.view(self.filled)
+    }
+
+    /// The mask of the last object (also written to the caller's masks).
+    pub fn mask(&self) -> BitView<'_> {
+        self.view(self.mask)
     }
 }

@@ -27,8 +27,12 @@
 //! the search runs again (see [`inhibit`]).
 //!
 //! Per-pixel work is integer only: statistics use `u64`/`u128` sums and an
-//! integer square root; labelling uses `u16` labels with caller-provided
-//! tables ([`Labeller`]). Nothing allocates.
+//! integer square root. Each step is also a function over `bool` and cell
+//! maps (labelling with `u16` labels and caller-provided tables,
+//! [`Labeller`]), the readable definition; [`segment`] runs the same steps
+//! on bit maps (32 pixels a word: morphology and hole filling are word
+//! operations, components are labelled by runs) and gives the same output
+//! bit for bit. Its buffers are [`scratch_bytes`] long. Nothing allocates.
 //!
 //! ```
 //! use protogist::conspicuity::{Conspicuity, EdgeCell};
@@ -52,14 +56,8 @@
 //!     let v = if ring { 40 } else if inside(x, y) { 5 } else { return EdgeCell::OFF };
 //!     EdgeCell::on(Conspicuity::from_num(v)).unwrap()
 //! }).collect();
-//! let (mut dm, mut em, mut bm, mut lm, mut area) = (
-//!     vec![Default::default(); disparity_maps_len(W, H)],
-//!     vec![Default::default(); edge_maps_len(W, H)],
-//!     vec![false; binary_maps_len(W, H)],
-//!     vec![0u16; label_maps_len(W, H)],
-//!     vec![0u32; label_capacity(W, H)],
-//! );
-//! let mut bufs = SegmentBuffers::new(W, H, &mut dm, &mut em, &mut bm, &mut lm, &mut area).unwrap();
+//! let (mut maps, mut table) = (vec![0u32; maps_len(W, H)], vec![0u32; table_len(W, H)]);
+//! let mut bufs = SegmentBuffers::new(W, H, &mut maps, &mut table).unwrap();
 //! let mut masks = vec![false; W * H];
 //! let d = ImageView::packed(&d, W, H).unwrap();
 //! let c = ImageView::packed(&c, W, H).unwrap();
@@ -70,28 +68,29 @@
 //! assert_eq!(obj.bbox, Some(BoundingBox { x: 10, y: 7, width: 14, height: 10 }));
 //! ```
 
+mod bits;
 mod buffers;
 mod label;
 mod morph;
+mod passes;
 mod pipeline;
 mod stats;
 
-pub use buffers::{
-    binary_maps_len, disparity_maps_len, edge_maps_len, label_maps_len, scratch_bytes,
-    SegmentBuffers,
-};
+pub use bits::{bit_map_len, row_runs, run_capacity, words_per_row, BitView};
+pub use buffers::{maps_len, scratch_bytes, table_len, SegmentBuffers, BIT_MAPS};
 pub use label::{area_filter, fill_holes, label_capacity, AreaReport, Connectivity, Labeller};
 pub use morph::{
     close, dilate, dilate_n, erode, erode_n, non_max_suppression, Disk, NMS_DIRECTIONS,
 };
 pub use pipeline::{
-    bounding_box, inhibit, refine_border, segment, BoundingBox, Detection, SegmentReport,
+    bounding_box, inhibit, refine_border, segment, segment_timed, BoundingBox, Detection,
+    SegmentReport, Step,
 };
 pub use stats::{
     above_mean, foreground, foreground_conspicuity, in_selected_area, object_conspicuity,
-    object_region, plane, select_slice, selected_area, selected_stats, slice_cells, slice_counts,
-    slice_radius, slice_range, thresholds, DisparityRange, PsiMean, SelectedStats, Slice,
-    SliceCounts, Thresholds, PLANES, STAT_FRAC_BITS,
+    object_region, plane, select_slice, selected_area, selected_bounds, selected_stats,
+    slice_cells, slice_counts, slice_radius, slice_range, thresholds, DisparityRange, PsiMean,
+    SelectedStats, Slice, SliceCounts, Thresholds, PLANES, STAT_FRAC_BITS,
 };
 
 use crate::image::ImageError;

@@ -1,12 +1,13 @@
 //! Border refinement, object inhibition and the whole stage.
 
+use super::bits;
 use super::buffers::SegmentBuffers;
-use super::label::{area_filter, fill_holes, AreaReport, Connectivity, Labeller};
-use super::morph::{close, dilate_n, non_max_suppression};
+use super::label::{AreaReport, Connectivity, Labeller};
+use super::morph::dilate_n;
+use super::passes;
 use super::stats::{
-    above_mean, foreground, foreground_conspicuity, object_conspicuity, object_region, plane,
-    select_slice, selected_stats, slice_counts, slice_range, thresholds, DisparityRange,
-    SelectedStats, Thresholds,
+    plane, select_slice, selected_stats, slice_range, thresholds, DisparityRange, SelectedStats,
+    Thresholds,
 };
 use super::{check_size, SegmentError, SegmentParams, MAX_OBJECTS};
 use crate::conspicuity::EdgeCell;
@@ -172,6 +173,9 @@ pub fn inhibit(
 /// disparity in S, no foreground or no foreground edge the report has no
 /// objects and every map is OFF (never an error).
 ///
+/// The steps are those of the `bool` functions of this module, run on bit
+/// maps ([`SegmentBuffers`]); the output is the same bit for bit.
+///
 /// # Errors
 /// [`SegmentError::BadParams`], [`SegmentError::SizeMismatch`] when a map is
 /// not the buffers' size, [`SegmentError::MasksTooSmall`], or
@@ -182,6 +186,43 @@ pub fn segment(
     conspicuity: &ImageView<'_, EdgeCell>,
     bufs: &mut SegmentBuffers<'_>,
     masks: &mut [bool],
+) -> Result<SegmentReport, SegmentError> {
+    segment_timed(params, disparity, conspicuity, bufs, masks, &mut |_| {})
+}
+
+/// The steps [`segment_timed`] reports to its probe, in order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// mean_S, σ_S, the thresholds and D_fg.
+    Foreground,
+    /// A^C(d) and δ.
+    Slice,
+    /// D_ObjReg, ψ and C_ObjReg.
+    Region,
+    /// The border refinement (dilations, largest component) and C_Obj.
+    Refine,
+    /// Non-maximum suppression.
+    Nms,
+    /// The closing.
+    Close,
+    /// Hole filling.
+    Fill,
+    /// Area filter, mask output, bounding box and inhibition.
+    Mask,
+}
+
+/// [`segment`], calling `probe(step)` after each [`Step`] (for per-step
+/// timing on the board).
+///
+/// # Errors
+/// As [`segment`].
+pub fn segment_timed(
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+    conspicuity: &ImageView<'_, EdgeCell>,
+    bufs: &mut SegmentBuffers<'_>,
+    masks: &mut [bool],
+    probe: &mut dyn FnMut(Step),
 ) -> Result<SegmentReport, SegmentError> {
     params.validate()?;
     let (w, h) = bufs.size();
@@ -197,6 +238,7 @@ pub fn segment(
     }
     masks.fill(false);
     bufs.clear();
+    let g = bufs.g;
     let mut report = SegmentReport {
         stats: None,
         thresholds: None,
@@ -209,54 +251,105 @@ pub fn segment(
     let t = thresholds(params, &stats);
     report.stats = Some(stats);
     report.thresholds = Some(t);
-    report.foreground = foreground(params, disparity, &t, &mut bufs.d_fg)?;
+    report.foreground = passes::foreground(params, disparity, &t, g, bufs.d_fg);
+    probe(Step::Foreground);
     for (index, mask) in masks.chunks_exact_mut(w * h).take(k).enumerate() {
-        let mut mask = ImageViewMut::packed(mask, w, h)?;
-        foreground_conspicuity(conspicuity, &bufs.d_fg.as_view(), &mut bufs.c_fg)?;
-        let counts = slice_counts(&bufs.c_fg.as_view(), &bufs.d_fg.as_view())?;
+        let counts = passes::slice_counts(conspicuity, disparity, g, bufs.d_fg);
         let Some(slice) = select_slice(&counts, params.exponent) else {
             break;
         };
+        probe(Step::Slice);
         let range = slice_range(params, &stats, slice.delta);
-        object_region(&bufs.d_fg.as_view(), &range, &mut bufs.d_obj_reg)?;
-        object_conspicuity(conspicuity, &bufs.d_obj_reg.as_view(), &mut bufs.psi)?;
-        above_mean(
+        passes::object(
             params.psi_mean,
-            &bufs.psi.as_view(),
-            &bufs.d_obj_reg.as_view(),
-            &mut bufs.c_obj_reg,
-        )?;
-        refine_border(
-            params,
-            &bufs.psi.as_view(),
-            &bufs.c_obj_reg.as_view(),
-            &mut bufs.region,
-            &mut bufs.scratch,
-            &mut bufs.labeller,
-            &mut bufs.c_obj,
-        )?;
-        non_max_suppression(&bufs.c_obj.as_view(), &mut bufs.nms)?;
-        bufs.closed.copy_from(&bufs.nms.as_view())?;
-        close(
+            conspicuity,
+            disparity,
+            &range,
+            g,
+            bufs.d_fg,
+            bufs.d_obj_reg,
+            bufs.region,
+            bufs.c_obj_reg,
+        );
+        probe(Step::Region);
+        bits::morph_n(
+            g,
             params.disk,
-            &mut bufs.closed,
-            &mut bufs.scratch,
+            bufs.region,
+            bufs.scratch,
+            bufs.morph_rows,
+            params.refine_dilations,
+            false,
+        );
+        let comps = bits::components(g, bufs.region, Connectivity::Eight, bufs.rows, bufs.table)?;
+        let best = comps.largest.map(|(r, _)| r);
+        comps.select(g, bufs.region, bufs.table, bufs.scratch, |r, _| {
+            Some(r) == best
+        });
+        bufs.region.copy_from_slice(bufs.scratch);
+        for ((o, &a), &b) in bufs
+            .c_obj
+            .iter_mut()
+            .zip(bufs.c_obj_reg.iter())
+            .zip(bufs.region.iter())
+        {
+            *o = a & b;
+        }
+        probe(Step::Refine);
+        bits::nms(g, conspicuity, bufs.c_obj, bufs.nms);
+        probe(Step::Nms);
+        bufs.closed.copy_from_slice(bufs.nms);
+        bits::close(
+            g,
+            params.disk,
+            bufs.closed,
+            bufs.scratch,
+            bufs.morph_rows,
             params.closing_steps,
-        )?;
-        fill_holes(&bufs.closed.as_view(), &mut bufs.filled, &mut bufs.labeller)?;
-        let regions = area_filter(
-            &bufs.filled.as_view(),
-            &mut mask,
-            &mut bufs.labeller,
-            params.min_area,
-        )?;
+        );
+        probe(Step::Close);
+        bits::fill_holes(g, bufs.closed, bufs.filled, bufs.scratch);
+        probe(Step::Fill);
+        let comps = bits::components(g, bufs.filled, Connectivity::Eight, bufs.rows, bufs.table)?;
+        let largest = comps.largest.map_or(0, |(_, a)| a);
+        let keep = params.min_area;
+        let kept = |area: u32| {
+            u64::from(area) * u64::from(keep.den) >= u64::from(largest) * u64::from(keep.num)
+        };
+        let mut kept_regions = 0u32;
+        let area = comps.select(g, bufs.filled, bufs.table, bufs.mask, |_, a| kept(a));
+        comps.for_each_root(bufs.table, |a| kept_regions += u32::from(kept(a)));
+        let regions = AreaReport {
+            regions: u16::try_from(comps.count).unwrap_or(u16::MAX),
+            kept: u16::try_from(kept_regions).unwrap_or(u16::MAX),
+            largest,
+            area,
+        };
+        let bbox = bits::bbox(g, bufs.mask);
+        if let Some((_, y0, _, y1)) = bbox {
+            let rows = mask
+                .chunks_exact_mut(w)
+                .zip(bufs.mask.chunks_exact(g.stride.max(1)));
+            for (out, words) in rows.take(y1 + 1).skip(y0) {
+                for (o, b) in out.chunks_mut(32).zip(words) {
+                    for (i, o) in o.iter_mut().enumerate() {
+                        *o = b >> i & 1 != 0;
+                    }
+                }
+            }
+        }
         let det = Detection {
             index,
             delta: slice.delta,
             range,
             score: slice.score,
-            area: regions.area,
-            bbox: bounding_box(&mask.as_view()),
+            area,
+            bbox: bbox.map(|(x0, y0, x1, y1)| BoundingBox {
+                x: x0,
+                y: y0,
+                width: x1 - x0 + 1,
+                height: y1 - y0 + 1,
+            }),
             regions,
         };
         // Capacity MAX_OBJECTS >= max_objects, checked by `validate`.
@@ -264,14 +357,17 @@ pub fn segment(
         // Inhibit only before another search, so that after the run every
         // map shows what the last search saw (for K = 1, the paper's maps).
         if index + 1 < k {
-            inhibit(
-                &mut bufs.d_fg,
-                &bufs.d_obj_reg.as_view(),
-                &bufs.region.as_view(),
-                &mask.as_view(),
+            passes::inhibit(
+                disparity,
+                g,
+                bufs.d_fg,
+                bufs.d_obj_reg,
+                bufs.region,
+                bufs.mask,
                 slice.delta,
-            )?;
+            );
         }
+        probe(Step::Mask);
     }
     Ok(report)
 }

@@ -62,6 +62,36 @@ fn mul_ratio(x: u64, r: Ratio) -> u64 {
     (2 * x * u64::from(r.num) + den) / (2 * den)
 }
 
+/// The selected area S of a `width` x `height` map as `(x0, y0, y1)`: S is
+/// the columns `x0..width` of the rows `y0..y1`, that is
+/// `x > w·left` and `h·top_bottom < y < h·(1 − top_bottom)`, exactly.
+pub fn selected_bounds(
+    params: &SegmentParams,
+    width: usize,
+    height: usize,
+) -> (usize, usize, usize) {
+    let (l, tb) = (params.left_strip, params.top_bottom_strip);
+    let (w, h) = (width as u64, height as u64);
+    let (ln, ld, tn, td) = (
+        u64::from(l.num),
+        u64::from(l.den.max(1)),
+        u64::from(tb.num),
+        u64::from(tb.den.max(1)),
+    );
+    // x·ld > w·ln  <=>  x >= floor(w·ln / ld) + 1.
+    let x0 = w * ln / ld + 1;
+    // y·td > h·tn  <=>  y >= floor(h·tn / td) + 1;
+    // y·td < h·(td − tn)  <=>  y < ceil(h·(td − tn) / td).
+    let y0 = h * tn / td + 1;
+    let y1 = (h * (td - tn.min(td))).div_ceil(td);
+    let c = |v: u64, max: usize| usize::try_from(v).map_or(max, |v| v.min(max));
+    (
+        c(x0, width),
+        c(y0, height),
+        c(y1, height).max(c(y0, height)),
+    )
+}
+
 /// True when `(x, y)` lies in the selected area S of a `width` x `height`
 /// map: `x > w·left` and `h·top_bottom < y < h·(1 − top_bottom)`, exactly.
 pub fn in_selected_area(
@@ -71,15 +101,8 @@ pub fn in_selected_area(
     x: usize,
     y: usize,
 ) -> bool {
-    let (l, tb) = (params.left_strip, params.top_bottom_strip);
-    let (x, y, w, h) = (x as u64, y as u64, width as u64, height as u64);
-    let (ln, ld, tn, td) = (
-        u64::from(l.num),
-        u64::from(l.den.max(1)),
-        u64::from(tb.num),
-        u64::from(tb.den.max(1)),
-    );
-    x * ld > w * ln && y * td > h * tn && y * td < h * (td - tn.min(td))
+    let (x0, y0, y1) = selected_bounds(params, width, height);
+    x >= x0 && x < width && y >= y0 && y < y1
 }
 
 /// Writes S: D inside the selected area, OFF outside. Returns its ON count.
@@ -114,18 +137,21 @@ pub fn selected_stats(
     disparity: &ImageView<'_, DisparityCell>,
 ) -> Option<SelectedStats> {
     let (w, h) = disparity.size();
+    let (x0, y0, y1) = selected_bounds(params, w, h);
     let (mut n, mut sum, mut sum2) = (0u64, 0u64, 0u64);
-    for (y, row) in disparity.rows().enumerate() {
-        for (x, d) in row.iter().enumerate() {
+    for row in disparity.rows().take(y1).skip(y0) {
+        let (mut rn, mut rsum) = (0u32, 0u32);
+        for d in row.get(x0..).unwrap_or(&[]) {
             if let Some(d) = d.get() {
-                if in_selected_area(params, w, h, x, y) {
-                    let b = u64::from(d.to_bits());
-                    n += 1;
-                    sum += b;
-                    sum2 += b * b;
-                }
+                let b = u32::from(d.to_bits());
+                rn += 1;
+                // A row is under 2^13 cells of under 2^16: no overflow.
+                rsum += b;
+                sum2 += u64::from(b) * u64::from(b);
             }
         }
+        n += u64::from(rn);
+        sum += u64::from(rsum);
     }
     if n == 0 {
         return None;
