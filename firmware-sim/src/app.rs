@@ -6,9 +6,8 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{self, OutputPin};
 
 use crate::camera::Camera;
-use crate::pg::conspicuity::{
-    self, ConspicuityError, EdgeBuffers, EdgeCell, EdgeParams, Luv, LuvTables,
-};
+use crate::pg::checksum::Fnv1a;
+use crate::pg::conspicuity::{self, ConspicuityError, EdgeCell, EdgeParams, Luv, LuvTables};
 use crate::pg::image::{ImageError, ImageView, ImageViewMut, Rgb8};
 
 /// A monotonic counter read around each step (SysTick on the MCU, nothing on the host).
@@ -61,14 +60,22 @@ pub struct FrameResult {
     pub ticks: StepTicks,
 }
 
+/// Feeds a Luv map's bits to `hash`, row-major, little endian.
+fn hash_luv(hash: &mut Fnv1a, map: &ImageView<'_, Luv>) {
+    map.pixels().for_each(|p| {
+        p.to_bits()
+            .iter()
+            .for_each(|b| hash.write(&b.to_le_bytes()))
+    });
+}
+
 /// Caller-owned working memory, sized for the largest frame to be processed.
 pub struct Buffers<'a> {
     /// RGB frame, at least width * height pixels.
     pub rgb: &'a mut [Rgb8],
-    /// Luv map, at least `luv_len(width, height)`.
+    /// Luv map, at least `luv_len(width, height)`; smoothed in place, so it
+    /// holds the smoothed map after [`App::process`].
     pub luv: &'a mut [Luv],
-    /// Smoothed Luv map, at least `luv_len(width, height)`.
-    pub smoothed: &'a mut [Luv],
     /// Row scratch, at least `row_scratch_len(width)`.
     pub rows: &'a mut [Luv],
     /// Conspicuity map, at least `luv_len(width, height)`.
@@ -159,7 +166,6 @@ impl<C: Camera, P: OutputPin, D: DelayNs> App<C, P, D> {
         )
         .map_err(too_small)?;
         let luv = prefix(bufs.luv, n).map_err(too_small)?;
-        let smoothed = prefix(bufs.smoothed, n).map_err(too_small)?;
         let rows = prefix(bufs.rows, conspicuity::row_scratch_len(width)).map_err(too_small)?;
         let cmap = prefix(bufs.conspicuity, n).map_err(too_small)?;
 
@@ -177,30 +183,36 @@ impl<C: Camera, P: OutputPin, D: DelayNs> App<C, P, D> {
         let mut luv_v = ImageViewMut::packed(luv, width, height).map_err(image_err)?;
         conspicuity::rgb_to_luv(&self.tables, &view, &mut luv_v).map_err(stage_err)?;
         let t_luv = ticks.now();
-        let mut sm_v = ImageViewMut::packed(smoothed, width, height).map_err(image_err)?;
-        sm_v.copy_from(&luv_v.as_view()).map_err(image_err)?;
-        conspicuity::smooth(&self.params.smooth, &mut sm_v, rows).map_err(stage_err)?;
+        // The checksum covers the Luv map, the smoothed map and C, in that
+        // order (as `EdgeBuffers::checksum`); the Luv part is hashed now,
+        // untimed, because smoothing then runs in place.
+        let mut hash = Fnv1a::new();
+        hash_luv(&mut hash, &luv_v.as_view());
+        let t_hash = ticks.now();
+        conspicuity::smooth(&self.params.smooth, &mut luv_v, rows).map_err(stage_err)?;
         let t_smooth = ticks.now();
         let mut c_v = ImageViewMut::packed(cmap, width, height).map_err(image_err)?;
-        let max = conspicuity::conspicuity(&sm_v.as_view(), &mut c_v, rows).map_err(stage_err)?;
+        let max = conspicuity::conspicuity(&luv_v.as_view(), &mut c_v, rows).map_err(stage_err)?;
         let t_cmap = ticks.now();
         let on_count = conspicuity::threshold(&mut c_v, max, self.params.threshold_percent)
             .map_err(stage_err)?;
         let t2 = ticks.now();
-        let edge = EdgeBuffers::new(width, height, luv, smoothed, rows, cmap)
-            .map_err(AppError::Conspicuity)?;
-        let checksum = edge.checksum();
+        hash_luv(&mut hash, &luv_v.as_view());
+        c_v.as_view()
+            .pixels()
+            .for_each(|c| hash.write(&c.raw().to_bits().to_le_bytes()));
+        let checksum = hash.finish();
         let t3 = ticks.now();
         self.led.set_low().map_err(pin_err)?;
 
         let ticks = StepTicks {
             capture: t1 - t0,
-            conspicuity: t2 - t1,
+            conspicuity: t2 - t1 - (t_hash - t_luv),
             luv: t_luv - t1,
-            smooth: t_smooth - t_luv,
+            smooth: t_smooth - t_hash,
             cmap: t_cmap - t_smooth,
             threshold: t2 - t_cmap,
-            checksum: t3 - t2,
+            checksum: t3 - t2 + (t_hash - t_luv),
         };
         Ok(FrameResult {
             width,

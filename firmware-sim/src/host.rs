@@ -55,13 +55,11 @@ pub fn run() -> ExitCode {
     let (w, h) = (MAX_WIDTH, MAX_HEIGHT);
     let mut rgb = vec![Rgb8::default(); w * h];
     let mut luv = vec![Luv::default(); luv_len(w, h)];
-    let mut smoothed = vec![Luv::default(); luv_len(w, h)];
     let mut rows = vec![Luv::default(); row_scratch_len(w)];
     let mut conspicuity = vec![EdgeCell::default(); luv_len(w, h)];
     let mut bufs = Buffers {
         rgb: &mut rgb,
         luv: &mut luv,
-        smoothed: &mut smoothed,
         rows: &mut rows,
         conspicuity: &mut conspicuity,
     };

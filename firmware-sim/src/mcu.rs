@@ -146,8 +146,6 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
     let rgb = singleton!(: [Rgb8; PIXELS] = [Rgb8 { r: 0, g: 0, b: 0 }; PIXELS])
         .ok_or("rgb buffer taken")?;
     let luv = singleton!(: [Luv; LUV_LEN] = [Luv::default(); LUV_LEN]).ok_or("luv buffer taken")?;
-    let smoothed =
-        singleton!(: [Luv; LUV_LEN] = [Luv::default(); LUV_LEN]).ok_or("smoothed buffer taken")?;
     let rows =
         singleton!(: [Luv; ROWS_LEN] = [Luv::default(); ROWS_LEN]).ok_or("row buffer taken")?;
     let conspicuity = singleton!(: [EdgeCell; LUV_LEN] = [EdgeCell::default(); LUV_LEN])
@@ -155,7 +153,6 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
     let mut bufs = Buffers {
         rgb,
         luv,
-        smoothed,
         rows,
         conspicuity,
     };

@@ -50,7 +50,6 @@ impl DelayNs for MockDelay {
 struct Storage {
     rgb: Vec<Rgb8>,
     luv: Vec<Luv>,
-    smoothed: Vec<Luv>,
     rows: Vec<Luv>,
     conspicuity: Vec<EdgeCell>,
 }
@@ -60,7 +59,6 @@ impl Storage {
         Self {
             rgb: vec![Rgb8::default(); w * h],
             luv: vec![Luv::default(); luv_len(w, h)],
-            smoothed: vec![Luv::default(); luv_len(w, h)],
             rows: vec![Luv::default(); row_scratch_len(w)],
             conspicuity: vec![EdgeCell::default(); luv_len(w, h)],
         }
@@ -69,7 +67,6 @@ impl Storage {
         Buffers {
             rgb: &mut self.rgb,
             luv: &mut self.luv,
-            smoothed: &mut self.smoothed,
             rows: &mut self.rows,
             conspicuity: &mut self.conspicuity,
         }
