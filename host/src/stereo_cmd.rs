@@ -48,6 +48,11 @@ pub struct StereoOptions {
     /// Border refinement radius, px (default: the model's; 0 disables).
     #[arg(long)]
     pub refine: Option<u8>,
+    /// Complete the map over the conspicuity regions of the left view
+    /// (`protogist::complete`, the pipeline's border step); the metrics
+    /// then score the completed map, and `model` the map before it.
+    #[arg(long)]
+    pub complete: bool,
     /// Print the numbers as JSON.
     #[arg(long)]
     pub json: bool,
@@ -345,17 +350,59 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         "on_fraction": on as f64 / n,
         "stereo_ms": run_ms,
     });
+    let model_f32 = maps.disparity_f32.clone();
+    let mut final_f32 = maps.disparity_f32;
+    if opts.complete {
+        let t = Instant::now();
+        let edges = crate::stages::run_conspicuity(
+            &protogist::conspicuity::LuvTables::new(),
+            &protogist::conspicuity::EdgeParams::default(),
+            &lp,
+            w,
+            h,
+        )?;
+        let (done, report) = crate::stages::run_complete(
+            &protogist::complete::CompleteParams::default(),
+            &edges.edges,
+            &edges.smoothed,
+            &maps.disparity,
+            w,
+            h,
+        )?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        s.push(
+            "completion",
+            format!(
+                "{} regions, {} replaced, {} filled, {ms:.1} ms",
+                report.regions, report.replaced, report.filled
+            ),
+        );
+        json["completion_ms"] = serde_json::json!(ms);
+        final_f32 = done
+            .iter()
+            .map(|c| c.get().map(|d| d.to_num::<f32>()))
+            .collect();
+        panels.push(Panel::new(
+            "disparity_completed",
+            disparity_panel(&final_f32, w, h, max),
+        ));
+    }
     if let Some(gt) = gt_small {
-        let m = metrics(&maps.disparity_f32, &gt.data);
+        let m = metrics(&final_f32, &gt.data);
         let raw = metrics(&maps.left_raw, &gt.data);
         let gmax = gt.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
         s.push("GT max disparity px", format!("{gmax:.1}"));
         push_metrics(&mut s, "final", &m);
         push_metrics(&mut s, "raw argmax", &raw);
         panels.push(Panel::new("gt", disparity_panel(&gt.data, w, h, max)));
-        panels.push(Panel::new("error", error_panel(&maps.disparity_f32, &gt)));
+        panels.push(Panel::new("error", error_panel(&final_f32, &gt)));
         json["gt_max_disp"] = serde_json::json!(gmax);
         json["final"] = metrics_json(&m);
+        if opts.complete {
+            let before = metrics(&model_f32, &gt.data);
+            push_metrics(&mut s, "model (before completion)", &before);
+            json["model"] = metrics_json(&before);
+        }
         json["raw_argmax"] = metrics_json(&raw);
     }
     finish(&opts.out, panels, &mut s, start)?;

@@ -233,3 +233,62 @@ fn bad_input_is_a_typed_error_or_a_reported_skip() {
     .unwrap_err();
     assert!(matches!(err, CompleteError::Label(_)), "{err:?}");
 }
+
+/// `protogist stereo --complete` on the demo scene: the completed map is
+/// denser than the model's and no worse over all GT pixels.
+#[test]
+fn the_stereo_command_scores_the_completed_map_and_the_model() {
+    use protogist::image::Rgb8;
+    use protogist::synth::{render_disparity, render_left, render_right, SceneSpec};
+    use protogist_host::stereo_cmd::{run_stereo, StereoOptions};
+    let (w, h) = (160usize, 120usize);
+    let spec = SceneSpec::demo(w, h);
+    let (mut l, mut r, mut d) = (
+        vec![Rgb8::default(); w * h],
+        vec![Rgb8::default(); w * h],
+        vec![0u8; w * h],
+    );
+    render_left(&spec, &mut ImageViewMut::packed(&mut l, w, h).unwrap()).unwrap();
+    render_right(&spec, &mut ImageViewMut::packed(&mut r, w, h).unwrap()).unwrap();
+    render_disparity(&spec, &mut ImageViewMut::packed(&mut d, w, h).unwrap()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let rgb = |px: &[Rgb8]| {
+        image::RgbImage::from_fn(w as u32, h as u32, |x, y| {
+            let p = px[y as usize * w + x as usize];
+            image::Rgb([p.r, p.g, p.b])
+        })
+    };
+    let (lp, rp, gp) = (
+        dir.path().join("l.png"),
+        dir.path().join("r.png"),
+        dir.path().join("gt.png"),
+    );
+    rgb(&l).save(&lp).unwrap();
+    rgb(&r).save(&rp).unwrap();
+    image::GrayImage::from_raw(w as u32, h as u32, d)
+        .unwrap()
+        .save(&gp)
+        .unwrap();
+    let s = run_stereo(&StereoOptions {
+        left: lp,
+        right: rp,
+        gt: Some(gp),
+        gt_scale: 1.0,
+        width: 160,
+        max_disp: 15,
+        pool: None,
+        levels: None,
+        table: None,
+        refine: None,
+        complete: true,
+        json: true,
+        out: dir.path().join("out"),
+    })
+    .unwrap();
+    let v: serde_json::Value = serde_json::from_str(s.raw.as_deref().unwrap()).unwrap();
+    let get = |m: &str, k: &str| v[m][k].as_f64().unwrap();
+    println!("model {} final {}", v["model"], v["final"]);
+    assert!(get("final", "density") > get("model", "density"));
+    assert!(get("final", "bad2_all") < get("model", "bad2_all"));
+    assert!(dir.path().join("out/disparity_completed.png").is_file());
+}

@@ -183,6 +183,7 @@ fn the_command_rejects_bad_files_with_one_line_errors() {
         levels: None,
         refine: None,
         table: None,
+        complete: false,
         json: false,
         out: d.join("out"),
     };
