@@ -393,17 +393,26 @@ fn dem_aloe() -> Section {
          --width W --max-disp D --json --out DIR`, default `DemParams` (3 orientations, 2 scales, \
          5x5 pooling, left-right check). bad-k: % of pixels off by more than k px, over pixels \
          with an estimate, and over all GT pixels with a missing estimate counted as an error.\n\n\
-         The `--refine 1` rows add the colour-guided border refinement (docs/STEREO.md).\n\n\
-         | width | D | refine | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
+         The `--refine 1` rows add the colour-guided border refinement (docs/STEREO.md); the \
+         `--complete` rows score the map after the pipeline's completion over conspicuity \
+         regions (`protogist::complete`, docs/SEGMENT.md), ms without it.\n\n\
+         | width | D | options | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
          |---|---|---|---|---|---|---|---|\n",
     );
-    for (w, d, refine) in [
-        ("160", "32", "0"),
-        ("160", "32", "1"),
-        ("320", "64", "0"),
-        ("320", "64", "1"),
+    for (w, d, refine, complete) in [
+        ("160", "32", "0", false),
+        ("160", "32", "1", false),
+        ("160", "32", "0", true),
+        ("320", "64", "0", false),
+        ("320", "64", "1", false),
+        ("320", "64", "0", true),
     ] {
         let out_dir = root().join("target/bench-stereo");
+        let opts = match (refine, complete) {
+            (_, true) => "`--complete`".to_string(),
+            ("0", false) => "-".to_string(),
+            (r, false) => format!("`--refine {r}`"),
+        };
         let args = [
             "stereo",
             "--left",
@@ -423,7 +432,10 @@ fn dem_aloe() -> Section {
             &out_dir.to_string_lossy(),
         ]
         .map(|a| a.to_string());
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
+        if complete {
+            args.push("--complete");
+        }
         let row = protogist(&args)
             .ok()
             .and_then(|j| serde_json::from_str::<serde_json::Value>(&j).ok())
@@ -431,13 +443,13 @@ fn dem_aloe() -> Section {
                 let f = v.get("final")?;
                 let g = |k: &str| f.get(k).and_then(serde_json::Value::as_f64);
                 Some(format!(
-                    "| {w} | {d} | {refine} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {:.0} |\n",
+                    "| {w} | {d} | {opts} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {:.0} |\n",
                     g("bad1_estimated")?, g("bad2_estimated")?, g("bad4_estimated")?,
                     g("bad1_all")?, g("bad2_all")?, g("bad4_all")?,
                     g("mae")?, g("density")?, v.get("stereo_ms")?.as_f64()?
                 ))
             })
-            .unwrap_or_else(|| format!("| {w} | {d} | {refine} | {NOT_YET} | | | | |\n"));
+            .unwrap_or_else(|| format!("| {w} | {d} | {opts} | {NOT_YET} | | | | |\n"));
         body.push_str(&row);
     }
     body.push_str(&opencv_aloe(&dir));
