@@ -170,6 +170,14 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
         w,
         h,
     )?;
+    let completed_f32: Vec<_> = completed
+        .iter()
+        .map(|c| c.get().map(|d| d.to_num::<f32>()))
+        .collect();
+    out.push(Panel::new(
+        "b2_completed_disparity",
+        crate::stereo_cmd::disparity_panel(&completed_f32, w, h, dem.max_gt),
+    ));
     let seg = run_segment(&SegmentParams::default(), &completed, &maps.edges, w, h)?;
     out.extend(seg.panels(&scene.left));
     summary.push(
