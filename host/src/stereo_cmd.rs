@@ -7,7 +7,7 @@ use crate::ground_truth::{downscale_gt, load_gt, metrics, GtMap, Metrics};
 use crate::io;
 use crate::panels::{rgb_from, Panel};
 use crate::reference::stereo::table::{DemTable, DEFAULT_TABLE};
-use crate::reference::stereo::{self as dem, Decoder, DemLayout, DemParams, StereoError};
+use crate::reference::stereo::{self as dem, Decoder, DemParams, StereoError};
 use crate::summary::Summary;
 use image::{Rgb, RgbImage};
 use protogist::image::ImageView;
@@ -82,11 +82,11 @@ pub fn decoder_for(params: &DemParams, table: Option<&Path>) -> Result<Decoder> 
             path,
         )?,
         None => match DemTable::parse(DEFAULT_TABLE) {
-            Ok(t) if t.layout == DemLayout::of(params) => t,
+            Ok(t) if t.layout == dem::layout_of(params) => t,
             _ => DemTable::from_decoder(&dem::train(params)),
         },
     };
-    if t.layout != DemLayout::of(params) {
+    if t.layout != dem::layout_of(params) {
         return Err(StereoError::DecoderMismatch {
             got: t.layout.max_disp,
             expected: params.max_disp,

@@ -141,7 +141,7 @@ fn bad_input_is_a_typed_error() {
 
 fn default_decoder_for(p: &DemParams) -> dem::Decoder {
     // An untrained decoder of the right layout: only the checks run.
-    let layout = dem::DemLayout::of(p);
+    let layout = dem::layout_of(p);
     let n = usize::from(p.max_disp) + 1;
     dem::Decoder {
         layout,

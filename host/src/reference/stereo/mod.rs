@@ -138,49 +138,22 @@ impl DemParams {
     }
 }
 
-/// What a decoder was trained for: the parameters that shape the
-/// population, with the real ones quantised as the table stores them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct DemLayout {
-    /// Largest disparity.
-    pub max_disp: u8,
-    /// Pyramid levels.
-    pub levels: u8,
-    /// Carriers.
-    pub carriers: u8,
-    /// Shift step, level px.
-    pub shift_step: u8,
-    /// Kernel radius.
-    pub radius: u8,
-    /// λ, unsigned Q8.8.
-    pub wavelength_q8: u16,
-    /// σ/λ, unsigned Q4.12.
-    pub sigma_q12: u16,
-}
+/// What a decoder was trained for: core's layout type, one definition for
+/// the table format of both crates.
+pub use protogist::stereo::table::DemLayout;
 
-impl DemLayout {
-    /// The layout of `params`.
-    pub fn of(params: &DemParams) -> Self {
-        let q = |v: f32, bits: i32| (v * 2f32.powi(bits)).round().clamp(0.0, 65535.0) as u16;
-        Self {
-            max_disp: params.max_disp,
-            levels: params.levels,
-            carriers: params.carriers,
-            shift_step: params.shift_step,
-            radius: params.radius,
-            wavelength_q8: q(params.wavelength, 8),
-            sigma_q12: q(params.sigma_per_wavelength, 12),
-        }
-    }
-
-    /// Number of cell groups `(level, carrier, shift)`.
-    pub fn groups(&self) -> usize {
-        (0..usize::from(self.levels))
-            .map(|l| {
-                let step = usize::from(self.shift_step.max(1)) << l;
-                usize::from(self.carriers) * (usize::from(self.max_disp) + 1).div_ceil(step)
-            })
-            .sum()
+/// The layout of `params`: the parameters that shape the population, with
+/// the real ones quantised as the table stores them.
+pub fn layout_of(params: &DemParams) -> DemLayout {
+    let q = |v: f32, bits: i32| (v * 2f32.powi(bits)).round().clamp(0.0, 65535.0) as u16;
+    DemLayout {
+        max_disp: params.max_disp,
+        levels: params.levels,
+        carriers: params.carriers,
+        shift_step: params.shift_step,
+        radius: params.radius,
+        wavelength_q8: q(params.wavelength, 8),
+        sigma_q12: q(params.sigma_per_wavelength, 12),
     }
 }
 
@@ -259,7 +232,7 @@ fn check(
     if l != r {
         return Err(StereoError::SizeMismatch { left: l, right: r });
     }
-    if decoder.layout != DemLayout::of(params)
+    if decoder.layout != layout_of(params)
         || decoder.weights.len() != decoder.layout.groups() * decoder.disparities()
     {
         return Err(StereoError::DecoderMismatch {

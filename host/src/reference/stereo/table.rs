@@ -123,17 +123,8 @@ impl DemTable {
     /// [`TableError`] for anything but an intact table of this version.
     pub fn parse(bytes: &[u8]) -> Result<Self, TableError> {
         let t = core_table::DemTable::parse(bytes)?;
-        let l = t.layout;
         Ok(Self {
-            layout: DemLayout {
-                max_disp: l.max_disp,
-                levels: l.levels,
-                carriers: l.carriers,
-                shift_step: l.shift_step,
-                radius: l.radius,
-                wavelength_q8: l.wavelength_q8,
-                sigma_q12: l.sigma_q12,
-            },
+            layout: t.layout,
             weight_frac: t.weight_frac,
             bias_frac: t.bias_frac,
             weights: t.weights().collect(),
@@ -176,7 +167,10 @@ mod tests {
     #[test]
     fn the_default_table_is_what_train_dem_writes() {
         let t = DemTable::parse(DEFAULT_TABLE).unwrap();
-        assert_eq!(t.layout, DemLayout::of(&DemParams::default()));
+        assert_eq!(
+            t.layout,
+            crate::reference::stereo::layout_of(&DemParams::default())
+        );
         assert!(DEFAULT_TABLE.len() < 64 * 1024);
         assert_eq!(DemTable::from_decoder(&train(&DemParams::default())), t);
     }

@@ -163,7 +163,7 @@ pub fn fold(params: &DemParams, means: &[Vec<Energy>]) -> Decoder {
         .collect();
     let mean_sum = sum_w.iter().sum::<f32>() / n_disp.max(1) as f32;
     Decoder {
-        layout: DemLayout::of(params),
+        layout: super::layout_of(params),
         weights,
         bias: sum_w.iter().map(|s| s / mean_sum).collect(),
     }
