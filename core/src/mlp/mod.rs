@@ -111,11 +111,12 @@ impl core::fmt::Display for MlpError {
     }
 }
 
-/// Words of [`Scratch::input`] for a layer input of `n` values: the
-/// values are packed in pairs, `x[2i]` in the low and `x[2i + 1]` in the
-/// high half of word `i`.
+/// Words of [`Scratch::input`] for a layer input of `n` values: each
+/// group of four values `x[4g..4g + 4]` takes two words, `x0 | x2 << 16`
+/// and `x1 | x3 << 16` (the `SMLAD` pairing of even and odd weight bytes;
+/// missing values are 0).
 pub const fn input_len(n: usize) -> usize {
-    n.div_ceil(2)
+    2 * n.div_ceil(4)
 }
 
 /// Words of [`Scratch::input`] for a network: the quantised input, then the
@@ -174,13 +175,17 @@ pub enum Identity {
     Unknown,
 }
 
-/// Packs `values` in pairs into `out` (a missing last high half is 0).
+/// Packs `values` into `out` as [`input_len`] describes (missing values
+/// are 0).
 fn pack(values: impl Iterator<Item = i16>, out: &mut [u32]) {
     let mut values = values;
-    for w in out.iter_mut() {
-        let lo = values.next().unwrap_or(0);
-        let hi = values.next().unwrap_or(0);
-        *w = u32::from(lo as u16) | (u32::from(hi as u16) << 16);
+    let half = |v: i16| u32::from(v as u16);
+    for w in out.chunks_exact_mut(2) {
+        let x: [i16; 4] = core::array::from_fn(|_| values.next().unwrap_or(0));
+        if let [w02, w13] = w {
+            *w02 = half(x[0]) | (half(x[2]) << 16);
+            *w13 = half(x[1]) | (half(x[3]) << 16);
+        }
     }
 }
 
@@ -235,23 +240,23 @@ fn hi16(v: i32) -> i32 {
 }
 
 /// Four multiply-accumulates: weight bytes `w` (excess-128, byte `i` for
-/// input `i`) against inputs `x0 | x1 << 16` and `x2 | x3 << 16`. `mask`
+/// input `i`) against inputs `x0 | x2 << 16` and `x1 | x3 << 16`. `mask`
 /// is `0x00FF_00FF`: it puts bytes 0 and 2 (and 1 and 3) in the two 16-bit
 /// halves of a register, so each product reads its operands' halves
 /// directly (the Cortex-M4 `SMLAxy` forms). The caller passes the mask
 /// through `black_box` so that LLVM keeps the two-lane registers instead of
 /// extracting every byte on its own.
 #[inline(always)]
-fn mac4(acc: i32, w: u32, x01: i32, x23: i32, mask: u32) -> i32 {
+fn mac4(acc: i32, w: u32, x02: i32, x13: i32, mask: u32) -> i32 {
     let even = (w & mask) as i32;
     // An arithmetic shift, so that LLVM cannot prove the top half
     // non-negative and turn `hi16` into a logical shift (which `SMLAxT`
     // cannot fold).
     let odd = ((w as i32) >> 8) & mask as i32;
-    acc.wrapping_add(lo16(even).wrapping_mul(lo16(x01)))
-        .wrapping_add(lo16(odd).wrapping_mul(hi16(x01)))
-        .wrapping_add(hi16(even).wrapping_mul(lo16(x23)))
-        .wrapping_add(hi16(odd).wrapping_mul(hi16(x23)))
+    acc.wrapping_add(lo16(even).wrapping_mul(lo16(x02)))
+        .wrapping_add(lo16(odd).wrapping_mul(lo16(x13)))
+        .wrapping_add(hi16(even).wrapping_mul(hi16(x02)))
+        .wrapping_add(hi16(odd).wrapping_mul(hi16(x13)))
 }
 
 /// Four weight bytes as a little-endian word (0 if short: never, the
@@ -264,21 +269,15 @@ fn word(b: &[u8]) -> u32 {
 /// Input value `j` of packed words.
 #[inline]
 fn x_at(x: &[u32], j: usize) -> i32 {
-    let w = x.get(j / 2).copied().unwrap_or(0) as i32;
-    if j % 2 == 0 {
+    let w = x.get(j / 4 * 2 + j % 2).copied().unwrap_or(0) as i32;
+    if j % 4 < 2 {
         lo16(w)
     } else {
         hi16(w)
     }
 }
 
-/// The pair words of `x` covering the first `full` inputs (a multiple of 4).
-#[inline(always)]
-fn pairs(x: &[u32], full: usize) -> core::slice::ChunksExact<'_, u32> {
-    x.get(..full / 2).unwrap_or(&[]).chunks_exact(2)
-}
-
-/// `[x01, x23]` of a pair chunk.
+/// `[x02, x13]` of a group's two words.
 #[inline(always)]
 fn xpair(xs: &[u32]) -> (i32, i32) {
     match *xs {
@@ -287,30 +286,67 @@ fn xpair(xs: &[u32]) -> (i32, i32) {
     }
 }
 
+/// The inner dot-product kernel of [`forward_with`] (CMSIS-NN style: the
+/// portable default is [`SafeKernel`]; a target may supply an optimised
+/// one, e.g. with `SMLAD`).
+///
+/// Contract: `rows` are excess-128 weight bytes (byte `i` for input `i`),
+/// all of the same length `4m`; `x` holds `2m` words, inputs packed as
+/// [`input_len`] describes (`x0 | x2 << 16`, `x1 | x3 << 16` per group). Return `Σ_i u[i] · x[i]`
+/// per row with wrapping `i32` arithmetic, exactly as the default methods
+/// do (the layer's result must stay bit-identical).
+pub trait MacKernel {
+    /// Four rows sharing the inputs.
+    #[inline(always)]
+    fn dot4(rows: [&[u8]; 4], x: &[u32]) -> [i32; 4] {
+        let mask = core::hint::black_box(0x00FF_00FFu32);
+        let [r0, r1, r2, r3] = rows;
+        let (mut a0, mut a1, mut a2, mut a3) = (0i32, 0i32, 0i32, 0i32);
+        for ((((c0, c1), c2), c3), xs) in r0
+            .chunks_exact(4)
+            .zip(r1.chunks_exact(4))
+            .zip(r2.chunks_exact(4))
+            .zip(r3.chunks_exact(4))
+            .zip(x.chunks_exact(2))
+        {
+            let (x01, x23) = xpair(xs);
+            a0 = mac4(a0, word(c0), x01, x23, mask);
+            a1 = mac4(a1, word(c1), x01, x23, mask);
+            a2 = mac4(a2, word(c2), x01, x23, mask);
+            a3 = mac4(a3, word(c3), x01, x23, mask);
+        }
+        [a0, a1, a2, a3]
+    }
+
+    /// One row.
+    #[inline(always)]
+    fn dot1(row: &[u8], x: &[u32]) -> i32 {
+        let mask = core::hint::black_box(0x00FF_00FFu32);
+        row.chunks_exact(4)
+            .zip(x.chunks_exact(2))
+            .fold(0i32, |a, (c, xs)| {
+                let (x01, x23) = xpair(xs);
+                mac4(a, word(c), x01, x23, mask)
+            })
+    }
+}
+
+/// The portable kernel (`SMLAxy` forms on Cortex-M4), used by [`forward`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SafeKernel;
+
+impl MacKernel for SafeKernel {}
+
 /// `Σ_j u[r][j] · x[j]` for four rows of `n` excess-128 weight bytes
 /// (consecutive in `w`), sharing each input load between the rows. Sums
 /// wrap; the caller subtracts `128 · Σx`, and the true dot products fit
 /// `i32` (see [`layer`]), so the wrapped result is exact.
 #[inline(always)]
-fn dot4(w: &[u8], n: usize, x: &[u32], mask: u32) -> [i32; 4] {
+fn dot4<K: MacKernel>(w: &[u8], n: usize, x: &[u32]) -> [i32; 4] {
     let full = n - n % 4;
     let row = |r: usize| w.get(r * n..r * n + full).unwrap_or(&[]);
-    let (r0, r1, r2, r3) = (row(0), row(1), row(2), row(3));
-    let (mut a0, mut a1, mut a2, mut a3) = (0i32, 0i32, 0i32, 0i32);
-    for ((((c0, c1), c2), c3), xs) in r0
-        .chunks_exact(4)
-        .zip(r1.chunks_exact(4))
-        .zip(r2.chunks_exact(4))
-        .zip(r3.chunks_exact(4))
-        .zip(pairs(x, full))
-    {
-        let (x01, x23) = xpair(xs);
-        a0 = mac4(a0, word(c0), x01, x23, mask);
-        a1 = mac4(a1, word(c1), x01, x23, mask);
-        a2 = mac4(a2, word(c2), x01, x23, mask);
-        a3 = mac4(a3, word(c3), x01, x23, mask);
-    }
-    let mut s = [a0, a1, a2, a3];
+    let xs = x.get(..full / 2).unwrap_or(&[]);
+    let mut s = K::dot4([row(0), row(1), row(2), row(3)], xs);
     for j in full..n {
         let xj = x_at(x, j);
         for (r, acc) in s.iter_mut().enumerate() {
@@ -323,17 +359,12 @@ fn dot4(w: &[u8], n: usize, x: &[u32], mask: u32) -> [i32; 4] {
 
 /// [`dot4`] for one row.
 #[inline(always)]
-fn dot1(w: &[u8], n: usize, x: &[u32], mask: u32) -> i32 {
+fn dot1<K: MacKernel>(w: &[u8], n: usize, x: &[u32]) -> i32 {
     let full = n - n % 4;
-    let mut a = w
-        .get(..full)
-        .unwrap_or(&[])
-        .chunks_exact(4)
-        .zip(pairs(x, full))
-        .fold(0i32, |a, (c, xs)| {
-            let (x01, x23) = xpair(xs);
-            mac4(a, word(c), x01, x23, mask)
-        });
+    let mut a = K::dot1(
+        w.get(..full).unwrap_or(&[]),
+        x.get(..full / 2).unwrap_or(&[]),
+    );
     for j in full..n {
         let u = i32::from(w.get(j).copied().unwrap_or(128));
         a = a.wrapping_add(u.wrapping_mul(x_at(x, j)));
@@ -345,7 +376,7 @@ fn dot1(w: &[u8], n: usize, x: &[u32], mask: u32) -> i32 {
 /// over `n` packed inputs. Weights are stored excess-128 (`u = w + 128`),
 /// so `W·x = Σ u·x − 128·Σx`. With `|w| <= 127`, `|x| <= 255` and at most
 /// 65535 inputs, `|W·x| < 2^31`.
-fn layer<T>(
+fn layer<K: MacKernel, T>(
     w: &[u8],
     b: &[u8],
     rq: &[u8],
@@ -357,7 +388,7 @@ fn layer<T>(
     if n == 0 {
         return;
     }
-    // The pad half of an odd count is 0, so summing whole words is exact.
+    // Missing values are packed as 0, so summing whole words is exact.
     let xsum = x
         .get(..input_len(n))
         .unwrap_or(&[])
@@ -366,7 +397,6 @@ fn layer<T>(
             a.wrapping_add(lo16(w as i32)).wrapping_add(hi16(w as i32))
         });
     let offset = xsum.wrapping_mul(128);
-    let mask = core::hint::black_box(0x00FF_00FFu32);
     let finish = |acc: i32, c: usize| -> T {
         let acc = acc.wrapping_sub(offset).saturating_add(le_i32(b, 4 * c));
         let z = requantize(acc, le_i32(rq, 8 * c), le_i32(rq, 8 * c + 4));
@@ -376,7 +406,7 @@ fn layer<T>(
     let mut outs = out.chunks_exact_mut(4);
     let mut c = 0;
     for (block, o) in (&mut blocks).zip(&mut outs) {
-        let s = dot4(block, n, x, mask);
+        let s = dot4::<K>(block, n, x);
         for (o, s) in o.iter_mut().zip(s) {
             *o = finish(s, c);
             c += 1;
@@ -387,7 +417,7 @@ fn layer<T>(
         .chunks_exact(n)
         .zip(outs.into_remainder())
     {
-        *o = finish(dot1(row, n, x, mask), c);
+        *o = finish(dot1::<K>(row, n, x), c);
         c += 1;
     }
 }
@@ -399,6 +429,18 @@ fn layer<T>(
 /// [`MlpError::FeatureSize`] for an input of another length than the
 /// model's, [`MlpError::ScratchTooSmall`].
 pub fn forward<'s>(
+    model: &Model<'_>,
+    input: &[ShapeElem],
+    scratch: &'s mut Scratch<'_>,
+) -> Result<&'s [u16], MlpError> {
+    forward_with::<SafeKernel>(model, input, scratch)
+}
+
+/// [`forward`] with the dot-product kernel `K` (see [`MacKernel`]).
+///
+/// # Errors
+/// As [`forward`].
+pub fn forward_with<'s, K: MacKernel>(
     model: &Model<'_>,
     input: &[ShapeElem],
     scratch: &'s mut Scratch<'_>,
@@ -415,7 +457,7 @@ pub fn forward<'s>(
     check_scratch("output", output_len(k), scratch.output.len())?;
     quantize_input(model, input, scratch.input)?;
     let hidden = scratch.hidden.get_mut(..h).unwrap_or(&mut []);
-    layer(
+    layer::<K, _>(
         model.w1,
         model.b1,
         model.rq1,
@@ -430,7 +472,7 @@ pub fn forward<'s>(
         scratch.input.get_mut(..input_len(h)).unwrap_or(&mut []),
     );
     let out = scratch.output.get_mut(..k).unwrap_or(&mut []);
-    layer(
+    layer::<K, _>(
         model.w2,
         model.b2,
         model.rq2,
