@@ -37,13 +37,15 @@
 //! [`Scratch`] (sizes from [`packed_len`], [`hidden_len`], [`output_len`]);
 //! the model is borrowed from wherever its bytes are (flash).
 //!
-//! **Kernel.** Each layer runs four output rows at a time; per four inputs
-//! and row it loads one weight word, splits it into even and odd bytes
-//! with two masks, and does four 16x16 multiply-accumulates that read
-//! their operands' register halves (inputs are kept packed in pairs), so
-//! the Cortex-M4 build uses `SMLABB`/`SMLABT`/`SMLATB`/`SMLATT`. Safe Rust
-//! has no `SMLAD` (two MACs per instruction): LLVM only forms it from two
-//! pairs of adjacent `i16` loads, and the weights are bytes.
+//! **Kernel.** The dot products go through [`MacKernel`] (CMSIS-NN
+//! style): [`forward`] uses the portable [`SafeKernel`] (four rows share
+//! each input load; per four inputs and row, one weight word masked into
+//! even and odd bytes and four 16x16 multiply-accumulates that read their
+//! operands' register halves, `SMLAxy` on the Cortex-M4); a target may pass
+//! its own to [`forward_with`], as the firmware does with an `SMLAD`
+//! kernel in assembly (safe Rust cannot reach `SMLAD` from byte weights,
+//! and core forbids `unsafe`). Any kernel that honours the contract gives
+//! the same bits. docs/MODEL_FORMAT.md, section Kernel, has the costs.
 
 pub mod blob;
 pub mod logsig_table;
@@ -54,7 +56,7 @@ pub use blob::{crc32, Model, ModelError};
 use crate::fixed::isqrt_floor_u128;
 use crate::shape::ShapeElem;
 use blob::{le_i32, le_u16};
-use requant::{logsig_q12, logsig_u8, requantize};
+use requant::{logsig_q12, logsig_u8, requantize, requantize_i16};
 
 /// Ranked classes the demo prints.
 pub const TOP_K: usize = 5;
@@ -175,17 +177,28 @@ pub enum Identity {
     Unknown,
 }
 
-/// Packs `values` into `out` as [`input_len`] describes (missing values
-/// are 0).
-fn pack(values: impl Iterator<Item = i16>, out: &mut [u32]) {
-    let mut values = values;
+/// Packs `f` of every value into `out` as [`input_len`] describes
+/// (missing values are 0).
+#[inline(always)]
+fn pack<S: Copy>(values: &[S], f: impl Fn(S) -> i16, out: &mut [u32]) {
     let half = |v: i16| u32::from(v as u16);
-    for w in out.chunks_exact_mut(2) {
-        let x: [i16; 4] = core::array::from_fn(|_| values.next().unwrap_or(0));
+    let put = |w: &mut [u32], x: [i16; 4]| {
         if let [w02, w13] = w {
             *w02 = half(x[0]) | (half(x[2]) << 16);
             *w13 = half(x[1]) | (half(x[3]) << 16);
         }
+    };
+    let mut groups = values.chunks_exact(4);
+    let mut words = out.chunks_exact_mut(2);
+    for (g, w) in (&mut groups).zip(&mut words) {
+        if let [a, b, c, d] = *g {
+            put(w, [f(a), f(b), f(c), f(d)]);
+        }
+    }
+    let rest = groups.remainder();
+    if let Some(w) = words.next() {
+        let x = core::array::from_fn(|i| rest.get(i).map_or(0, |&v| f(v)));
+        put(w, x);
     }
 }
 
@@ -209,10 +222,12 @@ pub fn quantize_input(
     let words = input_len(input.len());
     check_scratch("input", words, out.len())?;
     let (m, s) = model.input_requant();
-    let q = input
-        .iter()
-        .map(|x| requantize(i32::from(x.to_bits()), m, s).clamp(-127, 127) as i16);
-    pack(q, out.get_mut(..words).unwrap_or(&mut []));
+    let q = requantize_i16(m, s);
+    pack(
+        input,
+        |x| q(x.to_bits()).clamp(-127, 127) as i16,
+        out.get_mut(..words).unwrap_or(&mut []),
+    );
     Ok(())
 }
 
@@ -288,46 +303,22 @@ fn xpair(xs: &[u32]) -> (i32, i32) {
 
 /// The inner dot-product kernel of [`forward_with`] (CMSIS-NN style: the
 /// portable default is [`SafeKernel`]; a target may supply an optimised
-/// one, e.g. with `SMLAD`).
+/// one, e.g. with `SMLAD`, as the firmware does).
 ///
-/// Contract: `rows` are excess-128 weight bytes (byte `i` for input `i`),
-/// all of the same length `4m`; `x` holds `2m` words, inputs packed as
-/// [`input_len`] describes (`x0 | x2 << 16`, `x1 | x3 << 16` per group). Return `Σ_i u[i] · x[i]`
-/// per row with wrapping `i32` arithmetic, exactly as the default methods
-/// do (the layer's result must stay bit-identical).
+/// Contract of [`MacKernel::dot_rows`]: `w` holds `acc.len()` rows of
+/// excess-128 weight bytes, row `r` at `w[r · stride..][..len]` (byte `i`
+/// for input `i`), `len` a multiple of 4; `x` holds at least `len / 2`
+/// words, inputs packed as [`input_len`] describes (`x0 | x2 << 16`,
+/// `x1 | x3 << 16` per group of four). Set `acc[r] = Σ_i u[r][i] · x[i]`
+/// with wrapping `i32` arithmetic. Addition modulo 2^32 does not depend on
+/// order, so any kernel that honours this gives the same bits as the
+/// default. Rows that do not fit in `w` are never passed by [`layer`]; the
+/// default gives them partial sums rather than panicking.
 pub trait MacKernel {
-    /// Four rows sharing the inputs.
+    /// `acc[r] = Σ_{i < len} u[r · stride + i] · x[i]`, wrapping.
     #[inline(always)]
-    fn dot4(rows: [&[u8]; 4], x: &[u32]) -> [i32; 4] {
-        let mask = core::hint::black_box(0x00FF_00FFu32);
-        let [r0, r1, r2, r3] = rows;
-        let (mut a0, mut a1, mut a2, mut a3) = (0i32, 0i32, 0i32, 0i32);
-        for ((((c0, c1), c2), c3), xs) in r0
-            .chunks_exact(4)
-            .zip(r1.chunks_exact(4))
-            .zip(r2.chunks_exact(4))
-            .zip(r3.chunks_exact(4))
-            .zip(x.chunks_exact(2))
-        {
-            let (x01, x23) = xpair(xs);
-            a0 = mac4(a0, word(c0), x01, x23, mask);
-            a1 = mac4(a1, word(c1), x01, x23, mask);
-            a2 = mac4(a2, word(c2), x01, x23, mask);
-            a3 = mac4(a3, word(c3), x01, x23, mask);
-        }
-        [a0, a1, a2, a3]
-    }
-
-    /// One row.
-    #[inline(always)]
-    fn dot1(row: &[u8], x: &[u32]) -> i32 {
-        let mask = core::hint::black_box(0x00FF_00FFu32);
-        row.chunks_exact(4)
-            .zip(x.chunks_exact(2))
-            .fold(0i32, |a, (c, xs)| {
-                let (x01, x23) = xpair(xs);
-                mac4(a, word(c), x01, x23, mask)
-            })
+    fn dot_rows(w: &[u8], stride: usize, len: usize, x: &[u32], acc: &mut [i32]) {
+        safe_dot_rows(w, stride, len, x, acc);
     }
 }
 
@@ -337,40 +328,67 @@ pub struct SafeKernel;
 
 impl MacKernel for SafeKernel {}
 
-/// `Σ_j u[r][j] · x[j]` for four rows of `n` excess-128 weight bytes
-/// (consecutive in `w`), sharing each input load between the rows. Sums
-/// wrap; the caller subtracts `128 · Σx`, and the true dot products fit
-/// `i32` (see [`layer`]), so the wrapped result is exact.
+/// The default [`MacKernel::dot_rows`]: four rows at a time sharing each
+/// input load, then single rows.
 #[inline(always)]
-fn dot4<K: MacKernel>(w: &[u8], n: usize, x: &[u32]) -> [i32; 4] {
-    let full = n - n % 4;
-    let row = |r: usize| w.get(r * n..r * n + full).unwrap_or(&[]);
-    let xs = x.get(..full / 2).unwrap_or(&[]);
-    let mut s = K::dot4([row(0), row(1), row(2), row(3)], xs);
-    for j in full..n {
-        let xj = x_at(x, j);
-        for (r, acc) in s.iter_mut().enumerate() {
-            let u = i32::from(w.get(r * n + j).copied().unwrap_or(128));
-            *acc = acc.wrapping_add(u.wrapping_mul(xj));
-        }
+pub fn safe_dot_rows(w: &[u8], stride: usize, len: usize, x: &[u32], acc: &mut [i32]) {
+    let xs = x.get(..len / 2).unwrap_or(&[]);
+    let row = |r: usize| {
+        w.get(r.saturating_mul(stride)..)
+            .and_then(|t| t.get(..len))
+            .unwrap_or(&[])
+    };
+    let mut blocks = acc.chunks_exact_mut(4);
+    let mut r = 0;
+    for a in &mut blocks {
+        let s = dot4_rows([row(r), row(r + 1), row(r + 2), row(r + 3)], xs);
+        a.copy_from_slice(&s);
+        r += 4;
     }
-    s
+    for a in blocks.into_remainder() {
+        *a = dot1_row(row(r), xs);
+        r += 1;
+    }
 }
 
-/// [`dot4`] for one row.
+/// Four rows sharing the inputs.
 #[inline(always)]
-fn dot1<K: MacKernel>(w: &[u8], n: usize, x: &[u32]) -> i32 {
-    let full = n - n % 4;
-    let mut a = K::dot1(
-        w.get(..full).unwrap_or(&[]),
-        x.get(..full / 2).unwrap_or(&[]),
-    );
-    for j in full..n {
-        let u = i32::from(w.get(j).copied().unwrap_or(128));
-        a = a.wrapping_add(u.wrapping_mul(x_at(x, j)));
+fn dot4_rows(rows: [&[u8]; 4], x: &[u32]) -> [i32; 4] {
+    let mask = core::hint::black_box(0x00FF_00FFu32);
+    let [r0, r1, r2, r3] = rows;
+    let (mut a0, mut a1, mut a2, mut a3) = (0i32, 0i32, 0i32, 0i32);
+    for ((((c0, c1), c2), c3), xs) in r0
+        .chunks_exact(4)
+        .zip(r1.chunks_exact(4))
+        .zip(r2.chunks_exact(4))
+        .zip(r3.chunks_exact(4))
+        .zip(x.chunks_exact(2))
+    {
+        let (x02, x13) = xpair(xs);
+        a0 = mac4(a0, word(c0), x02, x13, mask);
+        a1 = mac4(a1, word(c1), x02, x13, mask);
+        a2 = mac4(a2, word(c2), x02, x13, mask);
+        a3 = mac4(a3, word(c3), x02, x13, mask);
     }
-    a
+    [a0, a1, a2, a3]
 }
+
+/// One row.
+#[inline(always)]
+fn dot1_row(row: &[u8], x: &[u32]) -> i32 {
+    let mask = core::hint::black_box(0x00FF_00FFu32);
+    row.chunks_exact(4)
+        .zip(x.chunks_exact(2))
+        .fold(0i32, |a, (c, xs)| {
+            let (x02, x13) = xpair(xs);
+            mac4(a, word(c), x02, x13, mask)
+        })
+}
+
+/// Rows per [`MacKernel::dot_rows`] call of [`layer`] (a multiple of 3 and
+/// 4, so that kernels blocking 3 or 4 rows have no remainder but the
+/// layer's last).
+const ROWS_PER_CALL: usize = 48;
 
 /// One fully connected layer: `out[c] = act(requantize(W[c]·x + b[c]))`
 /// over `n` packed inputs. Weights are stored excess-128 (`u = w + 128`),
@@ -397,28 +415,36 @@ fn layer<K: MacKernel, T>(
             a.wrapping_add(lo16(w as i32)).wrapping_add(hi16(w as i32))
         });
     let offset = xsum.wrapping_mul(128);
-    let finish = |acc: i32, c: usize| -> T {
-        let acc = acc.wrapping_sub(offset).saturating_add(le_i32(b, 4 * c));
-        let z = requantize(acc, le_i32(rq, 8 * c), le_i32(rq, 8 * c + 4));
-        act(z)
+    // Bias (4 bytes) and requantisation pair (8 bytes) of each channel, in
+    // step with the outputs (the blob parser checked the lengths).
+    let mut params = b.chunks_exact(4).zip(rq.chunks_exact(8));
+    let finish = |acc: i32, (b, rq): (&[u8], &[u8])| -> T {
+        let acc = acc.wrapping_sub(offset).saturating_add(le_i32(b, 0));
+        act(requantize(acc, le_i32(rq, 0), le_i32(rq, 4)))
     };
-    let mut blocks = w.chunks_exact(4 * n);
-    let mut outs = out.chunks_exact_mut(4);
-    let mut c = 0;
-    for (block, o) in (&mut blocks).zip(&mut outs) {
-        let s = dot4::<K>(block, n, x);
-        for (o, s) in o.iter_mut().zip(s) {
-            *o = finish(s, c);
-            c += 1;
-        }
-    }
-    for (row, o) in blocks
-        .remainder()
-        .chunks_exact(n)
-        .zip(outs.into_remainder())
+    // The kernel takes whole groups of four inputs; the rest (n % 4) is
+    // added per row here.
+    let full = n - n % 4;
+    let xs = x.get(..full / 2).unwrap_or(&[]);
+    let mut acc = [0i32; ROWS_PER_CALL];
+    for (rows, outs) in w
+        .chunks(ROWS_PER_CALL * n)
+        .zip(out.chunks_mut(ROWS_PER_CALL))
     {
-        *o = finish(dot1::<K>(row, n, x), c);
-        c += 1;
+        let acc = acc.get_mut(..outs.len()).unwrap_or(&mut []);
+        K::dot_rows(rows, n, full, xs, acc);
+        for (((o, &a), row), p) in outs
+            .iter_mut()
+            .zip(acc.iter())
+            .zip(rows.chunks(n))
+            .zip(&mut params)
+        {
+            let tail = row.get(full..).unwrap_or(&[]);
+            let a = tail.iter().enumerate().fold(a, |a, (j, &u)| {
+                a.wrapping_add(i32::from(u).wrapping_mul(x_at(x, full + j)))
+            });
+            *o = finish(a, p);
+        }
     }
 }
 
@@ -468,7 +494,8 @@ pub fn forward_with<'s, K: MacKernel>(
     );
     // The output layer reads the hidden activations packed like an input.
     pack(
-        hidden.iter().map(|&v| i16::from(v)),
+        hidden,
+        i16::from,
         scratch.input.get_mut(..input_len(h)).unwrap_or(&mut []),
     );
     let out = scratch.output.get_mut(..k).unwrap_or(&mut []);
