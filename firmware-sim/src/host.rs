@@ -186,7 +186,10 @@ fn run_mlp() -> Result<String, firmware_sim::mlp_run::MlpRunError> {
         hidden: &mut hidden,
         output: &mut output,
     };
-    let r = mlp_run::run(&mut bufs, &mut WallTicks(Instant::now()))?;
+    let r = mlp_run::run::<firmware_sim::pg::mlp::SafeKernel, _>(
+        &mut bufs,
+        &mut WallTicks(Instant::now()),
+    )?;
     let mut lines = String::new();
     // Writing into a String cannot fail.
     let _ = mlp_run::write_checksums(&mut lines, &r);

@@ -5,6 +5,8 @@
 #![deny(unsafe_code)]
 
 #[cfg(target_os = "none")]
+mod dsp;
+#[cfg(target_os = "none")]
 mod mcu;
 
 #[cfg(not(target_os = "none"))]

@@ -251,7 +251,8 @@ fn run_mlp(
         hidden: singleton!(: [u8; len::HIDDEN] = [0; len::HIDDEN]).ok_or("mlp hidden taken")?,
         output: singleton!(: [u16; len::OUTPUT] = [0; len::OUTPUT]).ok_or("mlp output taken")?,
     };
-    let r = mlp_run::run(&mut bufs, ticks).map_err(|_| "classifier failed")?;
+    let r = mlp_run::run::<crate::dsp::SmladKernel, _>(&mut bufs, ticks)
+        .map_err(|_| "classifier failed")?;
     mlp_run::write_checksums(out, &r).map_err(|_| "semihosting write failed")?;
     for b in &r.bench {
         let instructions = to_instructions(b.ticks);

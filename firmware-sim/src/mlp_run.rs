@@ -16,20 +16,34 @@ use crate::pg::checksum::Fnv1a;
 use crate::pg::image::ImageView;
 use crate::pg::image::Rgb8;
 use crate::pg::mlp::{
-    forward, hidden_len, output_len, packed_len, top_k, MlpError, Model, ModelError, Ranked,
-    Scratch, TOP_K,
+    forward_with, hidden_len, output_len, packed_len, top_k, MacKernel, MlpError, Model,
+    ModelError, Ranked, Scratch, TOP_K,
 };
 use crate::pg::rng::SplitMix64;
 use crate::pg::shape::{shape_vector, RadialProfile, ShapeElem, ShapeError, SHAPE_LEN};
 use crate::pg::synth::{ObjectSpec, Shape};
 use crate::Ticks;
 
+/// Bytes at a 4-byte-aligned address: the blob's weight rows are then
+/// word-aligned (docs/MODEL_FORMAT.md), which the `SMLAD` kernel's `ldrd`
+/// needs.
+#[repr(C, align(4))]
+pub struct Aligned<T: ?Sized>(pub T);
+
 /// The shipped model.
-pub static SHIPPED: &[u8] = include_bytes!("../../host/data/shapes_model.bin");
+pub static SHIPPED: &[u8] = &Aligned(*include_bytes!("../../host/data/shapes_model.bin")).0;
 /// The 720x256x10 benchmark network.
-pub static BENCH_256: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mlp_bench_256.bin"));
+pub static BENCH_256: &[u8] = &Aligned(*include_bytes!(concat!(
+    env!("OUT_DIR"),
+    "/mlp_bench_256.bin"
+)))
+.0;
 /// The 720x2000x10 benchmark network.
-pub static BENCH_2000: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mlp_bench_2000.bin"));
+pub static BENCH_2000: &[u8] = &Aligned(*include_bytes!(concat!(
+    env!("OUT_DIR"),
+    "/mlp_bench_2000.bin"
+)))
+.0;
 
 /// Mask size of the shipped model's inputs.
 pub const MASK_W: usize = 64;
@@ -148,11 +162,16 @@ fn synthetic_shape(
 }
 
 /// Runs the shipped model on the four synthetic shapes and each benchmark
-/// network once.
+/// network once, with the dot-product kernel `K` (the portable
+/// `SafeKernel` on the desktop, the `SMLAD` one on the Cortex-M4; the
+/// checksums must not depend on it).
 ///
 /// # Errors
 /// [`MlpRunError`].
-pub fn run<T: Ticks>(bufs: &mut MlpBuffers<'_>, ticks: &mut T) -> Result<MlpReport, MlpRunError> {
+pub fn run<K: MacKernel, T: Ticks>(
+    bufs: &mut MlpBuffers<'_>,
+    ticks: &mut T,
+) -> Result<MlpReport, MlpRunError> {
     let model = Model::parse(SHIPPED).map_err(MlpRunError::Model)?;
     let mut hash = Fnv1a::new();
     let mut top1 = [0u16; 4];
@@ -166,7 +185,7 @@ pub fn run<T: Ticks>(bufs: &mut MlpBuffers<'_>, ticks: &mut T) -> Result<MlpRepo
     for (shape, t1) in shapes.into_iter().zip(&mut top1) {
         synthetic_shape(shape, bufs.mask, &mut v)?;
         let mut s = scratch(bufs);
-        let out = forward(&model, &v, &mut s).map_err(MlpRunError::Mlp)?;
+        let out = forward_with::<K>(&model, &v, &mut s).map_err(MlpRunError::Mlp)?;
         out.iter().for_each(|o| hash.write(&o.to_le_bytes()));
         let mut ranked = [Ranked::default(); TOP_K];
         let n = top_k(&model, out, &mut ranked).map_err(MlpRunError::Mlp)?;
@@ -192,7 +211,7 @@ pub fn run<T: Ticks>(bufs: &mut MlpBuffers<'_>, ticks: &mut T) -> Result<MlpRepo
         let m = Model::parse(blob).map_err(MlpRunError::Model)?;
         let mut s = scratch(bufs);
         let t0 = ticks.now();
-        let out = forward(&m, &v, &mut s).map_err(MlpRunError::Mlp)?;
+        let out = forward_with::<K>(&m, &v, &mut s).map_err(MlpRunError::Mlp)?;
         let t1 = ticks.now();
         let mut h = Fnv1a::new();
         out.iter().for_each(|o| h.write(&o.to_le_bytes()));

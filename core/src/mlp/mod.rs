@@ -37,13 +37,15 @@
 //! [`Scratch`] (sizes from [`packed_len`], [`hidden_len`], [`output_len`]);
 //! the model is borrowed from wherever its bytes are (flash).
 //!
-//! **Kernel.** Each layer runs four output rows at a time; per four inputs
-//! and row it loads one weight word, splits it into even and odd bytes
-//! with two masks, and does four 16x16 multiply-accumulates that read
-//! their operands' register halves (inputs are kept packed in pairs), so
-//! the Cortex-M4 build uses `SMLABB`/`SMLABT`/`SMLATB`/`SMLATT`. Safe Rust
-//! has no `SMLAD` (two MACs per instruction): LLVM only forms it from two
-//! pairs of adjacent `i16` loads, and the weights are bytes.
+//! **Kernel.** The dot products go through [`MacKernel`] (CMSIS-NN
+//! style): [`forward`] uses the portable [`SafeKernel`] (four rows share
+//! each input load; per four inputs and row, one weight word masked into
+//! even and odd bytes and four 16x16 multiply-accumulates that read their
+//! operands' register halves, `SMLAxy` on the Cortex-M4); a target may pass
+//! its own to [`forward_with`], as the firmware does with an `SMLAD`
+//! kernel in assembly (safe Rust cannot reach `SMLAD` from byte weights,
+//! and core forbids `unsafe`). Any kernel that honours the contract gives
+//! the same bits. docs/MODEL_FORMAT.md, section Kernel, has the costs.
 
 pub mod blob;
 pub mod logsig_table;
@@ -54,7 +56,7 @@ pub use blob::{crc32, Model, ModelError};
 use crate::fixed::isqrt_floor_u128;
 use crate::shape::ShapeElem;
 use blob::{le_i32, le_u16};
-use requant::{logsig_q12, logsig_u8, requantize};
+use requant::{logsig_q12, logsig_u8, requantize, requantize_i16};
 
 /// Ranked classes the demo prints.
 pub const TOP_K: usize = 5;
@@ -111,11 +113,12 @@ impl core::fmt::Display for MlpError {
     }
 }
 
-/// Words of [`Scratch::input`] for a layer input of `n` values: the
-/// values are packed in pairs, `x[2i]` in the low and `x[2i + 1]` in the
-/// high half of word `i`.
+/// Words of [`Scratch::input`] for a layer input of `n` values: each
+/// group of four values `x[4g..4g + 4]` takes two words, `x0 | x2 << 16`
+/// and `x1 | x3 << 16` (the `SMLAD` pairing of even and odd weight bytes;
+/// missing values are 0).
 pub const fn input_len(n: usize) -> usize {
-    n.div_ceil(2)
+    2 * n.div_ceil(4)
 }
 
 /// Words of [`Scratch::input`] for a network: the quantised input, then the
@@ -174,13 +177,28 @@ pub enum Identity {
     Unknown,
 }
 
-/// Packs `values` in pairs into `out` (a missing last high half is 0).
-fn pack(values: impl Iterator<Item = i16>, out: &mut [u32]) {
-    let mut values = values;
-    for w in out.iter_mut() {
-        let lo = values.next().unwrap_or(0);
-        let hi = values.next().unwrap_or(0);
-        *w = u32::from(lo as u16) | (u32::from(hi as u16) << 16);
+/// Packs `f` of every value into `out` as [`input_len`] describes
+/// (missing values are 0).
+#[inline(always)]
+fn pack<S: Copy>(values: &[S], f: impl Fn(S) -> i16, out: &mut [u32]) {
+    let half = |v: i16| u32::from(v as u16);
+    let put = |w: &mut [u32], x: [i16; 4]| {
+        if let [w02, w13] = w {
+            *w02 = half(x[0]) | (half(x[2]) << 16);
+            *w13 = half(x[1]) | (half(x[3]) << 16);
+        }
+    };
+    let mut groups = values.chunks_exact(4);
+    let mut words = out.chunks_exact_mut(2);
+    for (g, w) in (&mut groups).zip(&mut words) {
+        if let [a, b, c, d] = *g {
+            put(w, [f(a), f(b), f(c), f(d)]);
+        }
+    }
+    let rest = groups.remainder();
+    if let Some(w) = words.next() {
+        let x = core::array::from_fn(|i| rest.get(i).map_or(0, |&v| f(v)));
+        put(w, x);
     }
 }
 
@@ -204,10 +222,12 @@ pub fn quantize_input(
     let words = input_len(input.len());
     check_scratch("input", words, out.len())?;
     let (m, s) = model.input_requant();
-    let q = input
-        .iter()
-        .map(|x| requantize(i32::from(x.to_bits()), m, s).clamp(-127, 127) as i16);
-    pack(q, out.get_mut(..words).unwrap_or(&mut []));
+    let q = requantize_i16(m, s);
+    pack(
+        input,
+        |x| q(x.to_bits()).clamp(-127, 127) as i16,
+        out.get_mut(..words).unwrap_or(&mut []),
+    );
     Ok(())
 }
 
@@ -235,23 +255,23 @@ fn hi16(v: i32) -> i32 {
 }
 
 /// Four multiply-accumulates: weight bytes `w` (excess-128, byte `i` for
-/// input `i`) against inputs `x0 | x1 << 16` and `x2 | x3 << 16`. `mask`
+/// input `i`) against inputs `x0 | x2 << 16` and `x1 | x3 << 16`. `mask`
 /// is `0x00FF_00FF`: it puts bytes 0 and 2 (and 1 and 3) in the two 16-bit
 /// halves of a register, so each product reads its operands' halves
 /// directly (the Cortex-M4 `SMLAxy` forms). The caller passes the mask
 /// through `black_box` so that LLVM keeps the two-lane registers instead of
 /// extracting every byte on its own.
 #[inline(always)]
-fn mac4(acc: i32, w: u32, x01: i32, x23: i32, mask: u32) -> i32 {
+fn mac4(acc: i32, w: u32, x02: i32, x13: i32, mask: u32) -> i32 {
     let even = (w & mask) as i32;
     // An arithmetic shift, so that LLVM cannot prove the top half
     // non-negative and turn `hi16` into a logical shift (which `SMLAxT`
     // cannot fold).
     let odd = ((w as i32) >> 8) & mask as i32;
-    acc.wrapping_add(lo16(even).wrapping_mul(lo16(x01)))
-        .wrapping_add(lo16(odd).wrapping_mul(hi16(x01)))
-        .wrapping_add(hi16(even).wrapping_mul(lo16(x23)))
-        .wrapping_add(hi16(odd).wrapping_mul(hi16(x23)))
+    acc.wrapping_add(lo16(even).wrapping_mul(lo16(x02)))
+        .wrapping_add(lo16(odd).wrapping_mul(lo16(x13)))
+        .wrapping_add(hi16(even).wrapping_mul(hi16(x02)))
+        .wrapping_add(hi16(odd).wrapping_mul(hi16(x13)))
 }
 
 /// Four weight bytes as a little-endian word (0 if short: never, the
@@ -264,21 +284,15 @@ fn word(b: &[u8]) -> u32 {
 /// Input value `j` of packed words.
 #[inline]
 fn x_at(x: &[u32], j: usize) -> i32 {
-    let w = x.get(j / 2).copied().unwrap_or(0) as i32;
-    if j % 2 == 0 {
+    let w = x.get(j / 4 * 2 + j % 2).copied().unwrap_or(0) as i32;
+    if j % 4 < 2 {
         lo16(w)
     } else {
         hi16(w)
     }
 }
 
-/// The pair words of `x` covering the first `full` inputs (a multiple of 4).
-#[inline(always)]
-fn pairs(x: &[u32], full: usize) -> core::slice::ChunksExact<'_, u32> {
-    x.get(..full / 2).unwrap_or(&[]).chunks_exact(2)
-}
-
-/// `[x01, x23]` of a pair chunk.
+/// `[x02, x13]` of a group's two words.
 #[inline(always)]
 fn xpair(xs: &[u32]) -> (i32, i32) {
     match *xs {
@@ -287,65 +301,100 @@ fn xpair(xs: &[u32]) -> (i32, i32) {
     }
 }
 
-/// `Σ_j u[r][j] · x[j]` for four rows of `n` excess-128 weight bytes
-/// (consecutive in `w`), sharing each input load between the rows. Sums
-/// wrap; the caller subtracts `128 · Σx`, and the true dot products fit
-/// `i32` (see [`layer`]), so the wrapped result is exact.
+/// The inner dot-product kernel of [`forward_with`] (CMSIS-NN style: the
+/// portable default is [`SafeKernel`]; a target may supply an optimised
+/// one, e.g. with `SMLAD`, as the firmware does).
+///
+/// Contract of [`MacKernel::dot_rows`]: `w` holds `acc.len()` rows of
+/// excess-128 weight bytes, row `r` at `w[r · stride..][..len]` (byte `i`
+/// for input `i`), `len` a multiple of 4; `x` holds at least `len / 2`
+/// words, inputs packed as [`input_len`] describes (`x0 | x2 << 16`,
+/// `x1 | x3 << 16` per group of four). Set `acc[r] = Σ_i u[r][i] · x[i]`
+/// with wrapping `i32` arithmetic. Addition modulo 2^32 does not depend on
+/// order, so any kernel that honours this gives the same bits as the
+/// default. Rows that do not fit in `w` are never passed by [`layer`]; the
+/// default gives them partial sums rather than panicking.
+pub trait MacKernel {
+    /// `acc[r] = Σ_{i < len} u[r · stride + i] · x[i]`, wrapping.
+    #[inline(always)]
+    fn dot_rows(w: &[u8], stride: usize, len: usize, x: &[u32], acc: &mut [i32]) {
+        safe_dot_rows(w, stride, len, x, acc);
+    }
+}
+
+/// The portable kernel (`SMLAxy` forms on Cortex-M4), used by [`forward`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SafeKernel;
+
+impl MacKernel for SafeKernel {}
+
+/// The default [`MacKernel::dot_rows`]: four rows at a time sharing each
+/// input load, then single rows.
 #[inline(always)]
-fn dot4(w: &[u8], n: usize, x: &[u32], mask: u32) -> [i32; 4] {
-    let full = n - n % 4;
-    let row = |r: usize| w.get(r * n..r * n + full).unwrap_or(&[]);
-    let (r0, r1, r2, r3) = (row(0), row(1), row(2), row(3));
+pub fn safe_dot_rows(w: &[u8], stride: usize, len: usize, x: &[u32], acc: &mut [i32]) {
+    let xs = x.get(..len / 2).unwrap_or(&[]);
+    let row = |r: usize| {
+        w.get(r.saturating_mul(stride)..)
+            .and_then(|t| t.get(..len))
+            .unwrap_or(&[])
+    };
+    let mut blocks = acc.chunks_exact_mut(4);
+    let mut r = 0;
+    for a in &mut blocks {
+        let s = dot4_rows([row(r), row(r + 1), row(r + 2), row(r + 3)], xs);
+        a.copy_from_slice(&s);
+        r += 4;
+    }
+    for a in blocks.into_remainder() {
+        *a = dot1_row(row(r), xs);
+        r += 1;
+    }
+}
+
+/// Four rows sharing the inputs.
+#[inline(always)]
+fn dot4_rows(rows: [&[u8]; 4], x: &[u32]) -> [i32; 4] {
+    let mask = core::hint::black_box(0x00FF_00FFu32);
+    let [r0, r1, r2, r3] = rows;
     let (mut a0, mut a1, mut a2, mut a3) = (0i32, 0i32, 0i32, 0i32);
     for ((((c0, c1), c2), c3), xs) in r0
         .chunks_exact(4)
         .zip(r1.chunks_exact(4))
         .zip(r2.chunks_exact(4))
         .zip(r3.chunks_exact(4))
-        .zip(pairs(x, full))
+        .zip(x.chunks_exact(2))
     {
-        let (x01, x23) = xpair(xs);
-        a0 = mac4(a0, word(c0), x01, x23, mask);
-        a1 = mac4(a1, word(c1), x01, x23, mask);
-        a2 = mac4(a2, word(c2), x01, x23, mask);
-        a3 = mac4(a3, word(c3), x01, x23, mask);
+        let (x02, x13) = xpair(xs);
+        a0 = mac4(a0, word(c0), x02, x13, mask);
+        a1 = mac4(a1, word(c1), x02, x13, mask);
+        a2 = mac4(a2, word(c2), x02, x13, mask);
+        a3 = mac4(a3, word(c3), x02, x13, mask);
     }
-    let mut s = [a0, a1, a2, a3];
-    for j in full..n {
-        let xj = x_at(x, j);
-        for (r, acc) in s.iter_mut().enumerate() {
-            let u = i32::from(w.get(r * n + j).copied().unwrap_or(128));
-            *acc = acc.wrapping_add(u.wrapping_mul(xj));
-        }
-    }
-    s
+    [a0, a1, a2, a3]
 }
 
-/// [`dot4`] for one row.
+/// One row.
 #[inline(always)]
-fn dot1(w: &[u8], n: usize, x: &[u32], mask: u32) -> i32 {
-    let full = n - n % 4;
-    let mut a = w
-        .get(..full)
-        .unwrap_or(&[])
-        .chunks_exact(4)
-        .zip(pairs(x, full))
+fn dot1_row(row: &[u8], x: &[u32]) -> i32 {
+    let mask = core::hint::black_box(0x00FF_00FFu32);
+    row.chunks_exact(4)
+        .zip(x.chunks_exact(2))
         .fold(0i32, |a, (c, xs)| {
-            let (x01, x23) = xpair(xs);
-            mac4(a, word(c), x01, x23, mask)
-        });
-    for j in full..n {
-        let u = i32::from(w.get(j).copied().unwrap_or(128));
-        a = a.wrapping_add(u.wrapping_mul(x_at(x, j)));
-    }
-    a
+            let (x02, x13) = xpair(xs);
+            mac4(a, word(c), x02, x13, mask)
+        })
 }
+
+/// Rows per [`MacKernel::dot_rows`] call of [`layer`] (a multiple of 3 and
+/// 4, so that kernels blocking 3 or 4 rows have no remainder but the
+/// layer's last).
+const ROWS_PER_CALL: usize = 48;
 
 /// One fully connected layer: `out[c] = act(requantize(W[c]·x + b[c]))`
 /// over `n` packed inputs. Weights are stored excess-128 (`u = w + 128`),
 /// so `W·x = Σ u·x − 128·Σx`. With `|w| <= 127`, `|x| <= 255` and at most
 /// 65535 inputs, `|W·x| < 2^31`.
-fn layer<T>(
+fn layer<K: MacKernel, T>(
     w: &[u8],
     b: &[u8],
     rq: &[u8],
@@ -357,7 +406,7 @@ fn layer<T>(
     if n == 0 {
         return;
     }
-    // The pad half of an odd count is 0, so summing whole words is exact.
+    // Missing values are packed as 0, so summing whole words is exact.
     let xsum = x
         .get(..input_len(n))
         .unwrap_or(&[])
@@ -366,29 +415,36 @@ fn layer<T>(
             a.wrapping_add(lo16(w as i32)).wrapping_add(hi16(w as i32))
         });
     let offset = xsum.wrapping_mul(128);
-    let mask = core::hint::black_box(0x00FF_00FFu32);
-    let finish = |acc: i32, c: usize| -> T {
-        let acc = acc.wrapping_sub(offset).saturating_add(le_i32(b, 4 * c));
-        let z = requantize(acc, le_i32(rq, 8 * c), le_i32(rq, 8 * c + 4));
-        act(z)
+    // Bias (4 bytes) and requantisation pair (8 bytes) of each channel, in
+    // step with the outputs (the blob parser checked the lengths).
+    let mut params = b.chunks_exact(4).zip(rq.chunks_exact(8));
+    let finish = |acc: i32, (b, rq): (&[u8], &[u8])| -> T {
+        let acc = acc.wrapping_sub(offset).saturating_add(le_i32(b, 0));
+        act(requantize(acc, le_i32(rq, 0), le_i32(rq, 4)))
     };
-    let mut blocks = w.chunks_exact(4 * n);
-    let mut outs = out.chunks_exact_mut(4);
-    let mut c = 0;
-    for (block, o) in (&mut blocks).zip(&mut outs) {
-        let s = dot4(block, n, x, mask);
-        for (o, s) in o.iter_mut().zip(s) {
-            *o = finish(s, c);
-            c += 1;
-        }
-    }
-    for (row, o) in blocks
-        .remainder()
-        .chunks_exact(n)
-        .zip(outs.into_remainder())
+    // The kernel takes whole groups of four inputs; the rest (n % 4) is
+    // added per row here.
+    let full = n - n % 4;
+    let xs = x.get(..full / 2).unwrap_or(&[]);
+    let mut acc = [0i32; ROWS_PER_CALL];
+    for (rows, outs) in w
+        .chunks(ROWS_PER_CALL * n)
+        .zip(out.chunks_mut(ROWS_PER_CALL))
     {
-        *o = finish(dot1(row, n, x, mask), c);
-        c += 1;
+        let acc = acc.get_mut(..outs.len()).unwrap_or(&mut []);
+        K::dot_rows(rows, n, full, xs, acc);
+        for (((o, &a), row), p) in outs
+            .iter_mut()
+            .zip(acc.iter())
+            .zip(rows.chunks(n))
+            .zip(&mut params)
+        {
+            let tail = row.get(full..).unwrap_or(&[]);
+            let a = tail.iter().enumerate().fold(a, |a, (j, &u)| {
+                a.wrapping_add(i32::from(u).wrapping_mul(x_at(x, full + j)))
+            });
+            *o = finish(a, p);
+        }
     }
 }
 
@@ -399,6 +455,18 @@ fn layer<T>(
 /// [`MlpError::FeatureSize`] for an input of another length than the
 /// model's, [`MlpError::ScratchTooSmall`].
 pub fn forward<'s>(
+    model: &Model<'_>,
+    input: &[ShapeElem],
+    scratch: &'s mut Scratch<'_>,
+) -> Result<&'s [u16], MlpError> {
+    forward_with::<SafeKernel>(model, input, scratch)
+}
+
+/// [`forward`] with the dot-product kernel `K` (see [`MacKernel`]).
+///
+/// # Errors
+/// As [`forward`].
+pub fn forward_with<'s, K: MacKernel>(
     model: &Model<'_>,
     input: &[ShapeElem],
     scratch: &'s mut Scratch<'_>,
@@ -415,7 +483,7 @@ pub fn forward<'s>(
     check_scratch("output", output_len(k), scratch.output.len())?;
     quantize_input(model, input, scratch.input)?;
     let hidden = scratch.hidden.get_mut(..h).unwrap_or(&mut []);
-    layer(
+    layer::<K, _>(
         model.w1,
         model.b1,
         model.rq1,
@@ -426,11 +494,12 @@ pub fn forward<'s>(
     );
     // The output layer reads the hidden activations packed like an input.
     pack(
-        hidden.iter().map(|&v| i16::from(v)),
+        hidden,
+        i16::from,
         scratch.input.get_mut(..input_len(h)).unwrap_or(&mut []),
     );
     let out = scratch.output.get_mut(..k).unwrap_or(&mut []);
-    layer(
+    layer::<K, _>(
         model.w2,
         model.b2,
         model.rq2,

@@ -9,8 +9,9 @@
 //! RoundingDivideByPOT(SaturatingRoundingDoublingHighMul(x · 2^max(shift, 0), M), max(−shift, 0))
 //! ```
 //!
-//! The doubling high multiply rounds half away from zero, the division by a
-//! power of two rounds half away from zero too. One difference from the C:
+//! The doubling high multiply rounds halves up (gemmlowp's nudge and
+//! truncation, see [`doubling_high_mul`]); the division by a power of two
+//! rounds half away from zero. One difference from the C:
 //! `x · 2^left` saturates instead of overflowing (undefined in C); models
 //! written by `protogist quantize` only use `shift <= 0`, where it does not
 //! arise.
@@ -28,27 +29,34 @@
 
 use super::logsig_table::LOGSIG_Q8;
 
-/// `round(a · b / 2^31)`, halves away from zero; `i32::MAX` for the one
-/// overflowing case `a = b = i32::MIN` (gemmlowp's
-/// `SaturatingRoundingDoublingHighMul`).
+/// gemmlowp's `SaturatingRoundingDoublingHighMul`: `a · b / 2^31` rounded
+/// to nearest, `i32::MAX` for the one overflowing case `a = b = i32::MIN`.
+///
+/// gemmlowp adds a nudge of `2^30` (`1 − 2^30` when `a · b < 0`) and divides
+/// by `2^31` truncating toward zero. For `p = a · b < 0` that is
+/// `ceil((p + 1 − 2^30) / 2^31) = floor((p + 2^30) / 2^31)`, the same
+/// expression as for `p >= 0`; so halves round up (toward +∞), and one
+/// add and one arithmetic shift compute it (`smull`, `adds`, `adc` and two
+/// shifts on the Cortex-M4). `|p + 2^30| < 2^62`, and the quotient fits
+/// `i32` except in the case handled first. The test module keeps gemmlowp's
+/// form and checks the two agree.
 #[inline]
 pub const fn doubling_high_mul(a: i32, b: i32) -> i32 {
     if a == i32::MIN && b == i32::MIN {
         return i32::MAX;
     }
-    let ab = a as i64 * b as i64;
-    let nudge = if ab >= 0 {
-        1i64 << 30
-    } else {
-        1 - (1i64 << 30)
-    };
-    // |ab| <= 2^62 - 2^31 + ..., so the sum does not overflow, and the
-    // quotient fits i32 except for the case handled above.
-    ((ab + nudge) / (1i64 << 31)) as i32
+    ((a as i64 * b as i64 + (1i64 << 30)) >> 31) as i32
 }
 
 /// `x / 2^exponent` rounded to nearest, halves away from zero
 /// (gemmlowp's `RoundingDivideByPOT`); `exponent` is clamped to `0..=31`.
+///
+/// gemmlowp compares the remainder `r = x mod 2^e` with the threshold
+/// `2^(e−1) − 1 + [x < 0]`; `r > threshold` exactly when
+/// `r + 2^(e−1) − [x < 0] >= 2^e`, so the result is
+/// `floor((x + 2^(e−1) − [x < 0]) / 2^e)`: one add and one arithmetic
+/// shift in `i64` (no overflow). The test module checks it against
+/// gemmlowp's form.
 #[inline]
 pub const fn rounding_divide_by_pot(x: i32, exponent: i32) -> i32 {
     let e = if exponent < 0 {
@@ -58,10 +66,11 @@ pub const fn rounding_divide_by_pot(x: i32, exponent: i32) -> i32 {
     } else {
         exponent
     };
-    let mask = ((1i64 << e) - 1) as i32;
-    let remainder = x & mask;
-    let threshold = (mask >> 1) + if x < 0 { 1 } else { 0 };
-    (x >> e) + if remainder > threshold { 1 } else { 0 }
+    if e == 0 {
+        return x;
+    }
+    let neg = if x < 0 { 1i64 } else { 0 };
+    ((x as i64 + (1i64 << (e - 1)) - neg) >> e) as i32
 }
 
 /// TFLM's `MultiplyByQuantizedMultiplier(x, multiplier, shift)`: `x` times
@@ -69,20 +78,43 @@ pub const fn rounding_divide_by_pot(x: i32, exponent: i32) -> i32 {
 /// `−31..=30`; the left shift saturates.
 #[inline]
 pub const fn requantize(x: i32, multiplier: i32, shift: i32) -> i32 {
-    let left = if shift > 0 {
-        if shift > 30 {
-            30
-        } else {
-            shift
-        }
+    // Models written by `protogist quantize` have `shift <= 0`: no
+    // multiply before the high multiply.
+    let scaled = if shift > 0 {
+        x.saturating_mul(1 << if shift > 30 { 30 } else { shift })
+    } else {
+        x
+    };
+    let right = if shift < 0 { -shift } else { 0 };
+    rounding_divide_by_pot(doubling_high_mul(scaled, multiplier), right)
+}
+
+/// [`requantize`] of 16-bit values with one `(multiplier, shift)`, its
+/// loop-invariant parts computed once (the input layer: 720 values, one
+/// pair). Bit-identical to [`requantize`] for every `i16` (tested
+/// exhaustively). With `shift <= 0` and `|x| <= 2^15` the high multiply
+/// cannot saturate and `|d| <= 2^15`, so the rounding division runs in
+/// `i32` as `(d + 2^(e−1) − [d < 0]) >> e` (see [`rounding_divide_by_pot`]);
+/// a positive shift takes the general path.
+#[inline(always)]
+pub fn requantize_i16(multiplier: i32, shift: i32) -> impl Fn(i16) -> i32 {
+    let e = if shift < -31 {
+        31
+    } else if shift < 0 {
+        -shift
     } else {
         0
     };
-    let right = if shift < 0 { -shift } else { 0 };
-    rounding_divide_by_pot(
-        doubling_high_mul(x.saturating_mul(1 << left), multiplier),
-        right,
-    )
+    let half = if e == 0 { 0 } else { 1i32 << (e - 1) };
+    // −[d < 0] is `d >> 31`; masked off when e = 0 (no rounding).
+    let neg_mask = if e == 0 { 0 } else { -1 };
+    move |x| {
+        if shift > 0 {
+            return requantize(i32::from(x), multiplier, shift);
+        }
+        let d = ((i64::from(x) * i64::from(multiplier) + (1i64 << 30)) >> 31) as i32;
+        (d + half + ((d >> 31) & neg_mask)) >> e
+    }
 }
 
 /// Table nodes per unit of `z` (`2^6`): node `i` is `z = i / 64`.
@@ -125,6 +157,95 @@ pub fn logsig_u8(z: i32) -> u8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// gemmlowp's `SaturatingRoundingDoublingHighMul`, as written there.
+    fn gemmlowp_srdhm(a: i32, b: i32) -> i32 {
+        if a == i32::MIN && b == i32::MIN {
+            return i32::MAX;
+        }
+        let ab = a as i64 * b as i64;
+        let nudge = if ab >= 0 {
+            1i64 << 30
+        } else {
+            1 - (1i64 << 30)
+        };
+        ((ab + nudge) / (1i64 << 31)) as i32
+    }
+
+    /// gemmlowp's `RoundingDivideByPOT`, as written there.
+    fn gemmlowp_rdbp(x: i32, exponent: i32) -> i32 {
+        let e = exponent.clamp(0, 31);
+        let mask = ((1i64 << e) - 1) as i32;
+        let remainder = x & mask;
+        let threshold = (mask >> 1) + i32::from(x < 0);
+        (x >> e) + i32::from(remainder > threshold)
+    }
+
+    /// Values that sit on rounding boundaries and at the ends of `i32`.
+    fn edges() -> impl Iterator<Item = i32> {
+        let pow = (0..31).flat_map(|k| {
+            let p = 1i32 << k;
+            [p, p - 1, p + 1, -p, -p - 1, -p + 1, p / 2 * 3]
+        });
+        pow.chain([0, 1, -1, i32::MAX, i32::MIN, i32::MIN + 1, i32::MAX - 1])
+    }
+
+    #[test]
+    fn requantize_i16_equals_requantize_for_every_i16() {
+        let mut rng = crate::rng::SplitMix64::new(16);
+        let mut pairs = [(0i32, 0i32); 96];
+        for (k, p) in pairs.iter_mut().enumerate() {
+            let m = match k % 4 {
+                0 => i32::MAX,
+                1 => 1 << 30,
+                _ => (1 << 30) + (rng.next_u64() % (1 << 30)) as i32,
+            };
+            // Every shift in -33..=32 once or more, the rest at random.
+            let s = if k < 66 {
+                k as i32 - 33
+            } else {
+                (rng.next_u64() % 40) as i32 - 35
+            };
+            *p = (m, s);
+        }
+        pairs[95] = (0, -7);
+        for (m, s) in pairs {
+            let f = requantize_i16(m, s);
+            for x in i16::MIN..=i16::MAX {
+                assert_eq!(f(x), requantize(i32::from(x), m, s), "x {x} m {m} s {s}");
+            }
+        }
+    }
+
+    #[test]
+    fn fast_forms_equal_gemmlowp_on_edges_and_random_values() {
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let edges: [i32; 224] = {
+            let mut e = [0; 224];
+            e.iter_mut().zip(edges()).for_each(|(d, s)| *d = s);
+            e
+        };
+        for &a in &edges {
+            for &b in &edges {
+                assert_eq!(doubling_high_mul(a, b), gemmlowp_srdhm(a, b), "{a} {b}");
+            }
+            for e in -2..34 {
+                assert_eq!(rounding_divide_by_pot(a, e), gemmlowp_rdbp(a, e), "{a} {e}");
+            }
+        }
+        for _ in 0..200_000 {
+            let (a, b) = (rng.next_u64() as i32, rng.next_u64() as i32);
+            assert_eq!(doubling_high_mul(a, b), gemmlowp_srdhm(a, b), "{a} {b}");
+            let e = (rng.next_u64() % 36) as i32 - 2;
+            assert_eq!(rounding_divide_by_pot(a, e), gemmlowp_rdbp(a, e), "{a} {e}");
+            // Small values, where every rounding boundary is hit often.
+            let (s, e) = (
+                (rng.next_u64() % 4096) as i32 - 2048,
+                (rng.next_u64() % 12) as i32,
+            );
+            assert_eq!(rounding_divide_by_pot(s, e), gemmlowp_rdbp(s, e), "{s} {e}");
+        }
+    }
 
     #[test]
     fn rounding_by_hand() {
