@@ -78,7 +78,11 @@ fn valid_blob_parses_and_runs() {
     assert_eq!((m.delta_q16(), m.meta()), (40_000, "test"));
     exercise(&b);
     // Feature size and scratch mismatches are typed errors.
-    let (mut xi, mut hi, mut yo) = (vec![0u32; 5], vec![0u8; 5], vec![0u16; 3]);
+    let (mut xi, mut hi, mut yo) = (
+        vec![0u32; protogist::mlp::packed_len(9, 5)],
+        vec![0u8; 5],
+        vec![0u16; 3],
+    );
     let mut s = Scratch {
         input: &mut xi,
         hidden: &mut hi,
