@@ -53,6 +53,21 @@ pub struct StereoOptions {
     /// then score the completed map, and `model` the map before it.
     #[arg(long)]
     pub complete: bool,
+    /// Read-out options: aggregation and OFF thresholds.
+    #[command(flatten)]
+    pub readout: ReadoutOptions,
+    /// Print the numbers as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Output directory (created if missing).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Read-out options of `protogist stereo`: semi-global aggregation and the
+/// OFF thresholds (all default to the model's).
+#[derive(Clone, Debug, PartialEq, clap::Args)]
+pub struct ReadoutOptions {
     /// Semi-global aggregation of the read-out's costs after the box
     /// pooling (an experiment, docs/STEREO.md; `--pool 0` for none).
     #[arg(long)]
@@ -73,12 +88,19 @@ pub struct StereoOptions {
     /// Left-right tolerance, px (default: the model's, 1; negative: off).
     #[arg(long, allow_negative_numbers = true)]
     pub lr: Option<f32>,
-    /// Print the numbers as JSON.
-    #[arg(long)]
-    pub json: bool,
-    /// Output directory (created if missing).
-    #[arg(long)]
-    pub out: PathBuf,
+}
+
+impl Default for ReadoutOptions {
+    fn default() -> Self {
+        Self {
+            sgm: false,
+            p1: SGM_P1,
+            p2: SGM_P2,
+            paths: SGM_PATHS,
+            min_margin: None,
+            lr: None,
+        }
+    }
 }
 
 /// `--p1` default (docs/STEREO.md, semi-global aggregation).
@@ -318,17 +340,17 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     if let Some(r) = opts.refine {
         params.refine_radius = r;
     }
-    if let Some(m) = opts.min_margin {
+    if let Some(m) = opts.readout.min_margin {
         params.min_margin = m;
     }
-    if let Some(t) = opts.lr {
+    if let Some(t) = opts.readout.lr {
         params.lr_tolerance = t;
     }
-    if opts.sgm {
+    if opts.readout.sgm {
         params.aggregation = dem::Aggregation::Sgm {
-            p1: opts.p1,
-            p2: opts.p2,
-            paths: opts.paths,
+            p1: opts.readout.p1,
+            p2: opts.readout.p2,
+            paths: opts.readout.paths,
         };
     }
     params.check()?;

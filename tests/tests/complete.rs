@@ -240,7 +240,7 @@ fn bad_input_is_a_typed_error_or_a_reported_skip() {
 fn the_stereo_command_scores_the_completed_map_and_the_model() {
     use protogist::image::Rgb8;
     use protogist::synth::{render_disparity, render_left, render_right, SceneSpec};
-    use protogist_host::stereo_cmd::{run_stereo, StereoOptions, SGM_P1, SGM_P2, SGM_PATHS};
+    use protogist_host::stereo_cmd::{run_stereo, ReadoutOptions, StereoOptions};
     let (w, h) = (160usize, 120usize);
     let spec = SceneSpec::demo(w, h);
     let (mut l, mut r, mut d) = (
@@ -281,12 +281,7 @@ fn the_stereo_command_scores_the_completed_map_and_the_model() {
         table: None,
         refine: None,
         complete: true,
-        sgm: false,
-        p1: SGM_P1,
-        p2: SGM_P2,
-        paths: SGM_PATHS,
-        min_margin: None,
-        lr: None,
+        readout: ReadoutOptions::default(),
         json: true,
         out: dir.path().join("out"),
     })

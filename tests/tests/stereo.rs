@@ -7,7 +7,9 @@ use protogist_host::error::HostError;
 use protogist_host::reference::stereo::table::{DemTable, DEFAULT_TABLE};
 use protogist_host::reference::stereo::train::random_dot_pair;
 use protogist_host::reference::stereo::{self as dem, DemParams, StereoError};
-use protogist_host::stereo_cmd::{run_stereo, StereoOptions, SGM_P1, SGM_P2, SGM_PATHS};
+use protogist_host::stereo_cmd::{
+    run_stereo, ReadoutOptions, StereoOptions, SGM_P1, SGM_P2, SGM_PATHS,
+};
 use std::path::Path;
 
 fn default_decoder() -> dem::Decoder {
@@ -205,12 +207,7 @@ fn the_command_rejects_bad_files_with_one_line_errors() {
         refine: None,
         table: None,
         complete: false,
-        sgm: false,
-        p1: SGM_P1,
-        p2: SGM_P2,
-        paths: SGM_PATHS,
-        min_margin: None,
-        lr: None,
+        readout: ReadoutOptions::default(),
         json: false,
         out: d.join("out"),
     };

@@ -6,7 +6,7 @@
 use protogist_host::reference::stereo::readout::Scores;
 use protogist_host::reference::stereo::sgm::{aggregate, aggregate_path, costs, directions};
 use protogist_host::reference::stereo::{DemParams, StereoError};
-use protogist_host::stereo_cmd::{run_stereo, StereoOptions, SGM_P1, SGM_P2, SGM_PATHS};
+use protogist_host::stereo_cmd::{run_stereo, ReadoutOptions, StereoOptions};
 use protogist_tests::data_file;
 
 /// 1x4 pixels, 3 candidates, P1 = 1, P2 = 3.
@@ -168,12 +168,10 @@ fn aloe(
         table: None,
         refine: Some(0),
         complete: false,
-        sgm,
-        p1: SGM_P1,
-        p2: SGM_P2,
-        paths: SGM_PATHS,
-        min_margin: None,
-        lr: None,
+        readout: ReadoutOptions {
+            sgm,
+            ..ReadoutOptions::default()
+        },
         json: true,
         out: out.to_path_buf(),
     };
