@@ -5,7 +5,8 @@
 //! left, right ─► grey ─► ↓2 pyramid ─► complex Gabor bank (per eye, once)
 //!   ─► binocular energies A, X per (level, carrier, shift) ─► Poisson
 //!   log-likelihood per disparity (trained templates) ─► box pooling
-//!   ─► argmax + parabola ─► OFF tests (texture, ambiguity, left-right)
+//!   [─► semi-global aggregation, opt-in, `sgm`] ─► argmax + parabola
+//!   ─► OFF tests (texture, ambiguity, left-right)
 //! ```
 //!
 //! Names and argument order are what the fixed-point `protogist::stereo`
@@ -306,28 +307,17 @@ pub fn stereo_grey(
     let n = decoder.disparities();
     let cells = 4.0 * decoder.layout.groups() as f32;
     let (left_picks, right_picks) = match params.aggregation {
-        Aggregation::Box => (
-            (0..w * h)
-                .map(|p| {
-                    readout::pick(
-                        &sl.raw[p * n..(p + 1) * n],
-                        sl.total[p],
-                        &decoder.bias,
-                        p % w,
-                    )
-                })
-                .collect::<Vec<_>>(),
-            (0..w * h)
-                .map(|p| {
-                    readout::pick(
-                        &sr.raw[p * n..(p + 1) * n],
-                        sr.total[p],
-                        &decoder.bias,
-                        w - 1 - p % w,
-                    )
-                })
-                .collect::<Vec<_>>(),
-        ),
+        Aggregation::Box => {
+            let run = |s: &readout::Scores, top: &dyn Fn(usize) -> usize| {
+                (0..w * h)
+                    .map(|p| {
+                        let raw = &s.raw[p * n..(p + 1) * n];
+                        readout::pick(raw, s.total[p], &decoder.bias, top(p))
+                    })
+                    .collect::<Vec<_>>()
+            };
+            (run(&sl, &|p| p % w), run(&sr, &|p| w - 1 - p % w))
+        }
         Aggregation::Sgm { p1, p2, paths } => {
             // Margins per path, in units of a pixel's mean cost gap.
             let per_path = sgm::directions(paths).map_or(1, <[_]>::len) as f32;
