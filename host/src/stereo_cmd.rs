@@ -53,6 +53,9 @@ pub struct StereoOptions {
     /// then score the completed map, and `model` the map before it.
     #[arg(long)]
     pub complete: bool,
+    /// Read-out options: aggregation and OFF thresholds.
+    #[command(flatten)]
+    pub readout: ReadoutOptions,
     /// Print the numbers as JSON.
     #[arg(long)]
     pub json: bool,
@@ -60,6 +63,52 @@ pub struct StereoOptions {
     #[arg(long)]
     pub out: PathBuf,
 }
+
+/// Read-out options of `protogist stereo`: semi-global aggregation and the
+/// OFF thresholds (all default to the model's).
+#[derive(Clone, Debug, PartialEq, clap::Args)]
+pub struct ReadoutOptions {
+    /// Semi-global aggregation of the read-out's costs after the box
+    /// pooling (an experiment, docs/STEREO.md; `--pool 0` for none).
+    #[arg(long)]
+    pub sgm: bool,
+    /// SGM penalty for a 1 px step, in units of a pixel's mean cost gap.
+    #[arg(long, default_value_t = SGM_P1, requires = "sgm")]
+    pub p1: f32,
+    /// SGM penalty for a larger step, in the same units.
+    #[arg(long, default_value_t = SGM_P2, requires = "sgm")]
+    pub p2: f32,
+    /// SGM path set: 3, 4, 5 (one top-to-bottom pass) or 8.
+    #[arg(long, default_value_t = SGM_PATHS, requires = "sgm")]
+    pub paths: u8,
+    /// Ambiguity threshold (default: the model's, 0); with `--sgm`, per
+    /// path in units of a pixel's mean cost gap.
+    #[arg(long)]
+    pub min_margin: Option<f32>,
+    /// Left-right tolerance, px (default: the model's, 1; negative: off).
+    #[arg(long, allow_negative_numbers = true)]
+    pub lr: Option<f32>,
+}
+
+impl Default for ReadoutOptions {
+    fn default() -> Self {
+        Self {
+            sgm: false,
+            p1: SGM_P1,
+            p2: SGM_P2,
+            paths: SGM_PATHS,
+            min_margin: None,
+            lr: None,
+        }
+    }
+}
+
+/// `--p1` default (docs/STEREO.md, semi-global aggregation).
+pub const SGM_P1: f32 = 0.25;
+/// `--p2` default.
+pub const SGM_P2: f32 = 16.0;
+/// `--paths` default.
+pub const SGM_PATHS: u8 = 5;
 
 /// The decoder for `params`: `table` if given (it must match), else the
 /// built-in default table when it matches, else trained now. A trained
@@ -291,6 +340,19 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     if let Some(r) = opts.refine {
         params.refine_radius = r;
     }
+    if let Some(m) = opts.readout.min_margin {
+        params.min_margin = m;
+    }
+    if let Some(t) = opts.readout.lr {
+        params.lr_tolerance = t;
+    }
+    if opts.readout.sgm {
+        params.aggregation = dem::Aggregation::Sgm {
+            p1: opts.readout.p1,
+            p2: opts.readout.p2,
+            paths: opts.readout.paths,
+        };
+    }
     params.check()?;
     // Size checks first: training for a hopeless size is wasted time.
     if usize::from(params.max_disp) >= w {
@@ -322,6 +384,12 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     s.push("max disparity", params.max_disp);
     s.push("pool radius", params.pool_radius);
     s.push("levels", params.levels);
+    if let dem::Aggregation::Sgm { p1, p2, paths } = params.aggregation {
+        s.push(
+            "aggregation",
+            format!("SGM, P1 {p1}, P2 {p2}, {paths} paths"),
+        );
+    }
     let n = (w * h) as f64;
     s.push("decoder ms", format!("{train_ms:.1}"));
     s.push("stereo ms", format!("{run_ms:.1}"));

@@ -240,7 +240,7 @@ fn bad_input_is_a_typed_error_or_a_reported_skip() {
 fn the_stereo_command_scores_the_completed_map_and_the_model() {
     use protogist::image::Rgb8;
     use protogist::synth::{render_disparity, render_left, render_right, SceneSpec};
-    use protogist_host::stereo_cmd::{run_stereo, StereoOptions};
+    use protogist_host::stereo_cmd::{run_stereo, ReadoutOptions, StereoOptions};
     let (w, h) = (160usize, 120usize);
     let spec = SceneSpec::demo(w, h);
     let (mut l, mut r, mut d) = (
@@ -281,6 +281,7 @@ fn the_stereo_command_scores_the_completed_map_and_the_model() {
         table: None,
         refine: None,
         complete: true,
+        readout: ReadoutOptions::default(),
         json: true,
         out: dir.path().join("out"),
     })

@@ -5,7 +5,8 @@
 //! left, right ─► grey ─► ↓2 pyramid ─► complex Gabor bank (per eye, once)
 //!   ─► binocular energies A, X per (level, carrier, shift) ─► Poisson
 //!   log-likelihood per disparity (trained templates) ─► box pooling
-//!   ─► argmax + parabola ─► OFF tests (texture, ambiguity, left-right)
+//!   [─► semi-global aggregation, opt-in, `sgm`] ─► argmax + parabola
+//!   ─► OFF tests (texture, ambiguity, left-right)
 //! ```
 //!
 //! Names and argument order are what the fixed-point `protogist::stereo`
@@ -15,12 +16,14 @@ pub mod filters;
 pub mod population;
 pub mod readout;
 pub mod refine;
+pub mod sgm;
 pub mod table;
 pub mod train;
 
 use protogist::disparity::{Disparity, DisparityCell};
 use protogist::image::{ImageView, Rgb8};
 
+pub use sgm::Aggregation;
 pub use train::{train, Decoder};
 
 /// Every parameter of the model, with the spec's defaults.
@@ -63,6 +66,9 @@ pub struct DemParams {
     /// Border refinement: colour-nearest neighbours whose median is taken.
     /// Default 5.
     pub refine_k: u8,
+    /// Spatial aggregation of the scores: box pooling only (default) or
+    /// followed by semi-global aggregation (an experiment, see `sgm`).
+    pub aggregation: Aggregation,
     /// Training: seed of the random-dot stereograms.
     pub train_seed: u64,
     /// Training: images per disparity. Default 4.
@@ -90,6 +96,7 @@ impl Default for DemParams {
             refine_radius: 0,
             refine_window: 8,
             refine_k: 5,
+            aggregation: Aggregation::Box,
             train_seed: 0x0de1_5eed,
             train_images: 4,
             train_width: 64,
@@ -131,6 +138,16 @@ impl DemParams {
         bad(self.shift_step >= 1, "shift_step must be at least 1")?;
         bad(self.min_energy >= 0.0, "min_energy must be >= 0")?;
         bad(self.train_images >= 1, "train_images must be at least 1")?;
+        if let Aggregation::Sgm { p1, p2, paths } = self.aggregation {
+            bad(
+                p1 >= 0.0 && p2 >= p1 && p2.is_finite(),
+                "SGM penalties must satisfy 0 <= p1 <= p2 < inf",
+            )?;
+            bad(
+                sgm::directions(paths).is_some(),
+                "SGM paths must be 3, 4, 5 or 8",
+            )?;
+        }
         bad(
             self.train_width >= 1 && self.train_height >= 1,
             "training size must be at least 1x1",
@@ -289,27 +306,41 @@ pub fn stereo_grey(
     readout::pool(&mut sr, r);
     let n = decoder.disparities();
     let cells = 4.0 * decoder.layout.groups() as f32;
-    let left_picks: Vec<_> = (0..w * h)
-        .map(|p| {
-            readout::pick(
-                &sl.raw[p * n..(p + 1) * n],
-                sl.total[p],
-                &decoder.bias,
-                p % w,
-            )
-        })
-        .collect();
-    let right_raw: Vec<Option<f32>> = (0..w * h)
-        .map(|p| {
-            readout::pick(
-                &sr.raw[p * n..(p + 1) * n],
-                sr.total[p],
-                &decoder.bias,
-                w - 1 - p % w,
-            )
-            .map(|k| k.disparity)
-        })
-        .collect();
+    let (left_picks, right_picks) = match params.aggregation {
+        Aggregation::Box => {
+            let run = |s: &readout::Scores, top: &dyn Fn(usize) -> usize| {
+                (0..w * h)
+                    .map(|p| {
+                        let raw = &s.raw[p * n..(p + 1) * n];
+                        readout::pick(raw, s.total[p], &decoder.bias, top(p))
+                    })
+                    .collect::<Vec<_>>()
+            };
+            (run(&sl, &|p| p % w), run(&sr, &|p| w - 1 - p % w))
+        }
+        Aggregation::Sgm { p1, p2, paths } => {
+            // Margins per path, in units of a pixel's mean cost gap.
+            let per_path = sgm::directions(paths).map_or(1, <[_]>::len) as f32;
+            let run = |s: &readout::Scores, top: &dyn Fn(usize) -> usize| {
+                let evidence = |p: usize| s.total[p] >= params.min_energy * cells * count[p];
+                let cost = sgm::costs(s, &decoder.bias, evidence, top);
+                let sum = sgm::aggregate(&cost, w, h, n, paths, p1, p2);
+                (0..w * h)
+                    .map(|p| {
+                        (s.total[p] > 0.0).then(|| {
+                            let k = readout::pick_by(n, top(p), |d| -sum[p * n + d]);
+                            readout::Pick {
+                                margin: k.margin / per_path,
+                                ..k
+                            }
+                        })
+                    })
+                    .collect::<Vec<_>>()
+            };
+            (run(&sl, &|p| p % w), run(&sr, &|p| w - 1 - p % w))
+        }
+    };
+    let right_raw: Vec<Option<f32>> = right_picks.iter().map(|k| k.map(|k| k.disparity)).collect();
     let mut out = DisparityMapsF {
         width: w,
         height: h,

@@ -139,12 +139,18 @@ pub fn pick(raw: &[f32], total: f32, bias: &[f32], max_d: usize) -> Option<Pick>
     if total <= 0.0 || raw.is_empty() {
         return None;
     }
-    let top = max_d.min(raw.len() - 1);
-    let s = |d: usize| raw[d] / total - bias[d];
+    Some(pick_by(raw.len(), max_d, |d| raw[d] / total - bias[d]))
+}
+
+/// Argmax of the scores `s(d)` over `0..=min(max_d, n − 1)` (`n >= 1`), with
+/// the parabola through `d̂ ± 1` and the margin to the best score more than
+/// 1 px away.
+pub fn pick_by(n: usize, max_d: usize, s: impl Fn(usize) -> f32) -> Pick {
+    let top = max_d.min(n.saturating_sub(1));
     let best = (0..=top).fold(0, |b, d| if s(d) > s(b) { d } else { b });
     let second = (0..=top)
         .filter(|&d| d.abs_diff(best) > 1)
-        .map(s)
+        .map(&s)
         .fold(f32::NEG_INFINITY, f32::max);
     let mut disparity = best as f32;
     if best > 0 && best < top {
@@ -154,8 +160,8 @@ pub fn pick(raw: &[f32], total: f32, bias: &[f32], max_d: usize) -> Option<Pick>
             disparity += (0.5 * (m - p) / denom).clamp(-0.5, 0.5);
         }
     }
-    Some(Pick {
+    Pick {
         disparity,
         margin: s(best) - second,
-    })
+    }
 }
