@@ -48,6 +48,14 @@ pub struct StereoOptions {
     /// Border refinement radius, px (default: the model's; 0 disables).
     #[arg(long)]
     pub refine: Option<u8>,
+    /// Input channels of the DEM (experiment): grey, or energies summed
+    /// over R, G, B or over CIELUV L*, u*, v* (docs/STEREO.md).
+    #[arg(long, value_enum, default_value_t = dem::Colour::Grey)]
+    pub colour: dem::Colour,
+    /// With `--colour luv`: weight of u*, v* against L* (default 1; 0: L*
+    /// only).
+    #[arg(long)]
+    pub chroma_weight: Option<f32>,
     /// Complete the map over the conspicuity regions of the left view
     /// (`protogist::complete`, the pipeline's border step); the metrics
     /// then score the completed map, and `model` the map before it.
@@ -353,6 +361,10 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             paths: opts.readout.paths,
         };
     }
+    params.colour = opts.colour;
+    if let Some(c) = opts.chroma_weight {
+        params.chroma_weight = c;
+    }
     params.check()?;
     // Size checks first: training for a hopeless size is wasted time.
     if usize::from(params.max_disp) >= w {
@@ -390,6 +402,17 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             format!("SGM, P1 {p1}, P2 {p2}, {paths} paths"),
         );
     }
+    if params.colour != dem::Colour::Grey {
+        s.push(
+            "colour",
+            format!(
+                "{:?} ({} channels, chroma weight {})",
+                params.colour,
+                params.colour.channels(&params),
+                params.chroma_weight
+            ),
+        );
+    }
     let n = (w * h) as f64;
     s.push("decoder ms", format!("{train_ms:.1}"));
     s.push("stereo ms", format!("{run_ms:.1}"));
@@ -415,6 +438,8 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         "width": w, "height": h,
         "max_disp": params.max_disp,
         "pool_radius": params.pool_radius,
+        "colour": format!("{:?}", params.colour).to_lowercase(),
+        "chroma_weight": params.chroma_weight,
         "on_fraction": on as f64 / n,
         "stereo_ms": run_ms,
     });

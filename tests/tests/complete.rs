@@ -280,6 +280,8 @@ fn the_stereo_command_scores_the_completed_map_and_the_model() {
         levels: None,
         table: None,
         refine: None,
+        colour: Default::default(),
+        chroma_weight: None,
         complete: true,
         readout: ReadoutOptions::default(),
         json: true,

@@ -206,6 +206,8 @@ fn the_command_rejects_bad_files_with_one_line_errors() {
         levels: None,
         refine: None,
         table: None,
+        colour: Default::default(),
+        chroma_weight: None,
         complete: false,
         readout: ReadoutOptions::default(),
         json: false,

@@ -167,6 +167,8 @@ fn aloe(
         levels,
         table: None,
         refine: Some(0),
+        colour: Default::default(),
+        chroma_weight: None,
         complete: false,
         readout: ReadoutOptions {
             sgm,

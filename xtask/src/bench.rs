@@ -395,23 +395,38 @@ fn dem_aloe() -> Section {
          with an estimate, and over all GT pixels with a missing estimate counted as an error.\n\n\
          The `--refine 1` rows add the colour-guided border refinement (docs/STEREO.md); the \
          `--complete` rows score the map after the pipeline's completion over conspicuity \
-         regions (`protogist::complete`, docs/SEGMENT.md), ms without it.\n\n\
+         regions (`protogist::complete`, docs/SEGMENT.md), ms without it. The `--sgm` rows \
+         follow the box pooling with semi-global aggregation of the normalised Poisson costs \
+         (5 one-pass paths, P1 0.25, P2 16; an f32-reference experiment, not yet in core: \
+         docs/STEREO.md, section Semi-global aggregation).\n\n\
          | width | D | options | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
          |---|---|---|---|---|---|---|---|\n",
     );
-    for (w, d, refine, complete) in [
-        ("160", "32", "0", false),
-        ("160", "32", "1", false),
-        ("160", "32", "0", true),
-        ("320", "64", "0", false),
-        ("320", "64", "1", false),
-        ("320", "64", "0", true),
-    ] {
+    // (width, D, extra options); every row runs with `--refine 0` unless it
+    // names another radius.
+    let rows: [(&str, &str, &[&str]); 10] = [
+        ("160", "32", &[]),
+        ("160", "32", &["--refine", "1"]),
+        ("160", "32", &["--complete"]),
+        ("160", "32", &["--levels", "1", "--sgm"]),
+        ("160", "32", &["--levels", "1", "--sgm", "--complete"]),
+        ("320", "64", &[]),
+        ("320", "64", &["--refine", "1"]),
+        ("320", "64", &["--complete"]),
+        ("320", "64", &["--levels", "1", "--sgm"]),
+        ("320", "64", &["--levels", "1", "--sgm", "--complete"]),
+    ];
+    for (w, d, extra) in rows {
         let out_dir = root().join("target/bench-stereo");
-        let opts = match (refine, complete) {
-            (_, true) => "`--complete`".to_string(),
-            ("0", false) => "-".to_string(),
-            (r, false) => format!("`--refine {r}`"),
+        let opts = if extra.is_empty() {
+            "-".to_string()
+        } else {
+            format!("`{}`", extra.join(" "))
+        };
+        let refine = if extra.contains(&"--refine") {
+            &[][..]
+        } else {
+            &["--refine", "0"][..]
         };
         let args = [
             "stereo",
@@ -425,17 +440,14 @@ fn dem_aloe() -> Section {
             w,
             "--max-disp",
             d,
-            "--refine",
-            refine,
             "--json",
             "--out",
             &out_dir.to_string_lossy(),
         ]
         .map(|a| a.to_string());
         let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
-        if complete {
-            args.push("--complete");
-        }
+        args.extend_from_slice(refine);
+        args.extend_from_slice(extra);
         let row = protogist(&args)
             .ok()
             .and_then(|j| serde_json::from_str::<serde_json::Value>(&j).ok())

@@ -153,24 +153,39 @@ pub fn mul(a: Complex, b: Complex) -> Complex {
     [a[0] * b[0] - a[1] * b[1], a[0] * b[1] + a[1] * b[0]]
 }
 
-/// A complex response map.
+/// A complex response map of one or more input channels (see
+/// [`super::colour`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Response {
     /// Width.
     pub width: usize,
     /// Height.
     pub height: usize,
-    /// `z` per pixel.
+    /// Channels stacked in `z`, at least 1.
+    pub channels: usize,
+    /// `z` per channel and pixel, channel-major planes of `width·height`.
     pub z: Vec<Complex>,
 }
 
 impl Response {
-    /// `z(x, y)`, or 0 outside the map.
-    pub fn at(&self, x: isize, y: usize) -> Complex {
+    /// `z` of channel `c` at `(x, y)`, or 0 outside the map.
+    pub fn at(&self, c: usize, x: isize, y: usize) -> Complex {
         if x < 0 || x as usize >= self.width {
             [0.0, 0.0]
         } else {
-            self.z[y * self.width + x as usize]
+            self.z[(c * self.height + y) * self.width + x as usize]
+        }
+    }
+
+    /// The channels of `parts` (all of one size, at least one) stacked.
+    pub fn stack(parts: Vec<Response>) -> Response {
+        let (width, height) = parts.first().map_or((0, 0), |p| (p.width, p.height));
+        debug_assert!(parts.iter().all(|p| (p.width, p.height) == (width, height)));
+        Response {
+            width,
+            height,
+            channels: parts.iter().map(|p| p.channels).sum(),
+            z: parts.into_iter().flat_map(|p| p.z).collect(),
         }
     }
 }
@@ -213,17 +228,30 @@ pub fn respond(img: &Plane, g: &Gabor) -> Response {
     Response {
         width: w,
         height: h,
+        channels: 1,
         z,
     }
 }
 
 /// Monocular responses of one eye, computed once: `[level][carrier]`.
 pub fn monocular(params: &DemParams, img: Plane) -> Vec<Vec<Response>> {
+    monocular_planes(params, vec![img])
+}
+
+/// Monocular responses of one eye with one or more input channels (all of
+/// one size), each filtered by the same bank: `[level][carrier]`, the
+/// channels stacked in each [`Response`].
+pub fn monocular_planes(params: &DemParams, planes: Vec<Plane>) -> Vec<Vec<Response>> {
     let n = usize::from(params.carriers);
+    let levels = usize::from(params.levels);
     let bank: Vec<Gabor> = (0..n).map(|k| gabor(params, carrier_deg(k, n))).collect();
-    pyramid(img, usize::from(params.levels))
-        .iter()
-        .map(|level| bank.iter().map(|g| respond(level, g)).collect())
+    let pyramids: Vec<Vec<Plane>> = planes.into_iter().map(|p| pyramid(p, levels)).collect();
+    (0..levels)
+        .map(|l| {
+            bank.iter()
+                .map(|g| Response::stack(pyramids.iter().map(|p| respond(&p[l], g)).collect()))
+                .collect()
+        })
         .collect()
 }
 

@@ -3,6 +3,7 @@
 //!
 //! ```text
 //! left, right ─► grey ─► ↓2 pyramid ─► complex Gabor bank (per eye, once)
+//!   (or RGB / CIELUV channels, `colour`, summed in the energies)
 //!   ─► binocular energies A, X per (level, carrier, shift) ─► Poisson
 //!   log-likelihood per disparity (trained templates) ─► box pooling
 //!   [─► semi-global aggregation, opt-in, `sgm`] ─► argmax + parabola
@@ -12,6 +13,7 @@
 //! Names and argument order are what the fixed-point `protogist::stereo`
 //! will use. Disparity is left-referenced, `d = x_L − x_R ≥ 0`, in pixels.
 
+pub mod colour;
 pub mod filters;
 pub mod population;
 pub mod readout;
@@ -23,6 +25,7 @@ pub mod train;
 use protogist::disparity::{Disparity, DisparityCell};
 use protogist::image::{ImageView, Rgb8};
 
+pub use colour::Colour;
 pub use sgm::Aggregation;
 pub use train::{train, Decoder};
 
@@ -69,6 +72,12 @@ pub struct DemParams {
     /// Spatial aggregation of the scores: box pooling only (default) or
     /// followed by semi-global aggregation (an experiment, see `sgm`).
     pub aggregation: Aggregation,
+    /// Input channels (experiment, host only; see [`colour`]): grey, or
+    /// the energies summed over RGB or CIELUV channels. Default grey.
+    pub colour: Colour,
+    /// Weight of the u* and v* channels against L* in [`Colour::Luv`]
+    /// (0: L* only). Default 1.
+    pub chroma_weight: f32,
     /// Training: seed of the random-dot stereograms.
     pub train_seed: u64,
     /// Training: images per disparity. Default 4.
@@ -97,6 +106,8 @@ impl Default for DemParams {
             refine_window: 8,
             refine_k: 5,
             aggregation: Aggregation::Box,
+            colour: Colour::Grey,
+            chroma_weight: 1.0,
             train_seed: 0x0de1_5eed,
             train_images: 4,
             train_width: 64,
@@ -137,6 +148,10 @@ impl DemParams {
         bad(self.radius >= 1, "radius must be at least 1")?;
         bad(self.shift_step >= 1, "shift_step must be at least 1")?;
         bad(self.min_energy >= 0.0, "min_energy must be >= 0")?;
+        bad(
+            self.chroma_weight >= 0.0 && self.chroma_weight.is_finite(),
+            "chroma_weight must be finite and >= 0",
+        )?;
         bad(self.train_images >= 1, "train_images must be at least 1")?;
         if let Aggregation::Sgm { p1, p2, paths } = self.aggregation {
             bad(
@@ -270,7 +285,8 @@ fn check(
     Ok(())
 }
 
-/// Runs the stage on an RGB pair (converted to grey).
+/// Runs the stage on an RGB pair (converted to grey, or to the channels
+/// of `params.colour`).
 ///
 /// # Errors
 /// [`StereoError`] for mismatched sizes, too small images, `max_disp` not
@@ -282,7 +298,12 @@ pub fn stereo(
     right: &ImageView<'_, Rgb8>,
 ) -> Result<DisparityMapsF, StereoError> {
     check(params, decoder, left.size(), right.size())?;
-    let mut maps = stereo_grey(params, decoder, filters::grey(left), filters::grey(right));
+    let mut maps = stereo_planes(
+        params,
+        decoder,
+        colour::planes(params, left),
+        colour::planes(params, right),
+    );
     refine::refine_borders(params, left, &mut maps);
     Ok(maps)
 }
@@ -295,10 +316,22 @@ pub fn stereo_grey(
     left: filters::Plane,
     right: filters::Plane,
 ) -> DisparityMapsF {
-    let (w, h) = (left.width, left.height);
+    stereo_planes(params, decoder, vec![left], vec![right])
+}
+
+/// Runs the stage on one or more channel planes per eye, all of one size
+/// (checked by the caller), energies summed over channels
+/// ([`colour`]); `params.colour` is not read here.
+pub fn stereo_planes(
+    params: &DemParams,
+    decoder: &Decoder,
+    left: Vec<filters::Plane>,
+    right: Vec<filters::Plane>,
+) -> DisparityMapsF {
+    let (w, h) = left.first().map_or((0, 0), |p| (p.width, p.height));
     let (ml, mr) = (
-        filters::monocular(params, left),
-        filters::monocular(params, right),
+        filters::monocular_planes(params, left),
+        filters::monocular_planes(params, right),
     );
     let (mut sl, mut sr) = readout::scores(params, decoder, &ml, &mr, w, h);
     let r = usize::from(params.pool_radius);

@@ -52,19 +52,32 @@ pub fn groups(params: &DemParams) -> Vec<Group> {
 /// `[A, X_r, X_i]` of one group.
 pub type Energy = [f32; 3];
 
-/// The energies of one group on its level's grid; `z_R` is 0 outside.
+/// The energies of one group on its level's grid, summed over the input
+/// channels (dem-spec §6; one channel: grey); `z_R` is 0 outside.
 pub fn energies_level(left: &Response, right: &Response, shift: usize) -> Vec<Energy> {
     let (w, h) = (left.width, left.height);
     let mut out = vec![[0.0; 3]; w * h];
-    for y in 0..h {
-        for x in 0..w {
-            let l = left.z[y * w + x];
-            let r = right.at(x as isize - shift as isize, y);
-            out[y * w + x] = [
-                l[0] * l[0] + l[1] * l[1] + r[0] * r[0] + r[1] * r[1],
-                l[0] * r[0] + l[1] * r[1],
-                l[1] * r[0] - l[0] * r[1],
-            ];
+    for c in 0..left.channels.min(right.channels) {
+        let plane = &left.z[c * w * h..(c + 1) * w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let l = plane[y * w + x];
+                let r = right.at(c, x as isize - shift as isize, y);
+                let e = [
+                    l[0] * l[0] + l[1] * l[1] + r[0] * r[0] + r[1] * r[1],
+                    l[0] * r[0] + l[1] * r[1],
+                    l[1] * r[0] - l[0] * r[1],
+                ];
+                let dst = &mut out[y * w + x];
+                if c == 0 {
+                    // Assigned, not added: grey stays bit-identical.
+                    *dst = e;
+                } else {
+                    for (d, v) in dst.iter_mut().zip(e) {
+                        *d += v;
+                    }
+                }
+            }
         }
     }
     out
@@ -147,11 +160,13 @@ mod tests {
         let left = Response {
             width: 1,
             height: 1,
+            channels: 1,
             z: vec![l],
         };
         let right = Response {
             width: 1,
             height: 1,
+            channels: 1,
             z: vec![r],
         };
         let e = energies_level(&left, &right, 0)[0];
@@ -164,6 +179,29 @@ mod tests {
             let direct = (l[0] + rot[0]).powi(2) + (l[1] + rot[1]).powi(2);
             assert!((c - direct).abs() < 1e-4, "{k}: {c} vs {direct}");
         }
+    }
+
+    #[test]
+    fn stacked_channels_sum_their_energies() {
+        // Two channels, 3x1, shift 1: the stacked energies are the sums of
+        // the single-channel ones (exactly: one f32 addition of each).
+        let z = |s: f32| -> Vec<[f32; 2]> { (0..3).map(|i| [s * i as f32, 1.0 - s]).collect() };
+        let one = |z: Vec<[f32; 2]>| Response {
+            width: 3,
+            height: 1,
+            channels: 1,
+            z,
+        };
+        let (l0, l1, r0, r1) = (one(z(0.5)), one(z(-2.0)), one(z(1.5)), one(z(3.0)));
+        let both = |a: &Response, b: &Response| Response::stack(vec![a.clone(), b.clone()]);
+        let sum = energies_level(&both(&l0, &l1), &both(&r0, &r1), 1);
+        let (e0, e1) = (energies_level(&l0, &r0, 1), energies_level(&l1, &r1, 1));
+        for ((s, a), b) in sum.iter().zip(&e0).zip(&e1) {
+            for i in 0..3 {
+                assert_eq!(s[i], a[i] + b[i]);
+            }
+        }
+        assert!(sum.iter().any(|e| e[1] != 0.0));
     }
 
     #[test]
