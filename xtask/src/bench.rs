@@ -398,23 +398,48 @@ fn dem_aloe() -> Section {
          regions (`protogist::complete`, docs/SEGMENT.md), ms without it. The `--sgm` rows \
          follow the box pooling with semi-global aggregation of the normalised Poisson costs \
          (5 one-pass paths, P1 0.25, P2 16; an f32-reference experiment, not yet in core: \
-         docs/STEREO.md, section Semi-global aggregation).\n\n\
+         docs/STEREO.md, section Semi-global aggregation). The `--colour luv` rows add colour \
+         channels, 8 paths and the settings named, chosen on Aloe itself (no held-out pair): \
+         docs/STEREO.md, section SGM with colour channels.\n\n\
          | width | D | options | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
          |---|---|---|---|---|---|---|---|\n",
     );
     // (width, D, extra options); every row runs with `--refine 0` unless it
     // names another radius.
-    let rows: [(&str, &str, &[&str]); 10] = [
+    // The combined rows: SGM with colour channels (settings chosen on Aloe
+    // itself, docs/STEREO.md "SGM with colour channels").
+    const COMBINED: [&str; 9] = [
+        "--levels",
+        "1",
+        "--sgm",
+        "--colour",
+        "luv",
+        "--paths",
+        "8",
+        "--chroma-weight",
+        "2",
+    ];
+    let c160: Vec<&str> = COMBINED
+        .iter()
+        .copied()
+        .chain(["--pool", "0", "--p2", "4"])
+        .collect();
+    let c320: Vec<&str> = COMBINED.iter().copied().chain(["--pool", "1"]).collect();
+    let rows: [(&str, &str, &[&str]); 14] = [
         ("160", "32", &[]),
         ("160", "32", &["--refine", "1"]),
         ("160", "32", &["--complete"]),
         ("160", "32", &["--levels", "1", "--sgm"]),
         ("160", "32", &["--levels", "1", "--sgm", "--complete"]),
+        ("160", "32", &c160),
+        ("160", "32", &c320),
         ("320", "64", &[]),
         ("320", "64", &["--refine", "1"]),
         ("320", "64", &["--complete"]),
         ("320", "64", &["--levels", "1", "--sgm"]),
         ("320", "64", &["--levels", "1", "--sgm", "--complete"]),
+        ("320", "64", &c320),
+        ("320", "64", &c160),
     ];
     for (w, d, extra) in rows {
         let out_dir = root().join("target/bench-stereo");
