@@ -274,3 +274,48 @@ macro_rules! mask {
         $crate::parse_mask(&[$($row),*])
     };
 }
+
+/// Random float networks and their int8 blobs, for the classifier tests.
+pub mod nets {
+    use ndarray::{Array1, Array2};
+    use protogist_host::classify::mlp::{unit, Mlp, SplitMix};
+    use protogist_host::classify::quant::{write_blob, BlobExtras, QuantNet};
+
+    /// `n` values uniform in `[-a, a)`.
+    pub fn uniform(rng: &mut SplitMix, n: usize, a: f64) -> Vec<f64> {
+        (0..n).map(|_| a * (2.0 * unit(rng) - 1.0)).collect()
+    }
+
+    /// A `d`-`h`-`k` network with weights uniform in `±a1` (layer 1) and
+    /// `±a2` (layer 2), biases in `±bias·a`.
+    pub fn random_net(
+        rng: &mut SplitMix,
+        (d, h, k): (usize, usize, usize),
+        a1: f64,
+        a2: f64,
+        bias: f64,
+    ) -> Mlp {
+        Mlp {
+            w1: Array2::from_shape_vec((h, d), uniform(rng, h * d, a1)).expect("h·d values"),
+            b1: Array1::from(uniform(rng, h, bias * a1)),
+            w2: Array2::from_shape_vec((k, h), uniform(rng, k * h, a2)).expect("k·h values"),
+            b2: Array1::from(uniform(rng, k, bias * a2)),
+        }
+    }
+
+    /// The blob of a quantised network with `k` classes named `c0..`, zero
+    /// templates, Δ 0 and no metadata.
+    pub fn blob(q: &QuantNet, k: usize) -> Vec<u8> {
+        let names: Vec<String> = (0..k).map(|c| format!("c{c}")).collect();
+        write_blob(
+            q,
+            &BlobExtras {
+                templates: &vec![0; k * k],
+                delta_q16: 0,
+                names: &names,
+                meta: "",
+            },
+        )
+        .expect("a valid network writes")
+    }
+}

@@ -7,13 +7,13 @@
 //! naive kernel against `forward`, on layers that cross the 48-row call
 //! blocks and have input counts that are not a multiple of 4.
 
-use ndarray::{Array1, Array2};
 use proptest::prelude::*;
 use protogist::mlp::{
     forward, forward_with, input_len, packed_len, safe_dot_rows, MacKernel, Model, Scratch,
 };
-use protogist_host::classify::mlp::{unit, Mlp, SplitMix};
-use protogist_host::classify::quant::{quantize_net, shape_elems, write_blob, BlobExtras};
+use protogist_host::classify::mlp::{unit, SplitMix};
+use protogist_host::classify::quant::{quantize_net, shape_elems};
+use protogist_tests::nets::{blob, random_net};
 
 /// Input `i` of words packed as `x0 | x2 << 16`, `x1 | x3 << 16` per group
 /// of four (the contract's packing, written out independently).
@@ -75,10 +75,6 @@ proptest! {
     }
 }
 
-fn uniform(rng: &mut SplitMix, n: usize, a: f64) -> Vec<f64> {
-    (0..n).map(|_| a * (2.0 * unit(rng) - 1.0)).collect()
-}
-
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
 
@@ -92,24 +88,13 @@ proptest! {
         seed in any::<u64>(),
     ) {
         let mut rng = SplitMix::new(seed);
-        let net = Mlp {
-            w1: Array2::from_shape_vec((h, d), uniform(&mut rng, h * d, 1.0)).unwrap(),
-            b1: Array1::from(uniform(&mut rng, h, 0.5)),
-            w2: Array2::from_shape_vec((k, h), uniform(&mut rng, k * h, 2.0)).unwrap(),
-            b2: Array1::from(uniform(&mut rng, k, 1.0)),
-        };
+        let net = random_net(&mut rng, (d, h, k), 1.0, 2.0, 0.5);
         let inputs: Vec<Vec<i16>> = (0..3)
             .map(|_| (0..d).map(|_| (8000.0 * (2.0 * unit(&mut rng) - 1.0)) as i16).collect())
             .collect();
         prop_assume!(inputs.iter().flatten().any(|&r| r != 0));
         let q = quantize_net(&net, &inputs).unwrap();
-        let names: Vec<String> = (0..k).map(|c| format!("c{c}")).collect();
-        let blob = write_blob(&q, &BlobExtras {
-            templates: &vec![0; k * k],
-            delta_q16: 0,
-            names: &names,
-            meta: "",
-        }).unwrap();
+        let blob = blob(&q, k);
         let model = Model::parse(&blob).unwrap();
         let (mut xi, mut hi, mut yo) = (vec![0u32; packed_len(d, h)], vec![0u8; h], vec![0u16; k]);
         for raw in &inputs {

@@ -2,19 +2,14 @@
 //! network. The bound is derived in docs/ERROR_BOUNDS.md §9 before these
 //! tests were written; the held-out thresholds are the issue's.
 
-use ndarray::{Array1, Array2};
+use ndarray::Array1;
 use proptest::prelude::*;
 use protogist::mlp::{forward, Model, Scratch};
 use protogist_host::classify::mlp::{unit, Mlp, SplitMix};
 use protogist_host::classify::model_cmd::{evaluate_model, EvalOptions, Features, TrainOptions};
-use protogist_host::classify::quant::{
-    output_error_bound, quantize_net, shape_elems, write_blob, BlobExtras,
-};
+use protogist_host::classify::quant::{output_error_bound, quantize_net, shape_elems};
 use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
-
-fn uniform(rng: &mut SplitMix, n: usize, a: f64) -> Vec<f64> {
-    (0..n).map(|_| a * (2.0 * unit(rng) - 1.0)).collect()
-}
+use protogist_tests::nets::{blob, random_net};
 
 #[allow(clippy::too_many_arguments)]
 fn random_case(
@@ -28,12 +23,7 @@ fn random_case(
     xmax: i16,
 ) -> (Mlp, Vec<Vec<i16>>) {
     let mut rng = SplitMix::new(seed);
-    let net = Mlp {
-        w1: Array2::from_shape_vec((h, d), uniform(&mut rng, h * d, a1)).unwrap(),
-        b1: Array1::from(uniform(&mut rng, h, bias * a1)),
-        w2: Array2::from_shape_vec((k, h), uniform(&mut rng, k * h, a2)).unwrap(),
-        b2: Array1::from(uniform(&mut rng, k, bias * a2)),
-    };
+    let net = random_net(&mut rng, (d, h, k), a1, a2, bias);
     let inputs = (0..4)
         .map(|_| {
             (0..d)
@@ -68,13 +58,7 @@ proptest! {
         };
         prop_assume!(fits(&net.b1, &q.l1.w_scale, q.x_scale));
         prop_assume!(fits(&net.b2, &q.l2.w_scale, 1.0 / 255.0));
-        let names: Vec<String> = (0..k).map(|c| format!("c{c}")).collect();
-        let blob = write_blob(&q, &BlobExtras {
-            templates: &vec![0; k * k],
-            delta_q16: 0,
-            names: &names,
-            meta: "",
-        }).unwrap();
+        let blob = blob(&q, k);
         let model = Model::parse(&blob).unwrap();
         let (mut xi, mut hi, mut yo) = (vec![0u32; protogist::mlp::packed_len(d, h)], vec![0u8; h], vec![0u16; k]);
         for raw in &inputs {
