@@ -339,22 +339,20 @@ pub fn stereo_planes(
     readout::pool(&mut sr, r);
     let n = decoder.disparities();
     let cells = 4.0 * decoder.layout.groups() as f32;
-    let (left_picks, right_picks) = match params.aggregation {
-        Aggregation::Box => {
-            let run = |s: &readout::Scores, top: &dyn Fn(usize) -> usize| {
-                (0..w * h)
-                    .map(|p| {
-                        let raw = &s.raw[p * n..(p + 1) * n];
-                        readout::pick(raw, s.total[p], &decoder.bias, top(p))
-                    })
-                    .collect::<Vec<_>>()
-            };
-            (run(&sl, &|p| p % w), run(&sr, &|p| w - 1 - p % w))
-        }
-        Aggregation::Sgm { p1, p2, paths } => {
-            // Margins per path, in units of a pixel's mean cost gap.
-            let per_path = sgm::directions(paths).map_or(1, <[_]>::len) as f32;
-            let run = |s: &readout::Scores, top: &dyn Fn(usize) -> usize| {
+    // Margins with SGM are per path, in units of a pixel's mean cost gap.
+    let per_path = match params.aggregation {
+        Aggregation::Sgm { paths, .. } => sgm::directions(paths).map_or(1, <[_]>::len) as f32,
+        Aggregation::Box => 1.0,
+    };
+    let picks = |s: &readout::Scores, top: &dyn Fn(usize) -> usize| -> Vec<Option<readout::Pick>> {
+        match params.aggregation {
+            Aggregation::Box => (0..w * h)
+                .map(|p| {
+                    let raw = &s.raw[p * n..(p + 1) * n];
+                    readout::pick(raw, s.total[p], &decoder.bias, top(p))
+                })
+                .collect(),
+            Aggregation::Sgm { p1, p2, paths } => {
                 let evidence = |p: usize| s.total[p] >= params.min_energy * cells * count[p];
                 let cost = sgm::costs(s, &decoder.bias, evidence, top);
                 let sum = sgm::aggregate(&cost, w, h, n, paths, p1, p2);
@@ -368,11 +366,11 @@ pub fn stereo_planes(
                             }
                         })
                     })
-                    .collect::<Vec<_>>()
-            };
-            (run(&sl, &|p| p % w), run(&sr, &|p| w - 1 - p % w))
+                    .collect()
+            }
         }
     };
+    let (left_picks, right_picks) = (picks(&sl, &|p| p % w), picks(&sr, &|p| w - 1 - p % w));
     let right_raw: Vec<Option<f32>> = right_picks.iter().map(|k| k.map(|k| k.disparity)).collect();
     let mut out = DisparityMapsF {
         width: w,
