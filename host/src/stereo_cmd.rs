@@ -96,6 +96,14 @@ pub struct ReadoutOptions {
     /// Left-right tolerance, px (default: the model's, 1; negative: off).
     #[arg(long, allow_negative_numbers = true)]
     pub lr: Option<f32>,
+    /// Coarse-to-fine (an experiment, docs/STEREO.md): halve the pair this
+    /// many times, search every candidate on the coarsest level and only
+    /// `2·d ± --c2f-radius` on each finer one (0: off).
+    #[arg(long, default_value_t = 0)]
+    pub c2f: u8,
+    /// Half width of the fine windows of `--c2f`, px of the finer level.
+    #[arg(long, default_value_t = 2, requires = "c2f")]
+    pub c2f_radius: u8,
 }
 
 impl Default for ReadoutOptions {
@@ -107,6 +115,8 @@ impl Default for ReadoutOptions {
             paths: SGM_PATHS,
             min_margin: None,
             lr: None,
+            c2f: 0,
+            c2f_radius: 2,
         }
     }
 }
@@ -381,13 +391,28 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     let t_train = Instant::now();
     let decoder = decoder_for(&params, opts.table.as_deref())?;
     let train_ms = t_train.elapsed().as_secs_f64() * 1e3;
+    let mut decoders = vec![decoder];
+    for k in 1..=usize::from(opts.readout.c2f) {
+        let p = DemParams {
+            max_disp: dem::c2f::level_max_disp(params.max_disp, k),
+            ..params
+        };
+        decoders.push(decoder_for(&p, None)?);
+    }
+    let decoder = &decoders[0];
+    let train_ms = if decoders.len() > 1 {
+        t_train.elapsed().as_secs_f64() * 1e3
+    } else {
+        train_ms
+    };
     let t_run = Instant::now();
-    let maps = dem::stereo(
-        &params,
-        &decoder,
-        &ImageView::packed(&lp, w, h)?,
-        &ImageView::packed(&rp, w, h)?,
-    )?;
+    let (lv, rv) = (ImageView::packed(&lp, w, h)?, ImageView::packed(&rp, w, h)?);
+    let maps = if decoders.len() > 1 {
+        let r = usize::from(opts.readout.c2f_radius);
+        dem::c2f::stereo_c2f(&params, &decoders, &lv, &rv, r)?
+    } else {
+        dem::stereo(&params, decoder, &lv, &rv)?
+    };
     let run_ms = t_run.elapsed().as_secs_f64() * 1e3;
 
     let mut s = Summary::new(format!("protogist stereo: {}", opts.left.display()));

@@ -13,6 +13,7 @@
 //! Names and argument order are what the fixed-point `protogist::stereo`
 //! will use. Disparity is left-referenced, `d = x_L − x_R ≥ 0`, in pixels.
 
+pub mod c2f;
 pub mod colour;
 pub mod filters;
 pub mod population;
@@ -328,6 +329,30 @@ pub fn stereo_planes(
     left: Vec<filters::Plane>,
     right: Vec<filters::Plane>,
 ) -> DisparityMapsF {
+    stereo_planes_in(params, decoder, left, right, None)
+}
+
+/// A search window of candidates `lo..=hi` per pixel (`None`: the whole
+/// range), for the left- and the right-referenced maps ([`c2f`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Windows {
+    /// Left-referenced windows, row-major.
+    pub left: Vec<Option<(usize, usize)>>,
+    /// Right-referenced windows, row-major.
+    pub right: Vec<Option<(usize, usize)>>,
+}
+
+/// [`stereo_planes`] with the candidates of each pixel restricted to its
+/// window (`windows`, sized `width x height`; `None` or a missing entry:
+/// every candidate). Scores are still computed for every candidate; only
+/// the decision and the SGM paths see the window.
+pub fn stereo_planes_in(
+    params: &DemParams,
+    decoder: &Decoder,
+    left: Vec<filters::Plane>,
+    right: Vec<filters::Plane>,
+    windows: Option<&Windows>,
+) -> DisparityMapsF {
     let (w, h) = left.first().map_or((0, 0), |p| (p.width, p.height));
     let (ml, mr) = (
         filters::monocular_planes(params, left),
@@ -344,22 +369,35 @@ pub fn stereo_planes(
         Aggregation::Sgm { paths, .. } => sgm::directions(paths).map_or(1, <[_]>::len) as f32,
         Aggregation::Box => 1.0,
     };
-    let picks = |s: &readout::Scores, top: &dyn Fn(usize) -> usize| -> Vec<Option<readout::Pick>> {
+    let picks = |s: &readout::Scores,
+                 top: &dyn Fn(usize) -> usize,
+                 win: &[Option<(usize, usize)>]|
+     -> Vec<Option<readout::Pick>> {
+        let window = |p: usize| win.get(p).copied().flatten();
+        // The decision window: `lo..=hi` within `0..=top`.
+        let range = |p: usize| {
+            let t = top(p).min(n - 1);
+            window(p).map_or((0, t), |(lo, hi)| (lo.min(t), hi.min(t)))
+        };
         match params.aggregation {
             Aggregation::Box => (0..w * h)
                 .map(|p| {
-                    let raw = &s.raw[p * n..(p + 1) * n];
-                    readout::pick(raw, s.total[p], &decoder.bias, top(p))
+                    let (raw, total) = (&s.raw[p * n..(p + 1) * n], s.total[p]);
+                    let (lo, hi) = range(p);
+                    (total > 0.0).then(|| {
+                        readout::pick_in(lo, hi, |d| raw[d] / total - decoder.bias[d])
+                    })
                 })
                 .collect(),
             Aggregation::Sgm { p1, p2, paths } => {
                 let evidence = |p: usize| s.total[p] >= params.min_energy * cells * count[p];
-                let cost = sgm::costs(s, &decoder.bias, evidence, top);
+                let cost = sgm::costs_in(s, &decoder.bias, evidence, top, window);
                 let sum = sgm::aggregate(&cost, w, h, n, paths, p1, p2);
                 (0..w * h)
                     .map(|p| {
                         (s.total[p] > 0.0).then(|| {
-                            let k = readout::pick_by(n, top(p), |d| -sum[p * n + d]);
+                            let (lo, hi) = range(p);
+                            let k = readout::pick_in(lo, hi, |d| -sum[p * n + d]);
                             readout::Pick {
                                 margin: k.margin / per_path,
                                 ..k
@@ -370,7 +408,12 @@ pub fn stereo_planes(
             }
         }
     };
-    let (left_picks, right_picks) = (picks(&sl, &|p| p % w), picks(&sr, &|p| w - 1 - p % w));
+    let none = Vec::new();
+    let (wl, wr) = windows.map_or((&none, &none), |ws| (&ws.left, &ws.right));
+    let (left_picks, right_picks) = (
+        picks(&sl, &|p| p % w, wl),
+        picks(&sr, &|p| w - 1 - p % w, wr),
+    );
     let right_raw: Vec<Option<f32>> = right_picks.iter().map(|k| k.map(|k| k.disparity)).collect();
     let mut out = DisparityMapsF {
         width: w,

@@ -146,14 +146,20 @@ pub fn pick(raw: &[f32], total: f32, bias: &[f32], max_d: usize) -> Option<Pick>
 /// the parabola through `d̂ ± 1` and the margin to the best score more than
 /// 1 px away.
 pub fn pick_by(n: usize, max_d: usize, s: impl Fn(usize) -> f32) -> Pick {
-    let top = max_d.min(n.saturating_sub(1));
-    let best = (0..=top).fold(0, |b, d| if s(d) > s(b) { d } else { b });
-    let second = (0..=top)
+    pick_in(0, max_d.min(n.saturating_sub(1)), s)
+}
+
+/// Argmax of the scores `s(d)` over the window `lo..=top` (`lo <= top`),
+/// with the parabola through `d̂ ± 1` when both are in the window and the
+/// margin to the best score more than 1 px away within it.
+pub fn pick_in(lo: usize, top: usize, s: impl Fn(usize) -> f32) -> Pick {
+    let best = (lo..=top).fold(lo, |b, d| if s(d) > s(b) { d } else { b });
+    let second = (lo..=top)
         .filter(|&d| d.abs_diff(best) > 1)
         .map(&s)
         .fold(f32::NEG_INFINITY, f32::max);
     let mut disparity = best as f32;
-    if best > 0 && best < top {
+    if best > lo && best < top {
         let (m, c, p) = (s(best - 1), s(best), s(best + 1));
         let denom = m - 2.0 * c + p;
         if denom < 0.0 {

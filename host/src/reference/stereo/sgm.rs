@@ -151,6 +151,11 @@ pub fn aggregate(
     sum
 }
 
+/// Cost of a candidate outside a pixel's search window: large enough that
+/// no path goes through it (every step then takes the `P2` branch), small
+/// enough that sums over 8 paths stay exact in f32 steps of the costs.
+pub const EXCLUDED: f32 = 1.0e6;
+
 /// The normalised cost volume of `scores` (module docs): `evidence(p)`
 /// says whether pixel `p` has any, and `top(p)` is its last valid
 /// candidate.
@@ -159,6 +164,20 @@ pub fn costs(
     bias: &[f32],
     evidence: impl Fn(usize) -> bool,
     top: impl Fn(usize) -> usize,
+) -> Vec<f32> {
+    costs_in(scores, bias, evidence, top, |_| None)
+}
+
+/// [`costs`] with a search window per pixel: `window(p) = Some((lo, hi))`
+/// restricts the candidates to `lo..=hi` (clipped to `top(p)`); the others
+/// cost [`EXCLUDED`] and the mean gap is taken over the window only, as an
+/// engine that scores only the window would.
+pub fn costs_in(
+    scores: &Scores,
+    bias: &[f32],
+    evidence: impl Fn(usize) -> bool,
+    top: impl Fn(usize) -> usize,
+    window: impl Fn(usize) -> Option<(usize, usize)>,
 ) -> Vec<f32> {
     let n = scores.disparities;
     let mut cost = vec![0.0f32; scores.raw.len()];
@@ -175,7 +194,16 @@ pub fn costs(
         for ((c, &r), &b) in c.iter_mut().zip(raw).zip(bias) {
             *c = -(r / total - b);
         }
-        let valid = &mut c[..=t];
+        let (lo, t) = match window(p) {
+            Some((lo, hi)) => {
+                let (lo, hi) = (lo.min(t), hi.min(t));
+                c[..lo].fill(EXCLUDED);
+                c[hi + 1..=t].fill(EXCLUDED);
+                (lo, hi)
+            }
+            None => (0, t),
+        };
+        let valid = &mut c[lo..=t];
         let lo = valid.iter().copied().fold(f32::INFINITY, f32::min);
         let mean = valid.iter().map(|v| v - lo).sum::<f32>() / valid.len() as f32;
         let scale = if mean > 0.0 { 1.0 / mean } else { 0.0 };
@@ -184,7 +212,7 @@ pub fn costs(
             *v = (*v - lo) * scale;
             hi = hi.max(*v);
         }
-        for v in &mut c[t + 1..] {
+        for v in c[t + 1..].iter_mut().filter(|v| **v < EXCLUDED) {
             *v = hi;
         }
     }

@@ -1,0 +1,155 @@
+//! Coarse-to-fine search (an opt-in experiment of the f32 reference,
+//! docs/STEREO.md "Coarse-to-fine with SGM (experiment)").
+//!
+//! The pair is halved `k` times (2x2 box means of the RGB pixels). The
+//! coarsest level searches every candidate `0..=⌈D / 2^k⌉`; each finer level
+//! searches only `2·d_c ± radius` around the coarser level's argmax `d_c`
+//! at the parent pixel `(x/2, y/2)` (before its OFF tests), for the left-
+//! and the right-referenced maps alike. A pixel whose parent has no
+//! estimate searches every candidate. Every level runs the same read-out
+//! ([`DemParams::aggregation`]: box or SGM) with its own decoder.
+//!
+//! What it answers: whether the read-out keeps its accuracy when the fine
+//! level scores only `2·radius + 1` candidates, the saving that a fast
+//! engine needs (the decode is `groups x candidates` per pixel). Here every
+//! candidate is still scored (the window acts on the decision and the SGM
+//! paths only, see [`super::stereo_planes_in`]), so it measures accuracy,
+//! not speed.
+
+use super::{
+    check, colour, refine, stereo_planes_in, Decoder, DemParams, DisparityMapsF, StereoError,
+    Windows,
+};
+use protogist::image::{ImageView, Rgb8};
+
+/// An owned RGB image.
+#[derive(Clone, Debug)]
+struct Rgb {
+    width: usize,
+    height: usize,
+    data: Vec<Rgb8>,
+}
+
+impl Rgb {
+    fn of(v: &ImageView<'_, Rgb8>) -> Self {
+        Self {
+            width: v.width(),
+            height: v.height(),
+            data: v.rows().flatten().copied().collect(),
+        }
+    }
+
+    /// 2x2 box means (rounded), `⌊w/2⌋ x ⌊h/2⌋`.
+    fn half(&self) -> Self {
+        let (w, h) = (self.width / 2, self.height / 2);
+        let at = |x: usize, y: usize| self.data[y * self.width + x];
+        let mut data = Vec::with_capacity(w * h);
+        for y in 0..h {
+            for x in 0..w {
+                let q = [
+                    at(2 * x, 2 * y),
+                    at(2 * x + 1, 2 * y),
+                    at(2 * x, 2 * y + 1),
+                    at(2 * x + 1, 2 * y + 1),
+                ];
+                let mean = |f: fn(&Rgb8) -> u8| {
+                    let s: u16 = q.iter().map(|p| u16::from(f(p))).sum();
+                    ((s + 2) / 4) as u8
+                };
+                data.push(Rgb8::new(mean(|p| p.r), mean(|p| p.g), mean(|p| p.b)));
+            }
+        }
+        Self {
+            width: w,
+            height: h,
+            data,
+        }
+    }
+
+    fn view(&self) -> ImageView<'_, Rgb8> {
+        ImageView::new(&self.data, self.width, self.height, self.width)
+            .expect("an owned image is consistent")
+    }
+}
+
+/// `max_disp` of level `k`: `⌈D / 2^k⌉`.
+pub fn level_max_disp(max_disp: u8, k: usize) -> u8 {
+    let m = u32::from(max_disp).div_ceil(1 << k);
+    u8::try_from(m).unwrap_or(u8::MAX)
+}
+
+/// The fine windows `2·d_c ± radius` from a coarse level's raw argmax maps
+/// (`wc x hc`) for a `w x h` level.
+pub fn windows_from(coarse: &DisparityMapsF, w: usize, h: usize, radius: usize) -> Windows {
+    let (wc, hc) = (coarse.width, coarse.height);
+    let map = |raw: &[Option<f32>]| -> Vec<Option<(usize, usize)>> {
+        (0..w * h)
+            .map(|p| {
+                let (x, y) = (p % w, p / w);
+                let q = (y / 2).min(hc.saturating_sub(1)) * wc + (x / 2).min(wc.saturating_sub(1));
+                raw.get(q).copied().flatten().map(|d| {
+                    let c = (2.0 * d).round().max(0.0) as usize;
+                    (c.saturating_sub(radius), c + radius)
+                })
+            })
+            .collect()
+    };
+    Windows {
+        left: map(&coarse.left_raw),
+        right: map(&coarse.right_raw),
+    }
+}
+
+/// Runs the stage coarse to fine: `decoders[k]` is level `k`'s decoder
+/// (`decoders[0]` for `params`, then `⌈D / 2^k⌉`), so `decoders.len() − 1`
+/// coarse levels; `radius` is the fine window's half width.
+///
+/// # Errors
+/// [`StereoError`] as [`super::stereo`], for the full-size pair and for
+/// every coarse level (too small, or a decoder of other parameters).
+pub fn stereo_c2f(
+    params: &DemParams,
+    decoders: &[Decoder],
+    left: &ImageView<'_, Rgb8>,
+    right: &ImageView<'_, Rgb8>,
+    radius: usize,
+) -> Result<DisparityMapsF, StereoError> {
+    let Some(fine) = decoders.first() else {
+        return Err(StereoError::BadParams("no decoder"));
+    };
+    check(params, fine, left.size(), right.size())?;
+    let mut pyramid = vec![(Rgb::of(left), Rgb::of(right))];
+    for k in 1..decoders.len() {
+        let (l, r) = &pyramid[k - 1];
+        let next = (l.half(), r.half());
+        let p = DemParams {
+            max_disp: level_max_disp(params.max_disp, k),
+            ..*params
+        };
+        let (lv, rv) = (next.0.view(), next.1.view());
+        check(&p, &decoders[k], lv.size(), rv.size())?;
+        pyramid.push(next);
+    }
+    let mut prior: Option<DisparityMapsF> = None;
+    for (k, ((l, r), decoder)) in pyramid.iter().zip(decoders).enumerate().rev() {
+        let p = DemParams {
+            max_disp: level_max_disp(params.max_disp, k),
+            ..*params
+        };
+        let windows = prior
+            .as_ref()
+            .map(|c| windows_from(c, l.width, l.height, radius));
+        let (lv, rv) = (l.view(), r.view());
+        let maps = stereo_planes_in(
+            &p,
+            decoder,
+            colour::planes(&p, &lv),
+            colour::planes(&p, &rv),
+            windows.as_ref(),
+        );
+        prior = Some(maps);
+    }
+    let mut maps = prior.ok_or(StereoError::BadParams("no level"))?;
+    refine::refine_borders(params, left, &mut maps);
+    Ok(maps)
+}
