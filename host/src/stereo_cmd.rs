@@ -104,6 +104,10 @@ pub struct ReadoutOptions {
     /// Half width of the fine windows of `--c2f`, px of the finer level.
     #[arg(long, default_value_t = 2, requires = "c2f")]
     pub c2f_radius: u8,
+    /// With `--c2f`: decode a fine pixel only from the groups whose shift
+    /// is within this many px of its window's centre (default: every group).
+    #[arg(long, requires = "c2f")]
+    pub c2f_band: Option<u8>,
 }
 
 impl Default for ReadoutOptions {
@@ -117,6 +121,7 @@ impl Default for ReadoutOptions {
             lr: None,
             c2f: 0,
             c2f_radius: 2,
+            c2f_band: None,
         }
     }
 }
@@ -409,7 +414,8 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     let (lv, rv) = (ImageView::packed(&lp, w, h)?, ImageView::packed(&rp, w, h)?);
     let maps = if decoders.len() > 1 {
         let r = usize::from(opts.readout.c2f_radius);
-        dem::c2f::stereo_c2f(&params, &decoders, &lv, &rv, r)?
+        let band = opts.readout.c2f_band.map(usize::from);
+        dem::c2f::stereo_c2f(&params, &decoders, &lv, &rv, r, band)?
     } else {
         dem::stereo(&params, decoder, &lv, &rv)?
     };

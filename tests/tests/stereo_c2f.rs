@@ -60,6 +60,7 @@ fn windows_restrict_the_decision_and_nothing_else() {
         let all = Windows {
             left: vec![Some((0, 15)); w * h],
             right: vec![Some((0, 15)); w * h],
+            band: None,
         };
         let full = stereo_planes_in(&params, &dec, vec![l.clone()], vec![r.clone()], Some(&all));
         assert_eq!(plain, full, "{aggregation:?}");
@@ -67,8 +68,15 @@ fn windows_restrict_the_decision_and_nothing_else() {
         let wrong = Windows {
             left: vec![Some((2, 5)); w * h],
             right: vec![Some((2, 5)); w * h],
+            band: None,
         };
-        let m = stereo_planes_in(&params, &dec, vec![l.clone()], vec![r.clone()], Some(&wrong));
+        let m = stereo_planes_in(
+            &params,
+            &dec,
+            vec![l.clone()],
+            vec![r.clone()],
+            Some(&wrong),
+        );
         // Where the border allows the whole window (x >= 5).
         let inside = m
             .left_raw
@@ -99,7 +107,10 @@ fn windowed_costs_are_normalised_over_the_window() {
     let bias = [0.0f32; 6];
     let plain = costs(&scores, &bias, |_| true, |_| 5);
     // Gaps to the best (6): 0 5 2 4 6 1, mean 3.
-    let want: Vec<f32> = [0.0, 5.0, 2.0, 4.0, 6.0, 1.0].iter().map(|g| g / 3.0).collect();
+    let want: Vec<f32> = [0.0, 5.0, 2.0, 4.0, 6.0, 1.0]
+        .iter()
+        .map(|g| g / 3.0)
+        .collect();
     let close = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
     assert!(close(&plain, &want), "{plain:?}");
     // Window 1..=3, border at 4: gaps in the window to its best (4): 3 0 2,
@@ -126,12 +137,18 @@ fn windows_come_from_the_parent_pixel() {
         off_ambiguous: 0,
         off_inconsistent: 0,
     };
-    let ws = windows_from(&coarse, 5, 2, 2);
+    let ws = windows_from(&coarse, 5, 2, 2, None);
     // x 0, 1 -> parent 0; x 2, 3 -> parent 1; x 4 -> parent 1 (clamped).
     let row = [Some((5, 9)), Some((5, 9)), None, None, None];
     assert_eq!(&ws.left[..5], &row);
     assert_eq!(&ws.left[5..], &row);
-    let rrow = [Some((0, 2)), Some((0, 2)), Some((12, 16)), Some((12, 16)), Some((12, 16))];
+    let rrow = [
+        Some((0, 2)),
+        Some((0, 2)),
+        Some((12, 16)),
+        Some((12, 16)),
+        Some((12, 16)),
+    ];
     assert_eq!(&ws.right[..5], &rrow);
     assert_eq!(level_max_disp(32, 1), 16);
     assert_eq!(level_max_disp(31, 2), 8);
@@ -139,11 +156,16 @@ fn windows_come_from_the_parent_pixel() {
 
 /// The random-dot anchor through one coarse level: every d of 0..=15 is
 /// found within 1 px on more than 95 % of the interior pixels (the spec's
-/// 5 % bound), with the box read-out and with SGM.
+/// 5 % bound), with the box read-out, with SGM, and with SGM decoding the
+/// fine level from the groups within 2 px of the window's centre.
 #[test]
 fn random_dots_bad1_below_5_percent_coarse_to_fine() {
     let (w, h) = (96, 64);
-    for aggregation in [dem::Aggregation::Box, sgm()] {
+    for (aggregation, band) in [
+        (dem::Aggregation::Box, None),
+        (sgm(), None),
+        (sgm(), Some(2)),
+    ] {
         let params = DemParams {
             aggregation,
             ..DemParams::default()
@@ -163,6 +185,7 @@ fn random_dots_bad1_below_5_percent_coarse_to_fine() {
                 &ImageView::packed(&lr, w, h).unwrap(),
                 &ImageView::packed(&rr, w, h).unwrap(),
                 2,
+                band,
             )
             .unwrap();
             for y in 16..h - 16 {
@@ -174,15 +197,15 @@ fn random_dots_bad1_below_5_percent_coarse_to_fine() {
             }
         }
         let pct = 100.0 * bad as f64 / n as f64;
-        eprintln!("RDS bad-1 coarse to fine, {aggregation:?}: {pct:.2} %");
-        assert!(pct < 5.0, "{aggregation:?}: {pct}");
+        eprintln!("RDS bad-1 coarse to fine, {aggregation:?}, band {band:?}: {pct:.2} %");
+        assert!(pct < 5.0, "{aggregation:?}, band {band:?}: {pct}");
     }
 }
 
 /// On Aloe, coarse to fine with SGM and CIELUV channels (docs/STEREO.md)
 /// stays below OpenCV SGBM's bad-2 over all GT pixels under our protocol
 /// (42.4 % at 160 px, 37.7 % at 320 px), searching 5 candidates at the
-/// fine levels.
+/// fine levels from the groups within 2 px of the window's centre.
 #[test]
 fn aloe_coarse_to_fine_sgm_beats_sgbm_over_all_pixels() {
     let dir = tempfile::tempdir().unwrap();
@@ -209,6 +232,7 @@ fn aloe_coarse_to_fine_sgm_beats_sgbm_over_all_pixels() {
                 paths: 5,
                 c2f: 2,
                 c2f_radius: 2,
+                c2f_band: Some(2),
                 ..ReadoutOptions::default()
             },
             json: true,
@@ -220,4 +244,56 @@ fn aloe_coarse_to_fine_sgm_beats_sgbm_over_all_pixels() {
         println!("{width} px: bad-2 all {all}");
         assert!(all < sgbm, "{width}: {all} vs {sgbm}");
     }
+}
+
+/// A pixel with a window is decoded from the groups whose shift is within
+/// `band` px of the window's centre: window 6..=10 (centre 8), band 2,
+/// shifts 6, 8, 10 of 3 carriers = 9 groups; a pixel without a window
+/// from all 3 x 8 groups (shifts 0, 2, .., 14, one level). A band wider
+/// than the range gives the unbanded left-referenced argmax.
+#[test]
+fn the_band_selects_the_groups_near_the_window() {
+    use protogist_host::reference::stereo::{filters, readout};
+    let dec_params = DemParams {
+        levels: 1,
+        ..DemParams::default()
+    };
+    let dec = decoder_for(&dec_params, None).unwrap();
+    let (w, h, d) = (48, 24, 8usize);
+    let (l, r) = random_dot_pair(w, h, d, 0xba4d);
+    let (ml, mr) = (
+        filters::monocular_planes(&dec_params, vec![l.clone()]),
+        filters::monocular_planes(&dec_params, vec![r.clone()]),
+    );
+    let mut ws = Windows {
+        left: vec![Some((6, 10)); w * h],
+        right: vec![None; w * h],
+        band: Some(2),
+    };
+    let (_, _, [vl, vr]) = readout::scores_banded(&dec_params, &dec, &ml, &mr, w, h, &ws, 2);
+    // Left pixel x >= 14 has every shift's cell; right pixel x < w − 14 too.
+    assert_eq!(vl[10 * w + 30], 9.0);
+    assert_eq!(vr[10 * w + 20], 24.0);
+    // Band 64: the same decision as without a band (float order aside).
+    ws.band = Some(64);
+    let wide = stereo_planes_in(
+        &dec_params,
+        &dec,
+        vec![l.clone()],
+        vec![r.clone()],
+        Some(&ws),
+    );
+    ws.band = None;
+    let plain = stereo_planes_in(&dec_params, &dec, vec![l], vec![r], Some(&ws));
+    let same = wide
+        .left_raw
+        .iter()
+        .zip(&plain.left_raw)
+        .filter(|(a, b)| match (a, b) {
+            (Some(a), Some(b)) => (a - b).abs() <= 0.01,
+            (None, None) => true,
+            _ => false,
+        })
+        .count();
+    assert!(same * 100 >= 99 * w * h, "{same} of {}", w * h);
 }

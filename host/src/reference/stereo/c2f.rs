@@ -80,7 +80,13 @@ pub fn level_max_disp(max_disp: u8, k: usize) -> u8 {
 
 /// The fine windows `2·d_c ± radius` from a coarse level's raw argmax maps
 /// (`wc x hc`) for a `w x h` level.
-pub fn windows_from(coarse: &DisparityMapsF, w: usize, h: usize, radius: usize) -> Windows {
+pub fn windows_from(
+    coarse: &DisparityMapsF,
+    w: usize,
+    h: usize,
+    radius: usize,
+    band: Option<usize>,
+) -> Windows {
     let (wc, hc) = (coarse.width, coarse.height);
     let map = |raw: &[Option<f32>]| -> Vec<Option<(usize, usize)>> {
         (0..w * h)
@@ -97,12 +103,15 @@ pub fn windows_from(coarse: &DisparityMapsF, w: usize, h: usize, radius: usize) 
     Windows {
         left: map(&coarse.left_raw),
         right: map(&coarse.right_raw),
+        band,
     }
 }
 
 /// Runs the stage coarse to fine: `decoders[k]` is level `k`'s decoder
 /// (`decoders[0]` for `params`, then `⌈D / 2^k⌉`), so `decoders.len() − 1`
-/// coarse levels; `radius` is the fine window's half width.
+/// coarse levels; `radius` is the fine window's half width, and `band`
+/// (optional) limits a windowed pixel's decode to the groups whose shift is
+/// within `band` px of its window's centre.
 ///
 /// # Errors
 /// [`StereoError`] as [`super::stereo`], for the full-size pair and for
@@ -113,6 +122,7 @@ pub fn stereo_c2f(
     left: &ImageView<'_, Rgb8>,
     right: &ImageView<'_, Rgb8>,
     radius: usize,
+    band: Option<usize>,
 ) -> Result<DisparityMapsF, StereoError> {
     let Some(fine) = decoders.first() else {
         return Err(StereoError::BadParams("no decoder"));
@@ -138,7 +148,7 @@ pub fn stereo_c2f(
         };
         let windows = prior
             .as_ref()
-            .map(|c| windows_from(c, l.width, l.height, radius));
+            .map(|c| windows_from(c, l.width, l.height, radius, band));
         let (lv, rv) = (l.view(), r.view());
         let maps = stereo_planes_in(
             &p,

@@ -340,6 +340,10 @@ pub struct Windows {
     pub left: Vec<Option<(usize, usize)>>,
     /// Right-referenced windows, row-major.
     pub right: Vec<Option<(usize, usize)>>,
+    /// Decode a pixel with a window only from the groups whose shift is
+    /// within this many px of the window's centre
+    /// ([`readout::scores_banded`]; `None`: every group).
+    pub band: Option<usize>,
 }
 
 /// [`stereo_planes`] with the candidates of each pixel restricted to its
@@ -358,12 +362,30 @@ pub fn stereo_planes_in(
         filters::monocular_planes(params, left),
         filters::monocular_planes(params, right),
     );
-    let (mut sl, mut sr) = readout::scores(params, decoder, &ml, &mr, w, h);
     let r = usize::from(params.pool_radius);
-    let count = readout::pool(&mut sl, r);
-    readout::pool(&mut sr, r);
+    let all_groups = decoder.layout.groups() as f32;
+    // Scores, box counts, and the groups voting per pixel of each map.
+    let (sl, sr, count, [gl, gr]) = match windows.and_then(|ws| ws.band.map(|b| (ws, b))) {
+        Some((ws, band)) => {
+            let (sl, sr, voters) =
+                readout::scores_banded(params, decoder, &ml, &mr, w, h, ws, band);
+            let mut count = vec![1.0f32; w * h];
+            readout::box_sum(&mut count, w, h, 1, r);
+            (sl, sr, count, voters)
+        }
+        None => {
+            let (mut sl, mut sr) = readout::scores(params, decoder, &ml, &mr, w, h);
+            let count = readout::pool(&mut sl, r);
+            readout::pool(&mut sr, r);
+            (
+                sl,
+                sr,
+                count,
+                [vec![all_groups; w * h], vec![all_groups; w * h]],
+            )
+        }
+    };
     let n = decoder.disparities();
-    let cells = 4.0 * decoder.layout.groups() as f32;
     // Margins with SGM are per path, in units of a pixel's mean cost gap.
     let per_path = match params.aggregation {
         Aggregation::Sgm { paths, .. } => sgm::directions(paths).map_or(1, <[_]>::len) as f32,
@@ -371,7 +393,8 @@ pub fn stereo_planes_in(
     };
     let picks = |s: &readout::Scores,
                  top: &dyn Fn(usize) -> usize,
-                 win: &[Option<(usize, usize)>]|
+                 win: &[Option<(usize, usize)>],
+                 voters: &[f32]|
      -> Vec<Option<readout::Pick>> {
         let window = |p: usize| win.get(p).copied().flatten();
         // The decision window: `lo..=hi` within `0..=top`.
@@ -384,13 +407,13 @@ pub fn stereo_planes_in(
                 .map(|p| {
                     let (raw, total) = (&s.raw[p * n..(p + 1) * n], s.total[p]);
                     let (lo, hi) = range(p);
-                    (total > 0.0).then(|| {
-                        readout::pick_in(lo, hi, |d| raw[d] / total - decoder.bias[d])
-                    })
+                    (total > 0.0)
+                        .then(|| readout::pick_in(lo, hi, |d| raw[d] / total - decoder.bias[d]))
                 })
                 .collect(),
             Aggregation::Sgm { p1, p2, paths } => {
-                let evidence = |p: usize| s.total[p] >= params.min_energy * cells * count[p];
+                let evidence =
+                    |p: usize| s.total[p] >= params.min_energy * 4.0 * voters[p] * count[p];
                 let cost = sgm::costs_in(s, &decoder.bias, evidence, top, window);
                 let sum = sgm::aggregate(&cost, w, h, n, paths, p1, p2);
                 (0..w * h)
@@ -411,8 +434,8 @@ pub fn stereo_planes_in(
     let none = Vec::new();
     let (wl, wr) = windows.map_or((&none, &none), |ws| (&ws.left, &ws.right));
     let (left_picks, right_picks) = (
-        picks(&sl, &|p| p % w, wl),
-        picks(&sr, &|p| w - 1 - p % w, wr),
+        picks(&sl, &|p| p % w, wl, &gl),
+        picks(&sr, &|p| w - 1 - p % w, wr, &gr),
     );
     let right_raw: Vec<Option<f32>> = right_picks.iter().map(|k| k.map(|k| k.disparity)).collect();
     let mut out = DisparityMapsF {
@@ -427,7 +450,7 @@ pub fn stereo_planes_in(
         off_inconsistent: 0,
     };
     for (p, pick) in left_picks.iter().enumerate() {
-        let energy = sl.total[p] / (cells * count[p]);
+        let energy = sl.total[p] / (4.0 * gl[p] * count[p]);
         let Some(pick) = pick.filter(|_| energy >= params.min_energy && energy > 0.0) else {
             out.off_texture += 1;
             continue;

@@ -80,6 +80,79 @@ pub fn scores(
     (sl, sr)
 }
 
+/// Scores for the coarse-to-fine experiment ([`super::c2f`]): each
+/// group's energies are box pooled (radius `r`, cells at `x < shift`
+/// contributing nothing, as in [`scores`]), and a pixel with a window
+/// `lo..=hi` is decoded only from the groups whose shift lies within
+/// `band` px of the window's centre `(lo + hi) / 2` (a pixel without a
+/// window: every group), as an engine that computes only those groups
+/// would. The scores come out already pooled; also returned, per pixel of
+/// each map, the number of groups that voted (for the texture test). Up to
+/// the clipping of the box at the right border, `band` ≥ `max_disp` gives
+/// [`scores`] followed by [`pool`].
+#[allow(clippy::too_many_arguments)]
+pub fn scores_banded(
+    params: &DemParams,
+    decoder: &Decoder,
+    left: &[Vec<Response>],
+    right: &[Vec<Response>],
+    width: usize,
+    height: usize,
+    windows: &super::Windows,
+    band: usize,
+) -> (Scores, Scores, [Vec<f32>; 2]) {
+    let n = decoder.disparities();
+    let (mut sl, mut sr) = (Scores::new(width, height, n), Scores::new(width, height, n));
+    let mut voters = [vec![0.0f32; width * height], vec![0.0f32; width * height]];
+    let mut vote = vec![0.0f32; n];
+    let r = usize::from(params.pool_radius);
+    let near = |win: &[Option<(usize, usize)>], p: usize, shift: usize| {
+        win.get(p)
+            .copied()
+            .flatten()
+            .is_none_or(|(lo, hi)| (shift as f32 - 0.5 * (lo + hi) as f32).abs() <= band as f32)
+    };
+    for (gi, g) in groups(params).iter().enumerate() {
+        let e = energies(left, right, g, width, height);
+        let mut flat: Vec<f32> = Vec::with_capacity(3 * width * height);
+        for (i, v) in e.iter().enumerate() {
+            let keep = i % width >= g.shift;
+            flat.extend(v.iter().map(|&c| if keep { c } else { 0.0 }));
+        }
+        box_sum(&mut flat, width, height, 3, r);
+        let w = decoder.group(gi);
+        for y in 0..height {
+            // Pooled energies reach left pixels x < shift too (from their
+            // box neighbours), right pixels only through x ≥ shift.
+            for x in 0..width {
+                let pl = y * width + x;
+                let pr = (y * width + x).wrapping_sub(g.shift);
+                let (a, xr, xi) = (flat[3 * pl], flat[3 * pl + 1], flat[3 * pl + 2]);
+                let (in_l, in_r) = (
+                    near(&windows.left, pl, g.shift),
+                    x >= g.shift && near(&windows.right, pr, g.shift),
+                );
+                if !(in_l || in_r) {
+                    continue;
+                }
+                for (v, abc) in vote.iter_mut().zip(w) {
+                    *v = a * abc[0] + xr * abc[1] + xi * abc[2];
+                }
+                for (on, s, p, k) in [(in_l, &mut sl, pl, 0), (in_r, &mut sr, pr, 1)] {
+                    if on {
+                        s.total[p] += 4.0 * a;
+                        voters[k][p] += 1.0;
+                        for (dst, v) in s.raw[p * n..(p + 1) * n].iter_mut().zip(&vote) {
+                            *dst += v;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    (sl, sr, voters)
+}
+
 /// Box sums over `(2r + 1)²` windows clipped to the image, of `k`
 /// interleaved channels per pixel, in place (separable running sums).
 pub fn box_sum(data: &mut [f32], width: usize, height: usize, k: usize, r: usize) {
