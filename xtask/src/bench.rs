@@ -400,7 +400,9 @@ fn dem_aloe() -> Section {
          (5 one-pass paths, P1 0.25, P2 16; an f32-reference experiment, not yet in core: \
          docs/STEREO.md, section Semi-global aggregation). The `--colour luv` rows add colour \
          channels, 8 paths and the settings named, chosen on Aloe itself (no held-out pair): \
-         docs/STEREO.md, section SGM with colour channels.\n\n\
+         docs/STEREO.md, section SGM with colour channels. The `--c2f` rows search coarse to \
+         fine (5 candidates from the groups near them at the fine levels; the ms still score \
+         every candidate): docs/STEREO.md, section Coarse-to-fine with SGM.\n\n\
          | width | D | options | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
          |---|---|---|---|---|---|---|---|\n",
     );
@@ -425,7 +427,28 @@ fn dem_aloe() -> Section {
         .chain(["--pool", "0", "--p2", "4"])
         .collect();
     let c320: Vec<&str> = COMBINED.iter().copied().chain(["--pool", "1"]).collect();
-    let rows: [(&str, &str, &[&str]); 14] = [
+    // Coarse to fine with SGM (docs/STEREO.md "Coarse-to-fine with SGM").
+    const C2F: [&str; 17] = [
+        "--levels",
+        "1",
+        "--sgm",
+        "--colour",
+        "luv",
+        "--chroma-weight",
+        "2",
+        "--paths",
+        "5",
+        "--pool",
+        "1",
+        "--c2f",
+        "2",
+        "--c2f-band",
+        "2",
+        "--min-margin",
+        "1.4",
+    ];
+    let c2f_plain = &C2F[..15];
+    let rows: [(&str, &str, &[&str]); 18] = [
         ("160", "32", &[]),
         ("160", "32", &["--refine", "1"]),
         ("160", "32", &["--complete"]),
@@ -433,6 +456,8 @@ fn dem_aloe() -> Section {
         ("160", "32", &["--levels", "1", "--sgm", "--complete"]),
         ("160", "32", &c160),
         ("160", "32", &c320),
+        ("160", "32", c2f_plain),
+        ("160", "32", &C2F),
         ("320", "64", &[]),
         ("320", "64", &["--refine", "1"]),
         ("320", "64", &["--complete"]),
@@ -440,6 +465,8 @@ fn dem_aloe() -> Section {
         ("320", "64", &["--levels", "1", "--sgm", "--complete"]),
         ("320", "64", &c320),
         ("320", "64", &c160),
+        ("320", "64", c2f_plain),
+        ("320", "64", &C2F),
     ];
     for (w, d, extra) in rows {
         let out_dir = root().join("target/bench-stereo");
