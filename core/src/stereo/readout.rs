@@ -12,7 +12,7 @@
 //! every `d`), where `raw'`, `T'` are `raw`, `T` shifted right together
 //! until `T' < 2^30` (block floating point per pixel), so `|n| < 2^61`.
 
-use super::filters::{level_size, pyramid_row, x_pass, y_pass, Z};
+use super::filters::{level_size, pyramid_row, Bank, MAX_TAPS, Z};
 use super::MAX_LEVELS;
 use super::{
     Dem, DemTable, GreyRows, Probe, Step, StereoBuffers, StereoError, StereoReport, CHUNK,
@@ -141,22 +141,29 @@ struct Eye<'a> {
     z: [&'a mut [Z]; MAX_LEVELS],
 }
 
-impl Eye<'_> {
-    /// Grey row `j` of `level` (level 0: from the ring, which must hold it).
-    fn grey(&self, level: usize, j: usize, w: usize, ring_rows: usize) -> &[u16] {
-        let (buf, lw, row) = if level == 0 {
-            (&*self.ring, w, j % ring_rows)
-        } else {
-            let p = self.planes.get(level).map_or(&[][..], |p| &**p);
-            (p, level_size(w, level), j)
-        };
-        buf.get(row * lw..(row + 1) * lw).unwrap_or(&[])
-    }
+/// Grey row `j` of `level` of an eye's `ring` and `planes` (level 0: from
+/// the ring, which must hold it).
+fn grey_of<'g>(
+    ring: &'g [u16],
+    planes: &'g [&mut [u16]; MAX_LEVELS],
+    level: usize,
+    j: usize,
+    w: usize,
+    ring_rows: usize,
+) -> &'g [u16] {
+    let (buf, lw, row) = if level == 0 {
+        (ring, w, j % ring_rows)
+    } else {
+        let p = planes.get(level).map_or(&[][..], |p| &**p);
+        (p, level_size(w, level), j)
+    };
+    buf.get(row * lw..(row + 1) * lw).unwrap_or(&[])
 }
 
 /// The row-streaming state.
 struct Engine<'d, 'a> {
     dem: &'d Dem,
+    bank: Bank<'d>,
     w: usize,
     h: usize,
     levels: usize,
@@ -244,8 +251,10 @@ pub(super) fn run<S: GreyRows>(
     let pooled = take(&mut scores, n + 1, "scores")?;
     let mut picks = &mut *bufs.picks;
     let picks = take(&mut picks, 2 * w, "picks")?;
+    let kernels = dem.kernels.get(..carriers).unwrap_or(&[]);
     let mut e = Engine {
         dem,
+        bank: Bank::new(kernels),
         w,
         h,
         levels,
@@ -347,23 +356,18 @@ impl Engine<'_, '_> {
                 self.load_grey(rgb, row + usize::from(self.dem.params.radius));
                 probe.enter(Step::Filters);
             }
+            let taps = self.bank.taps();
             for eye in &mut self.eyes {
-                for c in 0..self.carriers {
-                    let Some(g) = self.dem.kernel(c) else {
-                        continue;
-                    };
-                    let r = g.radius();
-                    let rows = (0..g.taps).map(|t| {
-                        let src = (row + t).saturating_sub(r).min(lh - 1);
-                        eye.grey(level, src, self.w, self.ring_rows)
-                    });
-                    let col = self.col.get_mut(..lw).unwrap_or(&mut []);
-                    y_pass(g, rows, col);
-                    let slot = row % zrows;
-                    let off = (slot * self.carriers + c) * lw;
-                    if let Some(dst) = eye.z.get_mut(level).and_then(|z| z.get_mut(off..off + lw)) {
-                        x_pass(g, col, dst);
-                    }
+                let mut rows: [&[u16]; MAX_TAPS] = [&[]; MAX_TAPS];
+                for (t, dst) in rows.iter_mut().enumerate().take(taps) {
+                    let src = (row + t).saturating_sub(taps / 2).min(lh - 1);
+                    *dst = grey_of(eye.ring, &eye.planes, level, src, self.w, self.ring_rows);
+                }
+                let col = self.col.get_mut(..lw).unwrap_or(&mut []);
+                let n = self.carriers * lw;
+                let off = (row % zrows) * n;
+                if let Some(dst) = eye.z.get_mut(level).and_then(|z| z.get_mut(off..off + n)) {
+                    self.bank.row(rows.get(..taps).unwrap_or(&[]), col, dst);
                 }
             }
         }
