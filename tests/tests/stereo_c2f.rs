@@ -297,3 +297,42 @@ fn the_band_selects_the_groups_near_the_window() {
         .count();
     assert!(same * 100 >= 99 * w * h, "{same} of {}", w * h);
 }
+
+/// Bad input to the coarse-to-fine driver is a typed error: no decoder, a
+/// coarse level below the filter support, a coarse decoder of another
+/// `max_disp`.
+#[test]
+fn coarse_to_fine_bad_input_is_a_typed_error() {
+    use protogist_host::reference::stereo::StereoError;
+    let params = DemParams::default();
+    let fine = default_decoder();
+    let (w, h) = (40, 40);
+    let img = vec![Rgb8::new(9, 9, 9); w * h];
+    let v = ImageView::packed(&img, w, h).unwrap();
+    assert!(matches!(
+        stereo_c2f(&params, &[], &v, &v, 2, None),
+        Err(StereoError::BadParams(_))
+    ));
+    // 40 -> 20 -> 10 px: below the support of the default filters.
+    let coarse = |k| DemParams {
+        max_disp: level_max_disp(params.max_disp, k),
+        ..params
+    };
+    let decs = [
+        fine.clone(),
+        decoder_for(&coarse(1), None).unwrap(),
+        decoder_for(&coarse(2), None).unwrap(),
+    ];
+    assert!(matches!(
+        stereo_c2f(&params, &decs, &v, &v, 2, None),
+        Err(StereoError::TooSmall { .. })
+    ));
+    // The fine decoder where the coarse one belongs.
+    let (w, h) = (96, 64);
+    let img = vec![Rgb8::new(9, 9, 9); w * h];
+    let v = ImageView::packed(&img, w, h).unwrap();
+    assert!(matches!(
+        stereo_c2f(&params, &[fine.clone(), fine], &v, &v, 2, None),
+        Err(StereoError::DecoderMismatch { .. })
+    ));
+}
