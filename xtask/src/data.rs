@@ -1,4 +1,8 @@
-//! `fetch-data`: the aloe stereo pair from Debian's opencv-doc package.
+//! `fetch-data`: the aloe stereo pair from Debian's opencv-doc package, and
+//! the Middlebury 2014 Motorcycle pair from scikit-image's wheel on PyPI
+//! ([`motorcycle`]).
+
+mod motorcycle;
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -16,22 +20,32 @@ const FILES: [(&str, &[u8]); 3] = [
     ("aloeGT.png", PNG),
 ];
 
-/// `<data root>/aloe`, where the data root is `$PROTOGIST_DATA`, else
-/// `<workspace>/.cache/data` (the same rule as the tests' `data_dir`).
-pub fn data_dir() -> PathBuf {
+/// The data root: `$PROTOGIST_DATA`, else `<workspace>/.cache/data` (the
+/// same rule as the tests' `data_dir`).
+pub fn data_root() -> PathBuf {
     std::env::var_os("PROTOGIST_DATA")
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)
         .unwrap_or_else(|| root().join(".cache/data"))
-        .join("aloe")
+}
+
+/// `<data root>/aloe`.
+pub fn data_dir() -> PathBuf {
+    data_root().join("aloe")
 }
 
 fn valid(path: &Path, magic: &[u8]) -> bool {
     fs::read(path).is_ok_and(|b| b.len() > magic.len() && b.starts_with(magic))
 }
 
-/// Ensures the files are in the cache; returns the directory.
+/// Ensures both pairs are in the cache; returns the aloe directory.
 pub fn fetch() -> Result<PathBuf> {
+    let aloe = fetch_aloe()?;
+    motorcycle::fetch(data_root().join("motorcycle"))?;
+    Ok(aloe)
+}
+
+fn fetch_aloe() -> Result<PathBuf> {
     let dir = data_dir();
     if FILES
         .iter()
