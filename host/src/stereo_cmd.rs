@@ -336,6 +336,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     let (lp, rp, gt_small) = (pair.left, pair.right, pair.gt);
     let (w, h) = (pair.width, pair.height);
     let params = preset::params_for(opts, w)?;
+    let complete = preset::complete(opts);
     params.check()?;
     // Size checks first: training for a hopeless size is wasted time.
     if usize::from(params.max_disp) >= w {
@@ -416,7 +417,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     });
     let model_f32 = maps.disparity_f32.clone();
     let mut final_f32 = maps.disparity_f32;
-    if opts.complete {
+    if complete {
         let t = Instant::now();
         let edges = crate::stages::run_conspicuity(
             &protogist::conspicuity::LuvTables::new(),
@@ -462,7 +463,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         panels.push(Panel::new("error", error_panel(&final_f32, &gt)));
         json["gt_max_disp"] = serde_json::json!(gmax);
         json["final"] = metrics_json(&m);
-        if opts.complete {
+        if complete {
             let before = metrics(&model_f32, &gt.data);
             push_metrics(&mut s, "model (before completion)", &before);
             json["model"] = metrics_json(&before);

@@ -87,6 +87,28 @@ pub fn data_file(rel: &str) -> Option<PathBuf> {
     None
 }
 
+/// A stereo pair with ground truth: `(left, right, GT)`.
+pub type PairFiles = (PathBuf, PathBuf, PathBuf);
+
+/// Middlebury Aloe (`<data root>/aloe/`), as [`data_file`] finds it.
+pub fn aloe_files() -> Option<PairFiles> {
+    Some((
+        data_file("aloe/aloeL.jpg")?,
+        data_file("aloe/aloeR.jpg")?,
+        data_file("aloe/aloeGT.png")?,
+    ))
+}
+
+/// Middlebury 2014 Motorcycle (`<data root>/motorcycle/`, scikit-image's
+/// copy: 741x500, GT a float32 npz in px), as [`data_file`] finds it.
+pub fn motorcycle_files() -> Option<PairFiles> {
+    Some((
+        data_file("motorcycle/motorcycle_left.png")?,
+        data_file("motorcycle/motorcycle_right.png")?,
+        data_file("motorcycle/motorcycle_disp.npz")?,
+    ))
+}
+
 /// A binary mask (0 or 255), tightly packed.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MaskCase {

@@ -171,8 +171,14 @@ mod tests {
             ("c.npy", f32_f),
             ("d.npz", npz(&[("arr_0.npy", f32_c.clone())])),
             // arr_0 wins over an earlier member; else the first array.
-            ("e.npz", npz(&[("x.npy", other), ("arr_0.npy", f64_c.clone())])),
-            ("f.npz", npz(&[("readme.txt", b"hi".to_vec()), ("disp.npy", f32_c)])),
+            (
+                "e.npz",
+                npz(&[("x.npy", other), ("arr_0.npy", f64_c.clone())]),
+            ),
+            (
+                "f.npz",
+                npz(&[("readme.txt", b"hi".to_vec()), ("disp.npy", f32_c)]),
+            ),
         ];
         for (name, bytes) in cases {
             let g = load(d, name, &bytes).unwrap();
@@ -211,7 +217,11 @@ mod tests {
         let d = dir.path();
         let ints = reason(load(d, "i.npy", &npy(&[2, 3], Order::C, &[1i32; 6])));
         assert!(ints.contains("not float32"), "{ints}");
-        let half = reason(load(d, "u.npz", &npz(&[("arr_0.npy", npy(&[2], Order::C, &[1u16; 2]))])));
+        let half = reason(load(
+            d,
+            "u.npz",
+            &npz(&[("arr_0.npy", npy(&[2], Order::C, &[1u16; 2]))]),
+        ));
         assert!(half.contains("not float32"), "{half}");
         for shape in [&[6u64][..], &[1, 2, 3], &[0, 3]] {
             let n = shape.iter().product::<u64>() as usize;
@@ -235,7 +245,14 @@ mod tests {
         std::fs::write(&bad, npz(&[("arr_0.npy", npy(&[3, 2], Order::C, &VALUES))])).unwrap();
         let err = crate::stereo_cmd::load_pair(&img, &img, Some(&bad), 1.0, 3).unwrap_err();
         assert!(
-            matches!(err, HostError::GroundTruthSize { got: (2, 3), expected: (3, 2), .. }),
+            matches!(
+                err,
+                HostError::GroundTruthSize {
+                    got: (2, 3),
+                    expected: (3, 2),
+                    ..
+                }
+            ),
             "{err:?}"
         );
     }

@@ -27,22 +27,23 @@ impl Preset {
 }
 
 /// The options of `--preset held-out`, as on the command line.
-pub const HELD_OUT_OPTIONS: &str =
-    "--levels 1 --sgm --paths 8 --colour luv --chroma-weight 2 --pool 1 --p2 16";
+pub const HELD_OUT_OPTIONS: &str = "--levels 1 --sgm --colour luv --chroma-weight 2 --paths 8 \
+     --pool 2 --p2 4 --p2-ref-width 160 --complete";
 
 /// `--preset held-out`, the same as [`HELD_OUT_OPTIONS`].
 pub const HELD_OUT: Settings = Settings {
     levels: Some(1),
-    pool: Some(1),
+    pool: Some(2),
     colour: Some(Colour::Luv),
     chroma_weight: Some(2.0),
     sgm: true,
     p1: None,
-    p2: Some(16.0),
+    p2: Some(4.0),
     paths: Some(8),
-    p2_ref_width: None,
+    p2_ref_width: Some(160),
     min_margin: None,
     lr: None,
+    complete: true,
 };
 
 /// Read-out settings that may be left unset (`None`: not given).
@@ -70,6 +71,8 @@ pub struct Settings {
     pub min_margin: Option<f32>,
     /// Left-right tolerance.
     pub lr: Option<f32>,
+    /// Complete the map over the conspicuity regions.
+    pub complete: bool,
 }
 
 impl Settings {
@@ -87,6 +90,7 @@ impl Settings {
             p2_ref_width: self.p2_ref_width.or(fallback.p2_ref_width),
             min_margin: self.min_margin.or(fallback.min_margin),
             lr: self.lr.or(fallback.lr),
+            complete: self.complete || fallback.complete,
         }
     }
 }
@@ -106,7 +110,24 @@ fn explicit(opts: &StereoOptions) -> Settings {
         p2_ref_width: r.p2_ref_width,
         min_margin: r.min_margin,
         lr: r.lr,
+        complete: opts.complete,
     }
+}
+
+/// The settings in force: explicit options, then the preset's.
+fn settings(opts: &StereoOptions) -> Settings {
+    let preset = opts
+        .readout
+        .preset
+        .map(Preset::settings)
+        .unwrap_or_default();
+    explicit(opts).or(preset)
+}
+
+/// Whether `protogist stereo` completes the map (`--complete` or the
+/// preset's).
+pub fn complete(opts: &StereoOptions) -> bool {
+    settings(opts).complete
 }
 
 /// The parameters of `protogist stereo` at working width `width`: explicit
@@ -116,8 +137,7 @@ fn explicit(opts: &StereoOptions) -> Settings {
 /// [`HostError::InvalidArgument`] for SGM options without SGM, or a zero
 /// reference width.
 pub fn params_for(opts: &StereoOptions, width: usize) -> Result<DemParams> {
-    let preset = opts.readout.preset.map(Preset::settings).unwrap_or_default();
-    let s = explicit(opts).or(preset);
+    let s = settings(opts);
     let mut params = DemParams {
         max_disp: opts.max_disp,
         ..DemParams::default()
@@ -177,4 +197,86 @@ pub fn params_for(opts: &StereoOptions, width: usize) -> Result<DemParams> {
         }
     }
     Ok(params)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::{Cli, Command};
+    use clap::Parser;
+
+    fn parse(extra: &str) -> StereoOptions {
+        let base = "protogist stereo --left l.png --right r.png --out o --max-disp 32";
+        let args: Vec<&str> = base
+            .split_whitespace()
+            .chain(extra.split_whitespace())
+            .collect();
+        match Cli::try_parse_from(args).unwrap().command {
+            Some(Command::Stereo(o)) => o,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn no_options_give_the_default_parameters() {
+        let o = parse("");
+        let expected = DemParams {
+            max_disp: 32,
+            ..DemParams::default()
+        };
+        for w in [160, 320] {
+            assert_eq!(params_for(&o, w).unwrap(), expected);
+        }
+        assert!(!complete(&o));
+    }
+
+    #[test]
+    fn the_preset_is_its_options_and_explicit_options_override_it() {
+        let (preset, spelled) = (parse("--preset held-out"), parse(HELD_OUT_OPTIONS));
+        for w in [160, 320] {
+            assert_eq!(
+                params_for(&preset, w).unwrap(),
+                params_for(&spelled, w).unwrap()
+            );
+        }
+        assert!(complete(&preset));
+        let p = params_for(&preset, 320).unwrap();
+        assert_eq!((p.levels, p.pool_radius, p.colour), (1, 2, Colour::Luv));
+        // P2 4 at 160 px, scaled with the width.
+        assert_eq!(
+            p.aggregation,
+            Aggregation::Sgm {
+                p1: SGM_P1,
+                p2: 8.0,
+                paths: 8
+            }
+        );
+        let o = parse("--preset held-out --pool 0 --colour grey --p2 16 --paths 5");
+        let q = params_for(&o, 160).unwrap();
+        assert_eq!((q.levels, q.pool_radius, q.colour), (1, 0, Colour::Grey));
+        assert_eq!(
+            q.aggregation,
+            Aggregation::Sgm {
+                p1: SGM_P1,
+                p2: 16.0,
+                paths: 5
+            }
+        );
+    }
+
+    #[test]
+    fn sgm_options_without_sgm_are_typed_errors() {
+        for extra in ["--p1 1", "--p2 4", "--paths 8", "--p2-ref-width 160"] {
+            let e = params_for(&parse(extra), 160).unwrap_err();
+            assert!(
+                matches!(e, HostError::InvalidArgument { .. }),
+                "{extra}: {e}"
+            );
+        }
+        let e = params_for(&parse("--sgm --p2-ref-width 0"), 160).unwrap_err();
+        assert!(matches!(e, HostError::InvalidArgument { .. }), "{e}");
+        // Without a reference width P2 is as given at every width.
+        let p = params_for(&parse("--sgm --p2 4"), 320).unwrap();
+        assert!(matches!(p.aggregation, Aggregation::Sgm { p2, .. } if p2 == 4.0));
+    }
 }

@@ -1,0 +1,69 @@
+//! `protogist stereo --preset held-out`: the setting chosen on the held-out
+//! Motorcycle pair (docs/STEREO.md, "Settings chosen on a held-out pair"),
+//! pinned against the targets it meets. Skipped without the data unless
+//! `PROTOGIST_REQUIRE_DATA` is set (as in CI).
+
+use protogist_host::stereo_cmd::{run_stereo, Preset, ReadoutOptions, StereoOptions};
+use protogist_tests::{aloe_files, motorcycle_files, PairFiles};
+use std::path::Path;
+
+/// bad-2 % (over estimated pixels, over all GT pixels) of `protogist stereo
+/// --refine 0 --preset held-out` at `width` and `max_disp`.
+fn held_out(files: PairFiles, width: u32, max_disp: u8, out: &Path) -> (f64, f64) {
+    let (left, right, gt) = files;
+    let opts = StereoOptions {
+        left,
+        right,
+        gt: Some(gt),
+        gt_scale: 1.0,
+        width,
+        max_disp,
+        pool: None,
+        levels: None,
+        table: None,
+        refine: Some(0),
+        colour: None,
+        chroma_weight: None,
+        complete: false,
+        readout: ReadoutOptions {
+            preset: Some(Preset::HeldOut),
+            ..ReadoutOptions::default()
+        },
+        json: true,
+        out: out.to_path_buf(),
+    };
+    let s = run_stereo(&opts).unwrap();
+    let v: serde_json::Value = serde_json::from_str(s.raw.as_deref().unwrap()).unwrap();
+    let get = |k: &str| v["final"][k].as_f64().unwrap();
+    (get("bad2_estimated"), get("bad2_all"))
+}
+
+/// The target met on Aloe: bad-2 over all GT pixels no worse than
+/// OpenCV SGBM under the same protocol (42.4 % at 160 px, D 32; 37.7 % at
+/// 320 px, D 64; docs/BENCHMARKS.md). The other target, ≤ 10 % over
+/// estimated pixels, is not met (docs/STEREO.md) and not pinned.
+#[test]
+fn held_out_setting_beats_sgbm_over_all_gt_pixels_on_aloe() {
+    let dir = tempfile::tempdir().unwrap();
+    for (width, max_disp, sgbm) in [(160, 32, 42.4), (320, 64, 37.7)] {
+        let Some(files) = aloe_files() else { return };
+        let (est, all) = held_out(files, width, max_disp, dir.path());
+        eprintln!("Aloe {width}/D{max_disp} held-out: bad-2 est {est:.1} %, all {all:.1} %");
+        assert!(all <= sgbm, "{width}: {all} > SGBM {sgbm}");
+    }
+}
+
+/// On the pair it was chosen on, at 160 px the same target holds against
+/// SGBM there (35.0 %, block 3, `scripts/opencv_baseline.py --pair
+/// motorcycle`); at 320 px it does not (docs/STEREO.md), so only 160 px is
+/// pinned.
+#[test]
+fn held_out_setting_beats_sgbm_over_all_gt_pixels_on_motorcycle_at_160() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(files) = motorcycle_files() else {
+        return;
+    };
+    let (est, all) = held_out(files, 160, 32, dir.path());
+    eprintln!("Motorcycle 160/D32 held-out: bad-2 est {est:.1} %, all {all:.1} %");
+    assert!(all <= 35.0, "{all}");
+}
