@@ -385,6 +385,9 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             ),
         );
     }
+    if let Some(p) = opts.readout.preset {
+        s.push("preset", p.options());
+    }
     let n = (w * h) as f64;
     s.push("decoder ms", format!("{train_ms:.1}"));
     s.push("stereo ms", format!("{run_ms:.1}"));
@@ -415,6 +418,9 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         "on_fraction": on as f64 / n,
         "stereo_ms": run_ms,
     });
+    if let Some(p) = opts.readout.preset {
+        json["preset_options"] = serde_json::json!(p.options());
+    }
     let model_f32 = maps.disparity_f32.clone();
     let mut final_f32 = maps.disparity_f32;
     if complete {

@@ -24,6 +24,13 @@ impl Preset {
             Self::HeldOut => HELD_OUT,
         }
     }
+
+    /// The preset's options, as on the command line.
+    pub fn options(self) -> &'static str {
+        match self {
+            Self::HeldOut => HELD_OUT_OPTIONS,
+        }
+    }
 }
 
 /// The options of `--preset held-out`, as on the command line.
