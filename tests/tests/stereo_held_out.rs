@@ -3,39 +3,16 @@
 //! pinned against the targets it meets. Skipped without the data unless
 //! `PROTOGIST_REQUIRE_DATA` is set (as in CI).
 
-use protogist_host::stereo_cmd::{run_stereo, Preset, ReadoutOptions, StereoOptions};
-use protogist_tests::{aloe_files, motorcycle_files, PairFiles};
+use protogist_host::stereo_cmd::Preset;
+use protogist_tests::{aloe_files, motorcycle_files, stereo_bad2, stereo_options, PairFiles};
 use std::path::Path;
 
 /// bad-2 % (over estimated pixels, over all GT pixels) of `protogist stereo
 /// --refine 0 --preset held-out` at `width` and `max_disp`.
 fn held_out(files: PairFiles, width: u32, max_disp: u8, out: &Path) -> (f64, f64) {
-    let (left, right, gt) = files;
-    let opts = StereoOptions {
-        left,
-        right,
-        gt: Some(gt),
-        gt_scale: 1.0,
-        width,
-        max_disp,
-        pool: None,
-        levels: None,
-        table: None,
-        refine: Some(0),
-        colour: None,
-        chroma_weight: None,
-        complete: false,
-        readout: ReadoutOptions {
-            preset: Some(Preset::HeldOut),
-            ..ReadoutOptions::default()
-        },
-        json: true,
-        out: out.to_path_buf(),
-    };
-    let s = run_stereo(&opts).unwrap();
-    let v: serde_json::Value = serde_json::from_str(s.raw.as_deref().unwrap()).unwrap();
-    let get = |k: &str| v["final"][k].as_f64().unwrap();
-    (get("bad2_estimated"), get("bad2_all"))
+    let mut opts = stereo_options(files, width, max_disp, out);
+    opts.readout.preset = Some(Preset::HeldOut);
+    stereo_bad2(&opts)
 }
 
 /// The target met on Aloe: bad-2 over all GT pixels no worse than

@@ -8,7 +8,6 @@
 //! `sha256sum`, the three members extracted with `unzip` (else Python's
 //! `zipfile`), each checked for its magic and renamed into place.
 
-use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -31,26 +30,10 @@ pub const FILES: [(&str, &[u8]); 3] = [
 
 /// Ensures the files are in `dir`; returns it.
 pub fn fetch(dir: PathBuf) -> Result<PathBuf> {
-    if FILES
-        .iter()
-        .all(|(name, magic)| super::valid(&dir.join(name), magic))
-    {
-        println!("motorcycle data already present in {}", dir.display());
-        return Ok(dir);
-    }
-    fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
-    let work = dir.join(format!(".fetch-{}", std::process::id()));
-    let result = fetch_into(&dir, &work);
-    let _ = fs::remove_dir_all(&work);
-    result?;
-    for (name, _) in FILES {
-        println!("  {}", dir.join(name).display());
-    }
-    Ok(dir)
+    super::ensure("motorcycle", dir, &FILES, fetch_into)
 }
 
 fn fetch_into(dir: &Path, work: &Path) -> Result<()> {
-    fs::create_dir_all(work).map_err(|e| format!("creating {}: {e}", work.display()))?;
     let url = wheel_url()?;
     let wheel = work.join(WHEEL);
     run(Command::new("curl")
@@ -88,19 +71,7 @@ fn fetch_into(dir: &Path, work: &Path) -> Result<()> {
             .arg(&out)
             .args(&members))?;
     }
-    for (name, magic) in FILES {
-        let src = out.join(name);
-        let tmp = dir.join(format!(".{name}.part"));
-        fs::copy(&src, &tmp).map_err(|e| format!("copying {}: {e}", src.display()))?;
-        if !super::valid(&tmp, magic) {
-            let _ = fs::remove_file(&tmp);
-            return Err(format!(
-                "{name} from {WHEEL} is empty or not the expected file type"
-            ));
-        }
-        fs::rename(&tmp, dir.join(name)).map_err(|e| format!("renaming {}: {e}", tmp.display()))?;
-    }
-    Ok(())
+    super::install(&out, dir, &FILES, WHEEL)
 }
 
 /// The wheel's URL from PyPI's JSON API: the release's `urls`, else the
