@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
-"""OpenCV StereoSGBM / StereoBM on Middlebury Aloe, under protogist's protocol.
+"""OpenCV StereoSGBM / StereoBM on Middlebury Aloe or Motorcycle, under protogist's protocol.
 
 Run by `cargo xtask bench` in a venv with scripts/requirements-opencv.txt.
-Prints one JSON object per line: matcher, block size, width, max disparity,
-bad-1/2/4 over estimated and over all GT pixels, MAE, density, ms.
+Prints one JSON object per line: pair, matcher, block size, width, max
+disparity, bad-1/2/4 over estimated and over all GT pixels, MAE, density, ms.
 
 The protocol mirrors `protogist stereo` (host/src/ground_truth.rs):
 - images area-averaged (INTER_AREA) to the working width, aspect kept,
   height rounded;
-- GT: 0 = unknown; downscaled as the overlap-weighted mean of the known
+- GT: Aloe's PNG, 0 = unknown; Motorcycle's npz (`arr_0`, float px),
+  non-finite or <= 0 = unknown; downscaled as the overlap-weighted mean of the known
   pixels, unknown when less than half of the footprint is known, times the
   width ratio;
 - bad-k: |error| > k px; "all" counts a missing estimate as an error.
@@ -26,8 +27,10 @@ def area(img, w, h):
 
 
 def gt_at(gt_full, w, h):
-    known = (gt_full > 0).astype(np.float32)
-    s = area(gt_full.astype(np.float32) * known, w, h)
+    g = gt_full.astype(np.float32)
+    ok = np.isfinite(g) & (g > 0)
+    known = ok.astype(np.float32)
+    s = area(np.where(ok, g, 0.0).astype(np.float32), w, h)
     k = area(known, w, h)
     out = np.full((h, w), np.nan, np.float32)
     valid = k >= 0.5
@@ -68,17 +71,36 @@ def run(matcher, left, right, d, bs):
     return est, ms
 
 
+def load(data, pair):
+    """Left, right (BGR) and GT (float px, unknown <= 0 or non-finite) at full size."""
+    if pair == "aloe":
+        names = ("aloeL.jpg", "aloeR.jpg")
+        gt = cv2.imread(f"{data}/aloeGT.png", cv2.IMREAD_GRAYSCALE)
+    else:
+        names = ("motorcycle_left.png", "motorcycle_right.png")
+        try:
+            with np.load(f"{data}/motorcycle_disp.npz") as z:
+                gt = z["arr_0"] if "arr_0" in z.files else z[z.files[0]]
+        except (OSError, ValueError, IndexError):
+            gt = None
+    left, right = (cv2.imread(f"{data}/{n}", cv2.IMREAD_COLOR) for n in names)
+    if left is None or right is None or gt is None or gt.ndim != 2:
+        raise SystemExit(f"cannot read the {pair} files in {data}")
+    if gt.shape != left.shape[:2] or right.shape != left.shape:
+        raise SystemExit(f"{pair}: the images and GT differ in size")
+    return left, right, gt
+
+
 def main():
     p = argparse.ArgumentParser()
-    p.add_argument("--data", required=True, help="folder with aloeL.jpg, aloeR.jpg, aloeGT.png")
+    p.add_argument("--data", required=True,
+                   help="folder with aloeL.jpg, aloeR.jpg, aloeGT.png (aloe) or "
+                        "motorcycle_left.png, motorcycle_right.png, motorcycle_disp.npz")
+    p.add_argument("--pair", choices=("aloe", "motorcycle"), default="aloe")
     p.add_argument("--config", action="append", required=True, help="WIDTH:MAXDISP")
     a = p.parse_args()
     cv2.setNumThreads(1)
-    l_full = cv2.imread(f"{a.data}/aloeL.jpg", cv2.IMREAD_COLOR)
-    r_full = cv2.imread(f"{a.data}/aloeR.jpg", cv2.IMREAD_COLOR)
-    gt_full = cv2.imread(f"{a.data}/aloeGT.png", cv2.IMREAD_GRAYSCALE)
-    if l_full is None or r_full is None or gt_full is None:
-        raise SystemExit("cannot read the Aloe files in " + a.data)
+    l_full, r_full, gt_full = load(a.data, a.pair)
     H, W = gt_full.shape
     for c in a.config:
         w, d = (int(v) for v in c.split(":"))
@@ -87,7 +109,7 @@ def main():
         for matcher, sizes in (("sgbm", (3, 5)), ("bm", (5,))):
             for bs in sizes:
                 est, ms = run(matcher, left, right, d, bs)
-                row = {"matcher": matcher, "block": bs, "width": w, "max_disp": d, "ms": ms,
+                row = {"pair": a.pair, "matcher": matcher, "block": bs, "width": w, "max_disp": d, "ms": ms,
                        "opencv": cv2.__version__}
                 row.update(metrics(est, gt))
                 print(json.dumps(row))

@@ -2,7 +2,10 @@
 //! PFM), bringing them to the working size, and the error metrics.
 //!
 //! A GT map holds left-referenced disparities in pixels of its own size;
-//! `None` is unknown (0 in a PNG, ±inf or NaN in a PFM).
+//! `None` is unknown (0 in a PNG, ±inf or NaN in a PFM, non-finite or ≤ 0
+//! in a NumPy `.npy`/`.npz` array, [`numpy`]).
+
+pub mod numpy;
 
 use crate::error::{HostError, Result};
 use image::{DynamicImage, ImageReader};
@@ -26,16 +29,25 @@ fn bad_gt(path: &Path, reason: impl Into<String>) -> HostError {
     }
 }
 
-/// Loads a GT map: PFM (`Pf`, one channel) by its magic, else a 8- or
-/// 16-bit grey PNG whose values are `scale` times the disparity.
+/// Loads a GT map, by its magic: PFM (`Pf`, one channel), a NumPy `.npy`
+/// or `.npz` float32/float64 2-D array ([`numpy`]; both in px, `scale`
+/// unused), else a 8- or 16-bit grey PNG whose values are `scale` times the
+/// disparity.
 ///
 /// # Errors
 /// [`HostError::Io`] when unreadable, [`HostError::BadGroundTruth`] when
-/// malformed, not single-channel, or `scale` is not positive.
+/// malformed or truncated, not single-channel, of another dtype or not 2-D,
+/// or `scale` is not positive.
 pub fn load_gt(path: &Path, scale: f32) -> Result<GtMap> {
     let bytes = std::fs::read(path).map_err(|e| HostError::io(path, e))?;
     if bytes.starts_with(b"P") && bytes.get(1).is_some_and(|&b| b == b'f' || b == b'F') {
         return parse_pfm(&bytes).map_err(|r| bad_gt(path, r));
+    }
+    if bytes.starts_with(numpy::NPY_MAGIC) {
+        return numpy::parse_npy(&bytes).map_err(|r| bad_gt(path, r));
+    }
+    if numpy::ZIP_MAGICS.iter().any(|m| bytes.starts_with(m)) {
+        return numpy::parse_npz(&bytes).map_err(|r| bad_gt(path, r));
     }
     if !(scale.is_finite() && scale > 0.0) {
         return Err(bad_gt(

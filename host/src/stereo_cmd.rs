@@ -14,6 +14,9 @@ use protogist::image::ImageView;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub mod preset;
+pub use preset::Preset;
+
 /// Options of `protogist stereo`.
 #[derive(Clone, Debug, PartialEq, clap::Args)]
 pub struct StereoOptions {
@@ -48,10 +51,11 @@ pub struct StereoOptions {
     /// Border refinement radius, px (default: the model's; 0 disables).
     #[arg(long)]
     pub refine: Option<u8>,
-    /// Input channels of the DEM (experiment): grey, or energies summed
-    /// over R, G, B or over CIELUV L*, u*, v* (docs/STEREO.md).
-    #[arg(long, value_enum, default_value_t = dem::Colour::Grey)]
-    pub colour: dem::Colour,
+    /// Input channels of the DEM (experiment): grey (the default), or
+    /// energies summed over R, G, B or over CIELUV L*, u*, v*
+    /// (docs/STEREO.md).
+    #[arg(long, value_enum)]
+    pub colour: Option<dem::Colour>,
     /// With `--colour luv`: weight of u*, v* against L* (default 1; 0: L*
     /// only).
     #[arg(long)]
@@ -72,23 +76,32 @@ pub struct StereoOptions {
     pub out: PathBuf,
 }
 
-/// Read-out options of `protogist stereo`: semi-global aggregation and the
-/// OFF thresholds (all default to the model's).
-#[derive(Clone, Debug, PartialEq, clap::Args)]
+/// Read-out options of `protogist stereo`: a named preset, semi-global
+/// aggregation and the OFF thresholds (all default to the model's).
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
 pub struct ReadoutOptions {
+    /// Named settings (f32 reference; options given explicitly override
+    /// them): `held-out`, chosen on the Middlebury Motorcycle pair
+    /// (docs/STEREO.md, "Settings chosen on a held-out pair").
+    #[arg(long, value_enum)]
+    pub preset: Option<Preset>,
     /// Semi-global aggregation of the read-out's costs after the box
     /// pooling (an experiment, docs/STEREO.md; `--pool 0` for none).
     #[arg(long)]
     pub sgm: bool,
-    /// SGM penalty for a 1 px step, in units of a pixel's mean cost gap.
-    #[arg(long, default_value_t = SGM_P1, requires = "sgm")]
-    pub p1: f32,
-    /// SGM penalty for a larger step, in the same units.
-    #[arg(long, default_value_t = SGM_P2, requires = "sgm")]
-    pub p2: f32,
-    /// SGM path set: 3, 4, 5 (one top-to-bottom pass) or 8.
-    #[arg(long, default_value_t = SGM_PATHS, requires = "sgm")]
-    pub paths: u8,
+    /// SGM penalty for a 1 px step, in units of a pixel's mean cost gap
+    /// (default 0.25).
+    #[arg(long)]
+    pub p1: Option<f32>,
+    /// SGM penalty for a larger step, in the same units (default 16).
+    #[arg(long)]
+    pub p2: Option<f32>,
+    /// SGM path set: 3, 4, 5 (one top-to-bottom pass, the default) or 8.
+    #[arg(long)]
+    pub paths: Option<u8>,
+    /// Scale P2 with the working width: P2 · width / this (default: off).
+    #[arg(long)]
+    pub p2_ref_width: Option<u32>,
     /// Ambiguity threshold (default: the model's, 0); with `--sgm`, per
     /// path in units of a pixel's mean cost gap.
     #[arg(long)]
@@ -98,32 +111,17 @@ pub struct ReadoutOptions {
     pub lr: Option<f32>,
     /// Coarse-to-fine (an experiment, docs/STEREO.md): halve the pair this
     /// many times, search every candidate on the coarsest level and only
-    /// `2·d ± --c2f-radius` on each finer one (0: off).
-    #[arg(long, default_value_t = 0)]
-    pub c2f: u8,
-    /// Half width of the fine windows of `--c2f`, px of the finer level.
-    #[arg(long, default_value_t = 2, requires = "c2f")]
-    pub c2f_radius: u8,
+    /// `2·d ± --c2f-radius` on each finer one (default 0: off).
+    #[arg(long)]
+    pub c2f: Option<u8>,
+    /// Half width of the fine windows of `--c2f`, px of the finer level
+    /// (default 2).
+    #[arg(long)]
+    pub c2f_radius: Option<u8>,
     /// With `--c2f`: decode a fine pixel only from the groups whose shift
     /// is within this many px of its window's centre (default: every group).
-    #[arg(long, requires = "c2f")]
+    #[arg(long)]
     pub c2f_band: Option<u8>,
-}
-
-impl Default for ReadoutOptions {
-    fn default() -> Self {
-        Self {
-            sgm: false,
-            p1: SGM_P1,
-            p2: SGM_P2,
-            paths: SGM_PATHS,
-            min_margin: None,
-            lr: None,
-            c2f: 0,
-            c2f_radius: 2,
-            c2f_band: None,
-        }
-    }
 }
 
 /// `--p1` default (docs/STEREO.md, semi-global aggregation).
@@ -350,36 +348,8 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     let (ow, oh) = pair.input_size;
     let (lp, rp, gt_small) = (pair.left, pair.right, pair.gt);
     let (w, h) = (pair.width, pair.height);
-    let mut params = DemParams {
-        max_disp: opts.max_disp,
-        ..DemParams::default()
-    };
-    if let Some(r) = opts.pool {
-        params.pool_radius = r;
-    }
-    if let Some(l) = opts.levels {
-        params.levels = l;
-    }
-    if let Some(r) = opts.refine {
-        params.refine_radius = r;
-    }
-    if let Some(m) = opts.readout.min_margin {
-        params.min_margin = m;
-    }
-    if let Some(t) = opts.readout.lr {
-        params.lr_tolerance = t;
-    }
-    if opts.readout.sgm {
-        params.aggregation = dem::Aggregation::Sgm {
-            p1: opts.readout.p1,
-            p2: opts.readout.p2,
-            paths: opts.readout.paths,
-        };
-    }
-    params.colour = opts.colour;
-    if let Some(c) = opts.chroma_weight {
-        params.chroma_weight = c;
-    }
+    let params = preset::params_for(opts, w)?;
+    let complete = preset::complete(opts);
     params.check()?;
     // Size checks first: training for a hopeless size is wasted time.
     if usize::from(params.max_disp) >= w {
@@ -396,8 +366,9 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     let t_train = Instant::now();
     let decoder = decoder_for(&params, opts.table.as_deref())?;
     let train_ms = t_train.elapsed().as_secs_f64() * 1e3;
+    let search = preset::search(opts)?;
     let mut decoders = vec![decoder];
-    for k in 1..=usize::from(opts.readout.c2f) {
+    for k in 1..=search.map_or(0, |c| c.levels) {
         let p = DemParams {
             max_disp: dem::c2f::level_max_disp(params.max_disp, k),
             ..params
@@ -412,10 +383,8 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     };
     let t_run = Instant::now();
     let (lv, rv) = (ImageView::packed(&lp, w, h)?, ImageView::packed(&rp, w, h)?);
-    let maps = if decoders.len() > 1 {
-        let r = usize::from(opts.readout.c2f_radius);
-        let band = opts.readout.c2f_band.map(usize::from);
-        dem::c2f::stereo_c2f(&params, &decoders, &lv, &rv, r, band)?
+    let maps = if let Some(c) = search {
+        dem::c2f::stereo_c2f(&params, &decoders, &lv, &rv, c.radius, c.band)?
     } else {
         dem::stereo(&params, decoder, &lv, &rv)?
     };
@@ -443,6 +412,9 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
                 params.chroma_weight
             ),
         );
+    }
+    if let Some(p) = opts.readout.preset {
+        s.push("preset", p.options());
     }
     let n = (w * h) as f64;
     s.push("decoder ms", format!("{train_ms:.1}"));
@@ -474,9 +446,12 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         "on_fraction": on as f64 / n,
         "stereo_ms": run_ms,
     });
+    if let Some(p) = opts.readout.preset {
+        json["preset_options"] = serde_json::json!(p.options());
+    }
     let model_f32 = maps.disparity_f32.clone();
     let mut final_f32 = maps.disparity_f32;
-    if opts.complete {
+    if complete {
         let t = Instant::now();
         let edges = crate::stages::run_conspicuity(
             &protogist::conspicuity::LuvTables::new(),
@@ -522,7 +497,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         panels.push(Panel::new("error", error_panel(&final_f32, &gt)));
         json["gt_max_disp"] = serde_json::json!(gmax);
         json["final"] = metrics_json(&m);
-        if opts.complete {
+        if complete {
             let before = metrics(&model_f32, &gt.data);
             push_metrics(&mut s, "model (before completion)", &before);
             json["model"] = metrics_json(&before);

@@ -87,6 +87,67 @@ pub fn data_file(rel: &str) -> Option<PathBuf> {
     None
 }
 
+/// A stereo pair with ground truth: `(left, right, GT)`.
+pub type PairFiles = (PathBuf, PathBuf, PathBuf);
+
+/// Middlebury Aloe (`<data root>/aloe/`), as [`data_file`] finds it.
+pub fn aloe_files() -> Option<PairFiles> {
+    Some((
+        data_file("aloe/aloeL.jpg")?,
+        data_file("aloe/aloeR.jpg")?,
+        data_file("aloe/aloeGT.png")?,
+    ))
+}
+
+/// Middlebury 2014 Motorcycle (`<data root>/motorcycle/`, scikit-image's
+/// copy: 741x500, GT a float32 npz in px), as [`data_file`] finds it.
+pub fn motorcycle_files() -> Option<PairFiles> {
+    Some((
+        data_file("motorcycle/motorcycle_left.png")?,
+        data_file("motorcycle/motorcycle_right.png")?,
+        data_file("motorcycle/motorcycle_disp.npz")?,
+    ))
+}
+
+/// The options of `protogist stereo --left L --right R --gt GT --width W
+/// --max-disp D --refine 0 --json --out DIR`, every other option at its
+/// default.
+pub fn stereo_options(
+    files: PairFiles,
+    width: u32,
+    max_disp: u8,
+    out: &std::path::Path,
+) -> protogist_host::stereo_cmd::StereoOptions {
+    let (left, right, gt) = files;
+    protogist_host::stereo_cmd::StereoOptions {
+        left,
+        right,
+        gt: Some(gt),
+        gt_scale: 1.0,
+        width,
+        max_disp,
+        pool: None,
+        levels: None,
+        table: None,
+        refine: Some(0),
+        colour: None,
+        chroma_weight: None,
+        complete: false,
+        readout: protogist_host::stereo_cmd::ReadoutOptions::default(),
+        json: true,
+        out: out.to_path_buf(),
+    }
+}
+
+/// bad-2 % (over estimated pixels, over all GT pixels) of the final map of
+/// `protogist stereo` with `opts` (which must ask for JSON and give GT).
+pub fn stereo_bad2(opts: &protogist_host::stereo_cmd::StereoOptions) -> (f64, f64) {
+    let s = protogist_host::stereo_cmd::run_stereo(opts).unwrap();
+    let v: serde_json::Value = serde_json::from_str(s.raw.as_deref().unwrap()).unwrap();
+    let get = |k: &str| v["final"][k].as_f64().unwrap();
+    (get("bad2_estimated"), get("bad2_all"))
+}
+
 /// A binary mask (0 or 255), tightly packed.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MaskCase {

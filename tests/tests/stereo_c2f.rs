@@ -224,14 +224,14 @@ fn aloe_coarse_to_fine_sgm_beats_sgbm_over_all_pixels() {
             levels: Some(1),
             table: None,
             refine: Some(0),
-            colour: dem::Colour::Luv,
+            colour: Some(dem::Colour::Luv),
             chroma_weight: Some(2.0),
             complete: false,
             readout: ReadoutOptions {
                 sgm: true,
-                paths: 5,
-                c2f: 2,
-                c2f_radius: 2,
+                paths: Some(5),
+                c2f: Some(2),
+                c2f_radius: Some(2),
                 c2f_band: Some(2),
                 ..ReadoutOptions::default()
             },

@@ -6,8 +6,7 @@
 use protogist_host::reference::stereo::readout::Scores;
 use protogist_host::reference::stereo::sgm::{aggregate, aggregate_path, costs, directions};
 use protogist_host::reference::stereo::{DemParams, StereoError};
-use protogist_host::stereo_cmd::{run_stereo, ReadoutOptions, StereoOptions};
-use protogist_tests::data_file;
+use protogist_tests::{aloe_files, stereo_bad2, stereo_options};
 
 /// 1x4 pixels, 3 candidates, P1 = 1, P2 = 3.
 const COST: [f32; 12] = [
@@ -156,31 +155,10 @@ fn aloe(
     levels: Option<u8>,
     out: &std::path::Path,
 ) -> Option<(f64, f64)> {
-    let opts = StereoOptions {
-        left: data_file("aloe/aloeL.jpg")?,
-        right: data_file("aloe/aloeR.jpg")?,
-        gt: Some(data_file("aloe/aloeGT.png")?),
-        gt_scale: 1.0,
-        width,
-        max_disp,
-        pool: None,
-        levels,
-        table: None,
-        refine: Some(0),
-        colour: Default::default(),
-        chroma_weight: None,
-        complete: false,
-        readout: ReadoutOptions {
-            sgm,
-            ..ReadoutOptions::default()
-        },
-        json: true,
-        out: out.to_path_buf(),
-    };
-    let s = run_stereo(&opts).unwrap();
-    let v: serde_json::Value = serde_json::from_str(s.raw.as_deref().unwrap()).unwrap();
-    let get = |k: &str| v["final"][k].as_f64().unwrap();
-    Some((get("bad2_estimated"), get("bad2_all")))
+    let mut opts = stereo_options(aloe_files()?, width, max_disp, out);
+    opts.levels = levels;
+    opts.readout.sgm = sgm;
+    Some(stereo_bad2(&opts))
 }
 
 /// Measured 2026-11-21 (docs/STEREO.md, "Semi-global aggregation"), bad-2

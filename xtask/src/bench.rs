@@ -8,6 +8,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::data::data_root;
 use crate::firmware::{build_and_run, size_report};
 use crate::util::{host_cargo, output, root, run as run_cmd, Result};
 
@@ -29,6 +30,7 @@ pub fn run() -> Result<()> {
         scratch(&qemu.stdout),
         segmentation_iou(),
         dem_aloe(),
+        dem_motorcycle(),
         mlp_qemu(&qemu.stdout),
         mlp_host(),
     ];
@@ -374,9 +376,7 @@ fn segmentation_iou() -> Section {
 
 fn dem_aloe() -> Section {
     let title = "Disparity energy model on Middlebury Aloe (f32 reference)";
-    let dir = std::env::var_os("PROTOGIST_DATA")
-        .map_or_else(|| root().join(".cache/data"), PathBuf::from)
-        .join("aloe");
+    let dir = data_root().join("aloe");
     let (l, r, gt) = (
         dir.join("aloeL.jpg"),
         dir.join("aloeR.jpg"),
@@ -388,7 +388,7 @@ fn dem_aloe() -> Section {
             body: format!("{NOT_YET}: run `cargo xtask fetch-data`.\n"),
         };
     }
-    let mut body = String::from(
+    let mut body = format!(
         "`cargo run --release -- stereo --left aloeL.jpg --right aloeR.jpg --gt aloeGT.png \
          --width W --max-disp D --json --out DIR`, default `DemParams` (3 orientations, 2 scales, \
          5x5 pooling, left-right check). bad-k: % of pixels off by more than k px, over pixels \
@@ -400,11 +400,11 @@ fn dem_aloe() -> Section {
          (5 one-pass paths, P1 0.25, P2 16; an f32-reference experiment, not yet in core: \
          docs/STEREO.md, section Semi-global aggregation). The `--colour luv` rows add colour \
          channels, 8 paths and the settings named, chosen on Aloe itself (no held-out pair): \
-         docs/STEREO.md, section SGM with colour channels. The `--c2f` rows search coarse to \
+         docs/STEREO.md, section SGM with colour channels. The `--c2f` row searches coarse to \
          fine (5 candidates from the groups near them at the fine levels; the ms still score \
-         every candidate): docs/STEREO.md, section Coarse-to-fine with SGM.\n\n\
-         | width | D | options | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
-         |---|---|---|---|---|---|---|---|\n",
+         every candidate): docs/STEREO.md, section Coarse-to-fine with SGM. The \
+         `--preset held-out` rows are the setting chosen on the held-out Motorcycle pair (next \
+         section), run here once with no change.\n\n{STEREO_TABLE_HEAD}",
     );
     // (width, D, extra options); every row runs with `--refine 0` unless it
     // names another radius.
@@ -428,7 +428,7 @@ fn dem_aloe() -> Section {
         .collect();
     let c320: Vec<&str> = COMBINED.iter().copied().chain(["--pool", "1"]).collect();
     // Coarse to fine with SGM (docs/STEREO.md "Coarse-to-fine with SGM").
-    const C2F: [&str; 17] = [
+    const C2F: [&str; 15] = [
         "--levels",
         "1",
         "--sgm",
@@ -444,10 +444,8 @@ fn dem_aloe() -> Section {
         "2",
         "--c2f-band",
         "2",
-        "--min-margin",
-        "1.4",
     ];
-    let c2f_plain = &C2F[..15];
+    let held_out: &[&str] = &["--preset", "held-out"];
     let rows: [(&str, &str, &[&str]); 18] = [
         ("160", "32", &[]),
         ("160", "32", &["--refine", "1"]),
@@ -456,8 +454,8 @@ fn dem_aloe() -> Section {
         ("160", "32", &["--levels", "1", "--sgm", "--complete"]),
         ("160", "32", &c160),
         ("160", "32", &c320),
-        ("160", "32", c2f_plain),
         ("160", "32", &C2F),
+        ("160", "32", held_out),
         ("320", "64", &[]),
         ("320", "64", &["--refine", "1"]),
         ("320", "64", &["--complete"]),
@@ -465,64 +463,111 @@ fn dem_aloe() -> Section {
         ("320", "64", &["--levels", "1", "--sgm", "--complete"]),
         ("320", "64", &c320),
         ("320", "64", &c160),
-        ("320", "64", c2f_plain),
         ("320", "64", &C2F),
+        ("320", "64", held_out),
     ];
     for (w, d, extra) in rows {
-        let out_dir = root().join("target/bench-stereo");
-        let opts = if extra.is_empty() {
-            "-".to_string()
-        } else {
-            format!("`{}`", extra.join(" "))
-        };
-        let refine = if extra.contains(&"--refine") {
-            &[][..]
-        } else {
-            &["--refine", "0"][..]
-        };
-        let args = [
-            "stereo",
-            "--left",
-            &l.to_string_lossy(),
-            "--right",
-            &r.to_string_lossy(),
-            "--gt",
-            &gt.to_string_lossy(),
-            "--width",
-            w,
-            "--max-disp",
-            d,
-            "--json",
-            "--out",
-            &out_dir.to_string_lossy(),
-        ]
-        .map(|a| a.to_string());
-        let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
-        args.extend_from_slice(refine);
-        args.extend_from_slice(extra);
-        let row = protogist(&args)
-            .ok()
-            .and_then(|j| serde_json::from_str::<serde_json::Value>(&j).ok())
-            .and_then(|v| {
-                let f = v.get("final")?;
-                let g = |k: &str| f.get(k).and_then(serde_json::Value::as_f64);
-                Some(format!(
-                    "| {w} | {d} | {opts} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {:.0} |\n",
-                    g("bad1_estimated")?, g("bad2_estimated")?, g("bad4_estimated")?,
-                    g("bad1_all")?, g("bad2_all")?, g("bad4_all")?,
-                    g("mae")?, g("density")?, v.get("stereo_ms")?.as_f64()?
-                ))
-            })
-            .unwrap_or_else(|| format!("| {w} | {d} | {opts} | {NOT_YET} | | | | |\n"));
-        body.push_str(&row);
+        body.push_str(&stereo_row([&l, &r, &gt], w, d, extra));
     }
-    body.push_str(&opencv_aloe(&dir));
+    body.push_str(&opencv_rows(&dir, "aloe"));
+    Section { title, body }
+}
+
+/// One table row: `protogist stereo` on `files` (left, right, GT) at width
+/// `w` and max disparity `d` with `extra` options (`--refine 0` unless they
+/// name a radius), or "not yet measured".
+fn stereo_row(files: [&Path; 3], w: &str, d: &str, extra: &[&str]) -> String {
+    let [l, r, gt] = files;
+    let out_dir = root().join("target/bench-stereo");
+    let opts = if extra.is_empty() {
+        "-".to_string()
+    } else {
+        format!("`{}`", extra.join(" "))
+    };
+    let refine = if extra.contains(&"--refine") {
+        &[][..]
+    } else {
+        &["--refine", "0"][..]
+    };
+    let args = [
+        "stereo",
+        "--left",
+        &l.to_string_lossy(),
+        "--right",
+        &r.to_string_lossy(),
+        "--gt",
+        &gt.to_string_lossy(),
+        "--width",
+        w,
+        "--max-disp",
+        d,
+        "--json",
+        "--out",
+        &out_dir.to_string_lossy(),
+    ]
+    .map(|a| a.to_string());
+    let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
+    args.extend_from_slice(refine);
+    args.extend_from_slice(extra);
+    protogist(&args)
+        .ok()
+        .and_then(|j| serde_json::from_str::<serde_json::Value>(&j).ok())
+        .and_then(|v| {
+            let f = v.get("final")?;
+            let g = |k: &str| f.get(k).and_then(serde_json::Value::as_f64);
+            Some(format!(
+                "| {w} | {d} | {opts} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {:.0} |\n",
+                g("bad1_estimated")?, g("bad2_estimated")?, g("bad4_estimated")?,
+                g("bad1_all")?, g("bad2_all")?, g("bad4_all")?,
+                g("mae")?, g("density")?, v.get("stereo_ms")?.as_f64()?
+            ))
+        })
+        .unwrap_or_else(|| format!("| {w} | {d} | {opts} | {NOT_YET} | | | | |\n"))
+}
+
+/// The same table header as the Aloe section's.
+const STEREO_TABLE_HEAD: &str = "| width | D | options | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
+     |---|---|---|---|---|---|---|---|\n";
+
+fn dem_motorcycle() -> Section {
+    let title = "Disparity energy model on Middlebury 2014 Motorcycle (held-out pair)";
+    let dir = data_root().join("motorcycle");
+    let (l, r, gt) = (
+        dir.join("motorcycle_left.png"),
+        dir.join("motorcycle_right.png"),
+        dir.join("motorcycle_disp.npz"),
+    );
+    if !gt.is_file() {
+        return Section {
+            title,
+            body: format!("{NOT_YET}: run `cargo xtask fetch-data`.\n"),
+        };
+    }
+    let mut body = format!(
+        "scikit-image 0.26.0's copy of Motorcycle (741x500, GT float32 px in an npz), fetched \
+         by `cargo xtask fetch-data`. `cargo run --release -- stereo --left \
+         motorcycle_left.png --right motorcycle_right.png --gt motorcycle_disp.npz --width W \
+         --max-disp D --refine 0 --json --out DIR OPTIONS`; metrics as in the Aloe section. \
+         `--preset held-out` is the setting chosen on this pair for both sizes \
+         (`host/src/stereo_cmd/preset.rs`; docs/STEREO.md, section Settings chosen on a \
+         held-out pair).\n\n{STEREO_TABLE_HEAD}"
+    );
+    for (w, d) in [("160", "32"), ("320", "64")] {
+        for extra in [
+            &[][..],
+            &["--levels", "1", "--sgm"],
+            &["--preset", "held-out"],
+        ] {
+            body.push_str(&stereo_row([&l, &r, &gt], w, d, extra));
+        }
+    }
+    body.push_str(&opencv_rows(&dir, "motorcycle"));
     Section { title, body }
 }
 
 /// OpenCV StereoSGBM / StereoBM on the same data and protocol, from
-/// `scripts/opencv_baseline.py` in a venv with pinned versions.
-fn opencv_aloe(data: &Path) -> String {
+/// `scripts/opencv_baseline.py --pair PAIR` in a venv with pinned versions.
+fn opencv_rows(data: &Path, pair: &str) -> String {
     let mut out = String::from(
         "\nOpenCV under the same protocol (area-averaged images, GT as the mean of its known \
          pixels), single thread, from `scripts/opencv_baseline.py` with the versions pinned in \
@@ -549,7 +594,7 @@ fn opencv_aloe(data: &Path) -> String {
                 .arg(root().join("scripts/opencv_baseline.py"))
                 .arg("--data")
                 .arg(data)
-                .args(["--config", "160:32", "--config", "320:64"]),
+                .args(["--pair", pair, "--config", "160:32", "--config", "320:64"]),
         )
     });
     let rows = match rows {
@@ -579,6 +624,9 @@ fn opencv_aloe(data: &Path) -> String {
             f("density"),
             f("ms")
         ));
+    }
+    if pair != "aloe" {
+        return out;
     }
     out.push_str(
         "\nIssue 3 quotes other figures for OpenCV 5.0 (SGBM bad-2 over all GT pixels 33.6 % at \

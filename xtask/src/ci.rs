@@ -35,7 +35,7 @@ pub fn run_ci() -> Result<CiSummary> {
         },
     )?;
     timed("clippy", t);
-    let (_, t) = step("fetch-data: aloe stereo pair", data::fetch)?;
+    let (_, t) = step("fetch-data: aloe and motorcycle stereo pairs", data::fetch)?;
     timed("fetch-data", t);
     let (totals, t) = step("test: cargo test --workspace", || {
         // The real-data tests must not skip in CI: a missing file fails them.

@@ -1,4 +1,8 @@
-//! `fetch-data`: the aloe stereo pair from Debian's opencv-doc package.
+//! `fetch-data`: the aloe stereo pair from Debian's opencv-doc package, and
+//! the Middlebury 2014 Motorcycle pair from scikit-image's wheel on PyPI
+//! ([`motorcycle`]).
+
+mod motorcycle;
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -16,43 +20,86 @@ const FILES: [(&str, &[u8]); 3] = [
     ("aloeGT.png", PNG),
 ];
 
-/// `<data root>/aloe`, where the data root is `$PROTOGIST_DATA`, else
-/// `<workspace>/.cache/data` (the same rule as the tests' `data_dir`).
-pub fn data_dir() -> PathBuf {
+/// The data root: `$PROTOGIST_DATA`, else `<workspace>/.cache/data` (the
+/// same rule as the tests' `data_dir`).
+pub fn data_root() -> PathBuf {
     std::env::var_os("PROTOGIST_DATA")
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)
         .unwrap_or_else(|| root().join(".cache/data"))
-        .join("aloe")
+}
+
+/// `<data root>/aloe`.
+pub fn data_dir() -> PathBuf {
+    data_root().join("aloe")
 }
 
 fn valid(path: &Path, magic: &[u8]) -> bool {
     fs::read(path).is_ok_and(|b| b.len() > magic.len() && b.starts_with(magic))
 }
 
-/// Ensures the files are in the cache; returns the directory.
+/// Ensures both pairs are in the cache; returns the aloe directory.
 pub fn fetch() -> Result<PathBuf> {
-    let dir = data_dir();
-    if FILES
+    let aloe = fetch_aloe()?;
+    motorcycle::fetch(data_root().join("motorcycle"))?;
+    Ok(aloe)
+}
+
+fn fetch_aloe() -> Result<PathBuf> {
+    ensure("aloe", data_dir(), &FILES, fetch_into)
+}
+
+/// `(file name, magic)` of a data set.
+type Files<'a> = [(&'a str, &'a [u8])];
+
+/// Ensures `files` are in `dir` (each with its magic), else runs
+/// `fetch_into(dir, work)` with a scratch `work` directory that is removed
+/// afterwards; returns `dir`.
+fn ensure(
+    what: &str,
+    dir: PathBuf,
+    files: &Files<'_>,
+    fetch_into: impl FnOnce(&Path, &Path) -> Result<()>,
+) -> Result<PathBuf> {
+    if files
         .iter()
         .all(|(name, magic)| valid(&dir.join(name), magic))
     {
-        println!("aloe data already present in {}", dir.display());
+        println!("{what} data already present in {}", dir.display());
         return Ok(dir);
     }
     fs::create_dir_all(&dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
     let work = dir.join(format!(".fetch-{}", std::process::id()));
-    let result = fetch_into(&dir, &work);
+    let result = fs::create_dir_all(&work)
+        .map_err(|e| format!("creating {}: {e}", work.display()))
+        .and_then(|()| fetch_into(&dir, &work));
     let _ = fs::remove_dir_all(&work);
     result?;
-    for (name, _) in FILES {
+    for (name, _) in files {
         println!("  {}", dir.join(name).display());
     }
     Ok(dir)
 }
 
+/// Copies each of `files` from `src` to `dir` through a `.part` file,
+/// checks its magic, and renames it into place (never a half-written file).
+fn install(src: &Path, dir: &Path, files: &Files<'_>, origin: &str) -> Result<()> {
+    for (name, magic) in files {
+        let from = src.join(name);
+        let tmp = dir.join(format!(".{name}.part"));
+        fs::copy(&from, &tmp).map_err(|e| format!("copying {}: {e}", from.display()))?;
+        if !valid(&tmp, magic) {
+            let _ = fs::remove_file(&tmp);
+            return Err(format!(
+                "{name} from {origin} is empty or not the expected file type"
+            ));
+        }
+        fs::rename(&tmp, dir.join(name)).map_err(|e| format!("renaming {}: {e}", tmp.display()))?;
+    }
+    Ok(())
+}
+
 fn fetch_into(dir: &Path, work: &Path) -> Result<()> {
-    fs::create_dir_all(work).map_err(|e| format!("creating {}: {e}", work.display()))?;
     let deb = match download_deb(work) {
         Err(e) if crate::setup::is_root() => {
             // Fresh machines may have empty apt lists: refresh once and retry.
@@ -66,19 +113,7 @@ fn fetch_into(dir: &Path, work: &Path) -> Result<()> {
     };
     let tree = work.join("x");
     run(Command::new("dpkg-deb").arg("-x").arg(&deb).arg(&tree))?;
-    for (name, magic) in FILES {
-        let src = tree.join(SRC_DIR).join(name);
-        let tmp = dir.join(format!(".{name}.part"));
-        fs::copy(&src, &tmp).map_err(|e| format!("copying {}: {e}", src.display()))?;
-        if !valid(&tmp, magic) {
-            let _ = fs::remove_file(&tmp);
-            return Err(format!(
-                "{name} from {PACKAGE} is empty or not the expected image type"
-            ));
-        }
-        fs::rename(&tmp, dir.join(name)).map_err(|e| format!("renaming {}: {e}", tmp.display()))?;
-    }
-    Ok(())
+    install(&tree.join(SRC_DIR), dir, &FILES, PACKAGE)
 }
 
 fn find_deb(work: &Path) -> Option<PathBuf> {

@@ -13,7 +13,8 @@ const USAGE: &str = "usage: cargo xtask <command>
 
 commands:
   ci          fmt, clippy, fetch-data, tests, no_std core build, firmware under QEMU vs host
-  fetch-data  download the aloe stereo pair (Debian opencv-doc) into the data cache
+  fetch-data  download the aloe (Debian opencv-doc) and motorcycle (scikit-image wheel)
+              stereo pairs into the data cache
   firmware    build the Cortex-M firmware and run it under QEMU mps2-an386
   bench       measure and write docs/BENCHMARKS.md
   setup       install missing system packages / rustup components";
