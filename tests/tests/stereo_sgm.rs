@@ -167,10 +167,11 @@ fn aloe(
 /// 59.7, `--levels 1 --sgm` 13.5 / 35.3. What the experiment claims, with
 /// a few points of slack below the measured gains: over all GT pixels at
 /// least 10 points (160) and 20 points (320) better than the box read-out
-/// and better than OpenCV SGBM under the same protocol (42.4 % and 37.7 %,
-/// docs/BENCHMARKS.md), and no worse over estimated pixels.
+/// and, at 160 px, better than OpenCV SGBM under the same protocol (33.5 %,
+/// docs/BENCHMARKS.md; at 320 px SGBM's 32.9 % is not reached by SGM
+/// alone), and no worse over estimated pixels.
 #[test]
-fn aloe_sgm_beats_the_box_read_out_and_sgbm() {
+fn aloe_sgm_beats_the_box_read_out_and_sgbm_at_160() {
     let dir = tempfile::tempdir().unwrap();
     let Some(box160) = aloe(160, 32, false, None, dir.path()) else {
         return;
@@ -179,13 +180,12 @@ fn aloe_sgm_beats_the_box_read_out_and_sgbm() {
         let (est, all) = aloe(160, 32, true, levels, dir.path()).unwrap();
         println!("160 px, levels {levels:?}: box {box160:?}, SGM ({est}, {all})");
         assert!(all <= box160.1 - 10.0, "{all} vs {}", box160.1);
-        assert!(all < 42.4, "{all}");
+        assert!(all < 33.5, "{all}");
         assert!(est <= box160.0, "{est} vs {}", box160.0);
     }
     let box320 = aloe(320, 64, false, None, dir.path()).unwrap();
     let (est, all) = aloe(320, 64, true, Some(1), dir.path()).unwrap();
     println!("320 px, one level: box {box320:?}, SGM ({est}, {all})");
     assert!(all <= box320.1 - 20.0, "{all} vs {}", box320.1);
-    assert!(all < 37.7, "{all}");
     assert!(est <= box320.0, "{est} vs {}", box320.0);
 }

@@ -572,7 +572,8 @@ fn opencv_rows(data: &Path, pair: &str) -> String {
         "\nOpenCV under the same protocol (area-averaged images, GT as the mean of its known \
          pixels), single thread, from `scripts/opencv_baseline.py` with the versions pinned in \
          `scripts/requirements-opencv.txt` (a venv in `target/venv-opencv`). SGBM is colour, \
-         P1 = 8·3·bs², P2 = 32·3·bs²; BM is grey.\n\n\
+         P1 = 8·3·bs², P2 = 32·3·bs²; BM is grey. Both search numDisparities = D (0..D−1, \
+         as in the issue's measurement; ours searches 0..D).\n\n\
          | matcher | block | width | D | bad-2 (estimated) | bad-2 (all GT) | density | ms |\n\
          |---|---|---|---|---|---|---|---|\n",
     );

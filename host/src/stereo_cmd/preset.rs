@@ -37,7 +37,7 @@ impl Preset {
 /// Motorcycle in the second round (docs/STEREO.md, "Settings chosen on a
 /// held-out pair"), coarse to fine.
 pub const HELD_OUT_OPTIONS: &str = "--levels 1 --sgm --colour luv --chroma-weight 2 --paths 8 \
-     --pool 0 --min-margin 1.4 --c2f 2 --c2f-band 2";
+     --pool 0 --min-margin 1 --c2f 2 --c2f-band 2";
 
 /// `--preset held-out`, the same as [`HELD_OUT_OPTIONS`].
 pub const HELD_OUT: Settings = Settings {
@@ -50,7 +50,7 @@ pub const HELD_OUT: Settings = Settings {
     p2: None,
     paths: Some(8),
     p2_ref_width: None,
-    min_margin: Some(1.4),
+    min_margin: Some(1.0),
     lr: None,
     complete: false,
     c2f: Some(2),
@@ -309,7 +309,7 @@ mod tests {
         assert!(!complete(&preset));
         let p = params_for(&preset, 320).unwrap();
         assert_eq!((p.levels, p.pool_radius, p.colour), (1, 0, Colour::Luv));
-        assert_eq!(p.min_margin, 1.4);
+        assert_eq!(p.min_margin, 1.0);
         assert_eq!(
             p.aggregation,
             Aggregation::Sgm {
