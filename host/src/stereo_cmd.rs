@@ -413,6 +413,18 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             ),
         );
     }
+    if let Some(c) = search {
+        let band = c
+            .band
+            .map_or("every group".to_string(), |b| format!("band {b} px"));
+        s.push(
+            "search",
+            format!(
+                "coarse to fine, {} coarse levels, windows ±{}, {band}",
+                c.levels, c.radius
+            ),
+        );
+    }
     if let Some(p) = opts.readout.preset {
         s.push("preset", p.options());
     }
@@ -448,6 +460,11 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     });
     if let Some(p) = opts.readout.preset {
         json["preset_options"] = serde_json::json!(p.options());
+    }
+    if let Some(c) = search {
+        json["c2f"] = serde_json::json!({
+            "levels": c.levels, "radius": c.radius, "band": c.band,
+        });
     }
     let model_f32 = maps.disparity_f32.clone();
     let mut final_f32 = maps.disparity_f32;
