@@ -27,6 +27,7 @@
 
 pub mod filters;
 pub mod readout;
+pub mod sgm;
 pub mod table;
 
 use crate::disparity::DisparityCell;
