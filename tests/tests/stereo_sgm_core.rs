@@ -129,7 +129,10 @@ fn disjoint_windows_take_the_p2_branch() {
     let got = core_sums(&costs, &[0, 5], (2, 1, 2), (p1, p2));
     // Pixel 0: right→left enters from pixel 1 (min 4 + P2 − 4); pixel 1:
     // left→right enters from pixel 0. The 4 other paths are L = C.
-    let want: Vec<u32> = costs.iter().map(|&c| 5 * u32::from(c) + u32::from(p2)).collect();
+    let want: Vec<u32> = costs
+        .iter()
+        .map(|&c| 5 * u32::from(c) + u32::from(p2))
+        .collect();
     assert_eq!(got, want);
     // Adjacent windows 0..2 and 2..4: candidate 2 of pixel 1 reaches
     // candidate 1 of pixel 0 with P1 (L 1 − min 1 + P1 = 2 < P2), candidate
@@ -164,9 +167,15 @@ fn bad_input_is_a_typed_error() {
     let mut sgm = Sgm::new(4, 3, 1, 3, &mut scratch).unwrap();
     let mut out = [7u32; 12];
     let bad = |what, needed, got| Err(SgmError::Buffer { what, needed, got });
-    assert_eq!(sgm.push_row(&COST[1..], &[0; 4], &mut out), bad("costs", 12, 11));
+    assert_eq!(
+        sgm.push_row(&COST[1..], &[0; 4], &mut out),
+        bad("costs", 12, 11)
+    );
     assert_eq!(sgm.push_row(&COST, &[0; 5], &mut out), bad("lo", 4, 5));
-    assert_eq!(sgm.push_row(&COST, &[0; 4], &mut out[1..]), bad("out", 12, 11));
+    assert_eq!(
+        sgm.push_row(&COST, &[0; 4], &mut out[1..]),
+        bad("out", 12, 11)
+    );
     let mut big = COST;
     big[5] = u16::MAX - 2;
     assert_eq!(
@@ -183,4 +192,31 @@ fn bad_input_is_a_typed_error() {
     assert_eq!(out, [7; 12]);
     big[5] = sgm.max_cost();
     assert_eq!(sgm.push_row(&big, &[0; 4], &mut out), Ok(()));
+}
+
+#[test]
+fn reset_starts_a_new_frame() {
+    // Two rows, then reset: the next row is a first row again (the paths
+    // from above restart with L = C).
+    let mut scratch = vec![0u16; scratch_len(4, 3)];
+    let mut sgm = Sgm::new(4, 3, 1, 3, &mut scratch).unwrap();
+    let (mut first, mut again) = ([0u32; 12], [0u32; 12]);
+    sgm.push_row(&COST, &[0; 4], &mut first).unwrap();
+    sgm.push_row(&COST, &[0; 4], &mut again).unwrap();
+    assert_ne!(first, again);
+    sgm.reset();
+    sgm.push_row(&COST, &[0; 4], &mut again).unwrap();
+    assert_eq!((first, sgm.rows()), (again, 1));
+}
+
+/// The scratch the module docs and docs/STEREO.md state: `3·w·n + w + 2·n`
+/// `u16`s (printed with `--nocapture`).
+#[test]
+fn scratch_at_160_px() {
+    use protogist::stereo::sgm::scratch_bytes;
+    let (w, n) = (160, 5);
+    println!("scratch at {w} px, n = {n}: {} B", scratch_bytes(w, n));
+    assert_eq!(scratch_bytes(w, n), 2 * (3 * w * n + w + 2 * n));
+    let mut scratch = vec![0u16; scratch_len(w, n)];
+    assert!(Sgm::new(w, n, 0, 0, &mut scratch).is_ok());
 }
