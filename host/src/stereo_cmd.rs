@@ -359,28 +359,22 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         }
         .into());
     }
+    // The coarsest level searched (the pair itself without `--c2f`) must
+    // hold the filters.
     let min = params.min_size();
-    if w < min || h < min {
-        return Err(StereoError::TooSmall { min, got: (w, h) }.into());
+    let search = preset::search(opts)?;
+    let coarse_levels = search.map_or(0, |c| c.levels);
+    let coarsest = (w >> coarse_levels, h >> coarse_levels);
+    if coarsest.0 < min || coarsest.1 < min {
+        return Err(StereoError::TooSmall { min, got: coarsest }.into());
     }
     let t_train = Instant::now();
-    let decoder = decoder_for(&params, opts.table.as_deref())?;
-    let train_ms = t_train.elapsed().as_secs_f64() * 1e3;
-    let search = preset::search(opts)?;
-    let mut decoders = vec![decoder];
-    for k in 1..=search.map_or(0, |c| c.levels) {
-        let p = DemParams {
-            max_disp: dem::c2f::level_max_disp(params.max_disp, k),
-            ..params
-        };
-        decoders.push(decoder_for(&p, None)?);
+    let mut decoders = vec![decoder_for(&params, opts.table.as_deref())?];
+    for k in 1..=coarse_levels {
+        decoders.push(decoder_for(&dem::c2f::level_params(&params, k), None)?);
     }
     let decoder = &decoders[0];
-    let train_ms = if decoders.len() > 1 {
-        t_train.elapsed().as_secs_f64() * 1e3
-    } else {
-        train_ms
-    };
+    let train_ms = t_train.elapsed().as_secs_f64() * 1e3;
     let t_run = Instant::now();
     let (lv, rv) = (ImageView::packed(&lp, w, h)?, ImageView::packed(&rp, w, h)?);
     let maps = if let Some(c) = search {

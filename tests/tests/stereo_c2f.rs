@@ -5,7 +5,9 @@
 //! fetch-data`).
 
 use protogist::image::{ImageView, Rgb8};
-use protogist_host::reference::stereo::c2f::{level_max_disp, stereo_c2f, windows_from};
+use protogist_host::reference::stereo::c2f::{
+    level_max_disp, level_params, stereo_c2f, windows_from,
+};
 use protogist_host::reference::stereo::filters::Plane;
 use protogist_host::reference::stereo::readout::Scores;
 use protogist_host::reference::stereo::sgm::{costs, costs_in, EXCLUDED};
@@ -14,10 +16,8 @@ use protogist_host::reference::stereo::train::random_dot_pair;
 use protogist_host::reference::stereo::{
     self as dem, stereo_planes, stereo_planes_in, DemParams, DisparityMapsF, Windows,
 };
-use protogist_host::stereo_cmd::{
-    decoder_for, run_stereo, ReadoutOptions, StereoOptions, SGM_P1, SGM_P2, SGM_PATHS,
-};
-use protogist_tests::data_file;
+use protogist_host::stereo_cmd::{decoder_for, ReadoutOptions, SGM_P1, SGM_P2, SGM_PATHS};
+use protogist_tests::{aloe_files, stereo_bad2, stereo_options};
 
 fn default_decoder() -> dem::Decoder {
     DemTable::parse(DEFAULT_TABLE).unwrap().to_decoder()
@@ -170,11 +170,10 @@ fn random_dots_bad1_below_5_percent_coarse_to_fine() {
             aggregation,
             ..DemParams::default()
         };
-        let coarse = DemParams {
-            max_disp: level_max_disp(params.max_disp, 1),
-            ..params
-        };
-        let decs = [default_decoder(), decoder_for(&coarse, None).unwrap()];
+        let decs = [
+            default_decoder(),
+            decoder_for(&level_params(&params, 1), None).unwrap(),
+        ];
         let (mut bad, mut n) = (0, 0);
         for d in 0..=15usize {
             let (l, r) = random_dot_pair(w, h, d, 0xc2f0_0000 + d as u64);
@@ -210,37 +209,23 @@ fn random_dots_bad1_below_5_percent_coarse_to_fine() {
 fn aloe_coarse_to_fine_sgm_beats_sgbm_over_all_pixels() {
     let dir = tempfile::tempdir().unwrap();
     for (width, max_disp, sgbm) in [(160, 32, 33.5), (320, 64, 32.9)] {
-        let Some(left) = data_file("aloe/aloeL.jpg") else {
+        let Some(files) = aloe_files() else {
             return;
         };
-        let opts = StereoOptions {
-            left,
-            right: data_file("aloe/aloeR.jpg").unwrap(),
-            gt: Some(data_file("aloe/aloeGT.png").unwrap()),
-            gt_scale: 1.0,
-            width,
-            max_disp,
-            pool: Some(1),
-            levels: Some(1),
-            table: None,
-            refine: Some(0),
-            colour: Some(dem::Colour::Luv),
-            chroma_weight: Some(2.0),
-            complete: false,
-            readout: ReadoutOptions {
-                sgm: true,
-                paths: Some(5),
-                c2f: Some(2),
-                c2f_radius: Some(2),
-                c2f_band: Some(2),
-                ..ReadoutOptions::default()
-            },
-            json: true,
-            out: dir.path().to_path_buf(),
+        let mut opts = stereo_options(files, width, max_disp, dir.path());
+        opts.pool = Some(1);
+        opts.levels = Some(1);
+        opts.colour = Some(dem::Colour::Luv);
+        opts.chroma_weight = Some(2.0);
+        opts.readout = ReadoutOptions {
+            sgm: true,
+            paths: Some(5),
+            c2f: Some(2),
+            c2f_radius: Some(2),
+            c2f_band: Some(2),
+            ..ReadoutOptions::default()
         };
-        let s = run_stereo(&opts).unwrap();
-        let v: serde_json::Value = serde_json::from_str(s.raw.as_deref().unwrap()).unwrap();
-        let all = v["final"]["bad2_all"].as_f64().unwrap();
+        let (_, all) = stereo_bad2(&opts);
         println!("{width} px: bad-2 all {all}");
         assert!(all < sgbm, "{width}: {all} vs {sgbm}");
     }
@@ -314,14 +299,10 @@ fn coarse_to_fine_bad_input_is_a_typed_error() {
         Err(StereoError::BadParams(_))
     ));
     // 40 -> 20 -> 10 px: below the support of the default filters.
-    let coarse = |k| DemParams {
-        max_disp: level_max_disp(params.max_disp, k),
-        ..params
-    };
     let decs = [
         fine.clone(),
-        decoder_for(&coarse(1), None).unwrap(),
-        decoder_for(&coarse(2), None).unwrap(),
+        decoder_for(&level_params(&params, 1), None).unwrap(),
+        decoder_for(&level_params(&params, 2), None).unwrap(),
     ];
     assert!(matches!(
         stereo_c2f(&params, &decs, &v, &v, 2, None),
@@ -335,4 +316,28 @@ fn coarse_to_fine_bad_input_is_a_typed_error() {
         stereo_c2f(&params, &[fine.clone(), fine], &v, &v, 2, None),
         Err(StereoError::DecoderMismatch { .. })
     ));
+}
+
+/// `protogist stereo --c2f K` refuses a pair whose coarsest level cannot
+/// hold the filters before it trains any decoder: a typed error.
+#[test]
+fn the_command_checks_the_coarsest_level_first() {
+    use protogist_host::error::HostError;
+    use protogist_host::reference::stereo::StereoError;
+    let dir = tempfile::tempdir().unwrap();
+    let Some(files) = aloe_files() else {
+        return;
+    };
+    let mut opts = stereo_options(files, 64, 8, dir.path());
+    opts.readout.c2f = Some(2);
+    let e = protogist_host::stereo_cmd::run_stereo(&opts).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            HostError::Stereo(StereoError::TooSmall { got: (16, _), .. })
+        ),
+        "{e}"
+    );
+    opts.readout.c2f = None;
+    assert!(protogist_host::stereo_cmd::run_stereo(&opts).is_ok());
 }

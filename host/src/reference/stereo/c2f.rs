@@ -39,7 +39,9 @@ impl Rgb {
         }
     }
 
-    /// 2x2 box means (rounded), `⌊w/2⌋ x ⌊h/2⌋`.
+    /// 2x2 box means (rounded), `⌊w/2⌋ x ⌊h/2⌋`. Not `io::area_downscale`:
+    /// for an odd side that averages over a non-integer ratio, and the
+    /// windows need coarse pixel `(x/2, y/2)` to be exactly the parent.
     fn half(&self) -> Self {
         let (w, h) = (self.width / 2, self.height / 2);
         let at = |x: usize, y: usize| self.data[y * self.width + x];
@@ -76,6 +78,14 @@ impl Rgb {
 pub fn level_max_disp(max_disp: u8, k: usize) -> u8 {
     let m = u32::from(max_disp).div_ceil(1 << k);
     u8::try_from(m).unwrap_or(u8::MAX)
+}
+
+/// The parameters of level `k`: `params` with `max_disp` [`level_max_disp`].
+pub fn level_params(params: &DemParams, k: usize) -> DemParams {
+    DemParams {
+        max_disp: level_max_disp(params.max_disp, k),
+        ..*params
+    }
 }
 
 /// The fine windows `2·d_c ± radius` from a coarse level's raw argmax maps
@@ -129,23 +139,16 @@ pub fn stereo_c2f(
     };
     check(params, fine, left.size(), right.size())?;
     let mut pyramid = vec![(Rgb::of(left), Rgb::of(right))];
-    for k in 1..decoders.len() {
+    for (k, decoder) in decoders.iter().enumerate().skip(1) {
         let (l, r) = &pyramid[k - 1];
         let next = (l.half(), r.half());
-        let p = DemParams {
-            max_disp: level_max_disp(params.max_disp, k),
-            ..*params
-        };
-        let (lv, rv) = (next.0.view(), next.1.view());
-        check(&p, &decoders[k], lv.size(), rv.size())?;
+        let size = (next.0.width, next.0.height);
+        check(&level_params(params, k), decoder, size, size)?;
         pyramid.push(next);
     }
     let mut prior: Option<DisparityMapsF> = None;
     for (k, ((l, r), decoder)) in pyramid.iter().zip(decoders).enumerate().rev() {
-        let p = DemParams {
-            max_disp: level_max_disp(params.max_disp, k),
-            ..*params
-        };
+        let p = level_params(params, k);
         let windows = prior
             .as_ref()
             .map(|c| windows_from(c, l.width, l.height, radius, band));

@@ -363,27 +363,29 @@ pub fn stereo_planes_in(
         filters::monocular_planes(params, right),
     );
     let r = usize::from(params.pool_radius);
-    let all_groups = decoder.layout.groups() as f32;
-    // Scores, box counts, and the groups voting per pixel of each map.
-    let (sl, sr, count, [gl, gr]) = match windows.and_then(|ws| ws.band.map(|b| (ws, b))) {
+    // Scores, box counts, and (banded) the groups voting per pixel of each
+    // map; without a band every group votes everywhere.
+    let (sl, sr, count, voters) = match windows.and_then(|ws| ws.band.map(|b| (ws, b))) {
         Some((ws, band)) => {
             let (sl, sr, voters) =
                 readout::scores_banded(params, decoder, &ml, &mr, w, h, ws, band);
             let mut count = vec![1.0f32; w * h];
             readout::box_sum(&mut count, w, h, 1, r);
-            (sl, sr, count, voters)
+            (sl, sr, count, Some(voters))
         }
         None => {
             let (mut sl, mut sr) = readout::scores(params, decoder, &ml, &mr, w, h);
             let count = readout::pool(&mut sl, r);
             readout::pool(&mut sr, r);
-            (
-                sl,
-                sr,
-                count,
-                [vec![all_groups; w * h], vec![all_groups; w * h]],
-            )
+            (sl, sr, count, None)
         }
+    };
+    let all_groups = decoder.layout.groups() as f32;
+    let groups_at = |eye: usize, p: usize| {
+        voters
+            .as_ref()
+            .and_then(|v| v.get(eye)?.get(p).copied())
+            .unwrap_or(all_groups)
     };
     let n = decoder.disparities();
     // Margins with SGM are per path, in units of a pixel's mean cost gap.
@@ -394,7 +396,7 @@ pub fn stereo_planes_in(
     let picks = |s: &readout::Scores,
                  top: &dyn Fn(usize) -> usize,
                  win: &[Option<(usize, usize)>],
-                 voters: &[f32]|
+                 eye: usize|
      -> Vec<Option<readout::Pick>> {
         let window = |p: usize| win.get(p).copied().flatten();
         // The decision window: `lo..=hi` within `0..=top`.
@@ -413,7 +415,7 @@ pub fn stereo_planes_in(
                 .collect(),
             Aggregation::Sgm { p1, p2, paths } => {
                 let evidence =
-                    |p: usize| s.total[p] >= params.min_energy * 4.0 * voters[p] * count[p];
+                    |p: usize| s.total[p] >= params.min_energy * 4.0 * groups_at(eye, p) * count[p];
                 let cost = sgm::costs_in(s, &decoder.bias, evidence, top, window);
                 let sum = sgm::aggregate(&cost, w, h, n, paths, p1, p2);
                 (0..w * h)
@@ -434,8 +436,8 @@ pub fn stereo_planes_in(
     let none = Vec::new();
     let (wl, wr) = windows.map_or((&none, &none), |ws| (&ws.left, &ws.right));
     let (left_picks, right_picks) = (
-        picks(&sl, &|p| p % w, wl, &gl),
-        picks(&sr, &|p| w - 1 - p % w, wr, &gr),
+        picks(&sl, &|p| p % w, wl, 0),
+        picks(&sr, &|p| w - 1 - p % w, wr, 1),
     );
     let right_raw: Vec<Option<f32>> = right_picks.iter().map(|k| k.map(|k| k.disparity)).collect();
     let mut out = DisparityMapsF {
@@ -450,7 +452,7 @@ pub fn stereo_planes_in(
         off_inconsistent: 0,
     };
     for (p, pick) in left_picks.iter().enumerate() {
-        let energy = sl.total[p] / (4.0 * gl[p] * count[p]);
+        let energy = sl.total[p] / (4.0 * groups_at(0, p) * count[p]);
         let Some(pick) = pick.filter(|_| energy >= params.min_energy && energy > 0.0) else {
             out.off_texture += 1;
             continue;

@@ -126,7 +126,7 @@ pub fn scores_banded(
             // box neighbours), right pixels only through x ≥ shift.
             for x in 0..width {
                 let pl = y * width + x;
-                let pr = (y * width + x).wrapping_sub(g.shift);
+                let pr = pl.saturating_sub(g.shift);
                 let (a, xr, xi) = (flat[3 * pl], flat[3 * pl + 1], flat[3 * pl + 2]);
                 let (in_l, in_r) = (
                     near(&windows.left, pl, g.shift),
