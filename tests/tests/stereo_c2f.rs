@@ -92,8 +92,8 @@ fn windows_restrict_the_decision_and_nothing_else() {
 }
 
 /// Inside a window the costs are normalised over the window alone (0 at
-/// its best, mean gap 1); outside they are [`EXCLUDED`]; beyond the border
-/// (`top`) the window's worst cost, as without windows.
+/// its best, mean gap 1); outside they are [`EXCLUDED`]; the window's
+/// candidates beyond the border (`top`) take its worst valid cost.
 #[test]
 fn windowed_costs_are_normalised_over_the_window() {
     // One pixel, 6 candidates, score raw(d)/total − bias(d) with bias 0.
@@ -114,16 +114,28 @@ fn windowed_costs_are_normalised_over_the_window() {
     let close = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
     assert!(close(&plain, &want), "{plain:?}");
     // Window 1..=3, border at 4: gaps in the window to its best (4): 3 0 2,
-    // mean 5/3; d = 0 and d = 4 excluded (4 is inside the border), d = 5
-    // beyond the border takes the window's worst.
+    // mean 5/3; the rest excluded.
     let c = costs_in(&scores, &bias, |_| true, |_| 4, |_| Some((1, 3)));
     let g = |v: f32| v / (5.0 / 3.0);
-    let want = [EXCLUDED, g(3.0), g(0.0), g(2.0), EXCLUDED, g(3.0)];
+    let want = [EXCLUDED, g(3.0), g(0.0), g(2.0), EXCLUDED, EXCLUDED];
+    assert!(close(&c, &want), "{c:?}");
+    // Window 2..=5, border at 3: valid 2, 3 (scores 4, 2: gaps 0, 2, mean
+    // 1); 4 and 5 are beyond the border and take the worst, 2.
+    let c = costs_in(&scores, &bias, |_| true, |_| 3, |_| Some((2, 5)));
+    let want = [EXCLUDED, EXCLUDED, 0.0, 2.0, 2.0, 2.0];
+    assert!(close(&c, &want), "{c:?}");
+    // Without evidence, or with the window wholly beyond the border: 0 in
+    // the window.
+    let want = [EXCLUDED, EXCLUDED, 0.0, 0.0, 0.0, 0.0];
+    let c = costs_in(&scores, &bias, |_| false, |_| 5, |_| Some((2, 5)));
+    assert!(close(&c, &want), "{c:?}");
+    let c = costs_in(&scores, &bias, |_| true, |_| 1, |_| Some((2, 5)));
     assert!(close(&c, &want), "{c:?}");
 }
 
-/// The windows map the parent pixel's argmax `d` to `2d ± radius`, and a
-/// parent without an estimate to the whole range.
+/// The windows map the parent pixel's argmax `d` to the `2·radius + 1`
+/// candidates around `2d`, shifted into `0..=max_disp`, and a parent
+/// without an estimate to the lowest window.
 #[test]
 fn windows_come_from_the_parent_pixel() {
     let coarse = DisparityMapsF {
@@ -137,19 +149,31 @@ fn windows_come_from_the_parent_pixel() {
         off_ambiguous: 0,
         off_inconsistent: 0,
     };
-    let ws = windows_from(&coarse, 5, 2, 2, None);
+    let ws = windows_from(&coarse, 5, 2, 2, None, 14);
     // x 0, 1 -> parent 0; x 2, 3 -> parent 1; x 4 -> parent 1 (clamped).
-    let row = [Some((5, 9)), Some((5, 9)), None, None, None];
+    let row = [
+        Some((5, 9)),
+        Some((5, 9)),
+        Some((0, 4)),
+        Some((0, 4)),
+        Some((0, 4)),
+    ];
     assert_eq!(&ws.left[..5], &row);
     assert_eq!(&ws.left[5..], &row);
+    // 2 · 0.2 rounds to 0: 0..=4, not −2..=2; 2 · 7 = 14: 10..=14.
     let rrow = [
-        Some((0, 2)),
-        Some((0, 2)),
-        Some((12, 16)),
-        Some((12, 16)),
-        Some((12, 16)),
+        Some((0, 4)),
+        Some((0, 4)),
+        Some((10, 14)),
+        Some((10, 14)),
+        Some((10, 14)),
     ];
     assert_eq!(&ws.right[..5], &rrow);
+    // A range shorter than the window: the whole range.
+    assert_eq!(
+        windows_from(&coarse, 5, 2, 2, None, 3).left[0],
+        Some((0, 3))
+    );
     assert_eq!(level_max_disp(32, 1), 16);
     assert_eq!(level_max_disp(31, 2), 8);
 }

@@ -5,8 +5,8 @@
 //! coarsest level searches every candidate `0..=⌈D / 2^k⌉`; each finer level
 //! searches only `2·d_c ± radius` around the coarser level's argmax `d_c`
 //! at the parent pixel `(x/2, y/2)` (before its OFF tests), for the left-
-//! and the right-referenced maps alike. A pixel whose parent has no
-//! estimate searches every candidate. Every level runs the same read-out
+//! and the right-referenced maps alike, in windows of fixed length
+//! ([`windows_from`]). Every level runs the same read-out
 //! ([`DemParams::aggregation`]: box or SGM) with its own decoder.
 //!
 //! What it answers: whether the read-out keeps its accuracy when the fine
@@ -88,25 +88,34 @@ pub fn level_params(params: &DemParams, k: usize) -> DemParams {
     }
 }
 
-/// The fine windows `2·d_c ± radius` from a coarse level's raw argmax maps
-/// (`wc x hc`) for a `w x h` level.
+/// The fine windows from a coarse level's raw argmax maps (`wc x hc`) for
+/// a `w x h` level searching `0..=max_disp`: every window holds
+/// `n = min(2·radius + 1, max_disp + 1)` consecutive candidates, the ones
+/// around `c = 2·d_c` shifted to fit the range
+/// (`lo = min(c − radius, max_disp + 1 − n)`, not below 0), and a pixel
+/// whose parent has no estimate gets the lowest window `0..n`. A fixed
+/// window length is what an engine that stores only the window holds
+/// (`protogist::stereo::c2f`).
 pub fn windows_from(
     coarse: &DisparityMapsF,
     w: usize,
     h: usize,
     radius: usize,
     band: Option<usize>,
+    max_disp: usize,
 ) -> Windows {
     let (wc, hc) = (coarse.width, coarse.height);
+    let n = (2 * radius + 1).min(max_disp + 1);
     let map = |raw: &[Option<f32>]| -> Vec<Option<(usize, usize)>> {
         (0..w * h)
             .map(|p| {
                 let (x, y) = (p % w, p / w);
                 let q = (y / 2).min(hc.saturating_sub(1)) * wc + (x / 2).min(wc.saturating_sub(1));
-                raw.get(q).copied().flatten().map(|d| {
+                let lo = raw.get(q).copied().flatten().map_or(0, |d| {
                     let c = (2.0 * d).round().max(0.0) as usize;
-                    (c.saturating_sub(radius), c + radius)
-                })
+                    c.saturating_sub(radius).min(max_disp + 1 - n)
+                });
+                Some((lo, lo + n - 1))
             })
             .collect()
     };
@@ -151,7 +160,7 @@ pub fn stereo_c2f(
         let p = level_params(params, k);
         let windows = prior
             .as_ref()
-            .map(|c| windows_from(c, l.width, l.height, radius, band));
+            .map(|c| windows_from(c, l.width, l.height, radius, band, usize::from(p.max_disp)));
         let (lv, rv) = (l.view(), r.view());
         let maps = stereo_planes_in(
             &p,

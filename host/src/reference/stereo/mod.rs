@@ -399,18 +399,22 @@ pub fn stereo_planes_in(
                  eye: usize|
      -> Vec<Option<readout::Pick>> {
         let window = |p: usize| win.get(p).copied().flatten();
-        // The decision window: `lo..=hi` within `0..=top`.
+        // The decision window: `lo..=hi` within `0..=top` (`None`: the
+        // window lies wholly beyond `top`, no estimate).
         let range = |p: usize| {
             let t = top(p).min(n - 1);
-            window(p).map_or((0, t), |(lo, hi)| (lo.min(t), hi.min(t)))
+            window(p).map_or(Some((0, t)), |(lo, hi)| {
+                (lo <= t).then_some((lo, hi.min(t)))
+            })
         };
         match params.aggregation {
             Aggregation::Box => (0..w * h)
                 .map(|p| {
                     let (raw, total) = (&s.raw[p * n..(p + 1) * n], s.total[p]);
-                    let (lo, hi) = range(p);
-                    (total > 0.0)
-                        .then(|| readout::pick_in(lo, hi, |d| raw[d] / total - decoder.bias[d]))
+                    let (lo, hi) = range(p).filter(|_| total > 0.0)?;
+                    Some(readout::pick_in(lo, hi, |d| {
+                        raw[d] / total - decoder.bias[d]
+                    }))
                 })
                 .collect(),
             Aggregation::Sgm { p1, p2, paths } => {
@@ -420,13 +424,11 @@ pub fn stereo_planes_in(
                 let sum = sgm::aggregate(&cost, w, h, n, paths, p1, p2);
                 (0..w * h)
                     .map(|p| {
-                        (s.total[p] > 0.0).then(|| {
-                            let (lo, hi) = range(p);
-                            let k = readout::pick_in(lo, hi, |d| -sum[p * n + d]);
-                            readout::Pick {
-                                margin: k.margin / per_path,
-                                ..k
-                            }
+                        let (lo, hi) = range(p).filter(|_| s.total[p] > 0.0)?;
+                        let k = readout::pick_in(lo, hi, |d| -sum[p * n + d]);
+                        Some(readout::Pick {
+                            margin: k.margin / per_path,
+                            ..k
                         })
                     })
                     .collect()

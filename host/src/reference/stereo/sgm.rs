@@ -169,9 +169,12 @@ pub fn costs(
 }
 
 /// [`costs`] with a search window per pixel: `window(p) = Some((lo, hi))`
-/// restricts the candidates to `lo..=hi` (clipped to `top(p)`); the others
-/// cost [`EXCLUDED`] and the mean gap is taken over the window only, as an
-/// engine that scores only the window would.
+/// restricts the candidates to `lo..=hi`, as an engine that stores only
+/// the window would (`protogist::stereo::c2f`): candidates outside it cost
+/// [`EXCLUDED`]; the valid ones, `lo..=min(hi, top(p))`, are normalised
+/// over themselves; the window's candidates beyond `top(p)` cost the worst
+/// valid one. A windowed pixel without evidence, or whose window lies
+/// wholly beyond `top(p)`, costs 0 in its window.
 pub fn costs_in(
     scores: &Scores,
     bias: &[f32],
@@ -186,35 +189,29 @@ pub fn costs_in(
         .zip(scores.raw.chunks_exact(n))
         .enumerate()
     {
+        let t = top(p).min(n - 1);
+        // The window, and its last valid candidate.
+        let (lo, hi) = window(p).map_or((0, n - 1), |(lo, hi)| (lo.min(n - 1), hi.min(n - 1)));
+        c[..lo].fill(EXCLUDED);
+        c[hi + 1..].fill(EXCLUDED);
         let total = scores.total[p];
-        if total <= 0.0 || !evidence(p) {
+        if total <= 0.0 || !evidence(p) || lo > t {
             continue;
         }
-        let t = top(p).min(n - 1);
-        for ((c, &r), &b) in c.iter_mut().zip(raw).zip(bias) {
+        let last = hi.min(t);
+        for ((c, &r), &b) in c[lo..=last].iter_mut().zip(&raw[lo..]).zip(&bias[lo..]) {
             *c = -(r / total - b);
         }
-        let (lo, t) = match window(p) {
-            Some((lo, hi)) => {
-                let (lo, hi) = (lo.min(t), hi.min(t));
-                c[..lo].fill(EXCLUDED);
-                c[hi + 1..=t].fill(EXCLUDED);
-                (lo, hi)
-            }
-            None => (0, t),
-        };
-        let valid = &mut c[lo..=t];
-        let lo = valid.iter().copied().fold(f32::INFINITY, f32::min);
-        let mean = valid.iter().map(|v| v - lo).sum::<f32>() / valid.len() as f32;
+        let valid = &mut c[lo..=last];
+        let min = valid.iter().copied().fold(f32::INFINITY, f32::min);
+        let mean = valid.iter().map(|v| v - min).sum::<f32>() / valid.len() as f32;
         let scale = if mean > 0.0 { 1.0 / mean } else { 0.0 };
-        let mut hi = 0.0f32;
+        let mut worst = 0.0f32;
         for v in valid.iter_mut() {
-            *v = (*v - lo) * scale;
-            hi = hi.max(*v);
+            *v = (*v - min) * scale;
+            worst = worst.max(*v);
         }
-        for v in c[t + 1..].iter_mut().filter(|v| **v < EXCLUDED) {
-            *v = hi;
-        }
+        c[last + 1..=hi].fill(worst);
     }
     cost
 }
