@@ -25,6 +25,7 @@
 //! (clipped to the image), so a coarse-to-fine search can narrow the window
 //! without touching the rest.
 
+pub mod c2f;
 pub mod filters;
 pub mod readout;
 pub mod sgm;
@@ -502,6 +503,8 @@ pub enum Step {
     Energies,
     /// Votes, pooling, argmax, OFF tests.
     Readout,
+    /// Semi-global aggregation (the coarse-to-fine engine).
+    Sgm,
 }
 
 /// Told when the stage enters a step (for per-step timing); `()` ignores it.

@@ -1,0 +1,1036 @@
+//! The coarse-to-fine engine: the DEM read-out searching a few candidates
+//! per pixel, with row-streamed semi-global aggregation, mirroring the f32
+//! reference `protogist_host::reference::stereo::c2f::stereo_c2f` with one
+//! pyramid level per c2f level (`levels = 1`), no pooling (`pool_radius =
+//! 0`) and 5 SGM paths (docs/STEREO.md, "The coarse-to-fine engine in
+//! core").
+//!
+//! ```text
+//! level K (w/2^K) ── full search 0..=⌈D/2^K⌉, every cell group ──► lo maps
+//! level k < K     ── window lo..lo+n (n = 2R + 1) from the parent pixel,
+//!                    groups within `band` px of the window's centre ──► …
+//! level 0         ── the same, then the OFF tests ──► sink(x, y, cell)
+//! ```
+//!
+//! **Levels.** Level `k` is the pair halved `k` times by rounded 2x2 means of
+//! the RGB pixels (`⌊w/2^k⌋ x ⌊h/2^k⌋`), produced row by row from the frames
+//! ([`RgbRows`]), so no level is stored: a level's grey rows go through a
+//! ring of `2r + 1` rows as in [`super::readout`]. Each level runs the DEM
+//! with its own decoder table (`max_disp` = `⌈D/2^k⌉`).
+//!
+//! **Windows.** A level finer than the coarsest searches, per pixel and
+//! eye, `n = min(2R + 1, max_disp + 1)` consecutive candidates from `lo`,
+//! where `lo = min(round(2·d_c) − R, max_disp + 1 − n)` (not below 0) from
+//! the parent pixel's argmax `d_c` (before the OFF tests), and `lo = 0`
+//! where the parent has none. The coarser level stores only these `lo`
+//! (one byte per pixel and eye). Candidates beyond the border (`d > x`
+//! left-referenced, `d > w − 1 − x` right-referenced) cost the window's
+//! worst valid cost; a window wholly beyond the border gives no estimate.
+//!
+//! **Band.** With `band = Some(b)`, a windowed pixel is decoded only from
+//! the cell groups whose shift `s` satisfies `|s − centre| ≤ b`, centre
+//! `lo + (n − 1)/2`; the texture test then counts only those groups. Cells
+//! are evaluated only where some pixel takes their vote: the left pixel `x`
+//! or the right pixel `x − s`.
+//!
+//! **Formats.** Energies as the full read-out (`Q8` grey², rounded once),
+//! votes and totals in `i64` from the `i16` table. The scores
+//! `n(d) = raw(d)·2^bf − bias(d)·T·2^wf` ([`super::readout::pick`]) give
+//! the SGM costs `C(d) = (max n − n(d)) · m / Σ_e (max n − n(e))` over the
+//! `m` valid candidates (the reference's gap to the best over the mean
+//! gap), in `Q8` (`u16`, at most `256·m`): the gaps are truncated to 16
+//! significant bits (block floating point per pixel) and the quotient
+//! rounded once. P1 and P2 are in the same `Q8` units; the 5 paths run in
+//! [`super::sgm::Sgm`] exactly. Pixels without evidence (below the
+//! texture threshold) cost 0 in their window. The decision is the argmin
+//! of the path sums in the window, with the parabola through its
+//! neighbours (`U8F8`) and the margin to the best sum more than 1 px
+//! away, per path, against `min_margin`.
+//!
+//! **Error bound** against the f32 reference: each cost is within
+//! `2^-8·(1/2 + m·2^-15·m)` mean gaps of the reference's (the rounding,
+//! and the truncation of each gap to 16 bits against a largest gap of at
+//! least `2^15` units), plus the energies' bound (ERROR_BOUNDS.md section
+//! 7). Path sums are exact on those costs, so decisions differ only where
+//! two candidates' sums are within the accumulated cost error, i.e. at
+//! near ties; the proptest of `tests/tests/stereo_c2f_core.rs` requires
+//! 99 % of the pixels valid in both to be within 0.25 px of the reference
+//! and 99 % of the OFF decisions to agree.
+
+use super::filters::{energy, grey_row, Bank, MAX_TAPS, Z};
+use super::sgm::{self, Sgm};
+use super::{Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport};
+use crate::disparity::DisparityCell;
+use crate::fixed::{round_shift, U8F8};
+use crate::image::{ImageView, Rgb8};
+
+/// Largest number of coarse levels.
+pub const MAX_COARSE: usize = 3;
+/// The number of SGM paths (the 5 of one top-to-bottom pass).
+pub const PATHS: u32 = 5;
+/// Fraction bits of the SGM costs and penalties.
+pub const COST_FRAC: u32 = 8;
+
+/// RGB rows of an input frame, on demand: a frame in memory, or a camera
+/// that renders rows as the engine asks for them.
+pub trait RgbRows {
+    /// `(width, height)`.
+    fn size(&self) -> (usize, usize);
+    /// Row `y` (`y < height`) into `out` (`width` long).
+    fn rgb_row(&self, y: usize, out: &mut [Rgb8]);
+}
+
+impl RgbRows for ImageView<'_, Rgb8> {
+    fn size(&self) -> (usize, usize) {
+        ImageView::size(self)
+    }
+
+    fn rgb_row(&self, y: usize, out: &mut [Rgb8]) {
+        if let Some(row) = self.row(y) {
+            for (o, &p) in out.iter_mut().zip(row) {
+                *o = p;
+            }
+        }
+    }
+}
+
+/// The parameters of the engine.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct C2fParams {
+    /// The model at every level (`max_disp` is level 0's); `levels` must be
+    /// 1 and `pool_radius` 0.
+    pub dem: DemParams,
+    /// Coarse levels `K` (1..=[`MAX_COARSE`]).
+    pub coarse: u8,
+    /// Window half width `R`: `2R + 1` candidates at the finer levels.
+    pub radius: u8,
+    /// Decode a windowed pixel only from the groups within this many px of
+    /// its window's centre (`None`: every group).
+    pub band: Option<u8>,
+    /// SGM penalty for a 1 px step, in mean cost gaps.
+    pub p1: f32,
+    /// SGM penalty for a larger step (`>= p1`), in mean cost gaps.
+    pub p2: f32,
+}
+
+impl C2fParams {
+    /// `--levels 1 --pool 0 --sgm --paths 5 --c2f 2 --c2f-radius 2
+    /// --c2f-band 2` of the reference with `max_disp` 31 (the firmware's
+    /// 32 disparities), P1 0.25 and P2 16 (the reference's SGM defaults).
+    pub const DEFAULT: Self = Self {
+        dem: DemParams {
+            max_disp: 31,
+            levels: 1,
+            pool_radius: 0,
+            ..DemParams::DEFAULT
+        },
+        coarse: 2,
+        radius: 2,
+        band: Some(2),
+        p1: 0.25,
+        p2: 16.0,
+    };
+
+    /// `max_disp` of level `k`: `⌈D / 2^k⌉`.
+    pub const fn level_max_disp(&self, k: usize) -> u8 {
+        let d = self.dem.max_disp as usize;
+        let m = d.div_ceil(1 << k);
+        if m > 255 {
+            255
+        } else {
+            m as u8
+        }
+    }
+
+    /// The model of level `k`.
+    pub const fn level_params(&self, k: usize) -> DemParams {
+        let mut p = self.dem;
+        p.max_disp = self.level_max_disp(k);
+        p
+    }
+
+    /// Candidates per pixel at level `k`: all of them at the coarsest,
+    /// `min(2R + 1, max_disp + 1)` below.
+    pub const fn candidates(&self, k: usize) -> usize {
+        let all = self.level_max_disp(k) as usize + 1;
+        let win = 2 * self.radius as usize + 1;
+        if k >= self.coarse as usize || win > all {
+            all
+        } else {
+            win
+        }
+    }
+
+    /// Levels, `K + 1` (0 for bad parameters).
+    const fn levels(&self) -> usize {
+        if self.coarse as usize > MAX_COARSE {
+            0
+        } else {
+            self.coarse as usize + 1
+        }
+    }
+}
+
+impl Default for C2fParams {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Width of level `k`: `⌊w / 2^k⌋`.
+pub const fn level_len(n: usize, k: usize) -> usize {
+    n >> k
+}
+
+/// `u16` elements of the grey rings: `2r + 1` rows of level 0 per eye.
+pub const fn grey_len(w: usize, p: &C2fParams) -> usize {
+    2 * (2 * p.dem.radius as usize + 1) * w
+}
+
+/// `Rgb8` elements of the row scratch: the longest chain of 2x2 means,
+/// `⌊w/2^k⌋ + Σ_{i<k} 2·⌊w/2^i⌋` over the levels.
+pub const fn rgb_len(w: usize, p: &C2fParams) -> usize {
+    let mut best = 0;
+    let mut k = 0;
+    while k < p.levels() {
+        let mut n = level_len(w, k);
+        let mut i = 0;
+        while i < k {
+            n += 2 * level_len(w, i);
+            i += 1;
+        }
+        if n > best {
+            best = n;
+        }
+        k += 1;
+    }
+    best
+}
+
+/// [`Z`] elements of the response rows: per eye and carrier, one row.
+pub const fn z_len(w: usize, p: &C2fParams) -> usize {
+    2 * p.dem.carriers as usize * w
+}
+
+/// Largest `width · candidates` over the levels.
+const fn row_cells(w: usize, p: &C2fParams) -> usize {
+    let mut best = 0;
+    let mut k = 0;
+    while k < p.levels() {
+        let n = level_len(w, k) * p.candidates(k);
+        if n > best {
+            best = n;
+        }
+        k += 1;
+    }
+    best
+}
+
+/// `i64` elements of the score rows: per eye, pixel and candidate, plus
+/// each pixel's total.
+pub const fn score_len(w: usize, p: &C2fParams) -> usize {
+    let mut best = 0;
+    let mut k = 0;
+    while k < p.levels() {
+        let n = level_len(w, k) * (p.candidates(k) + 1);
+        if n > best {
+            best = n;
+        }
+        k += 1;
+    }
+    2 * best
+}
+
+/// `u16` elements of the cost rows, the windows and the voter counts of
+/// both eyes, and of the two SGM states.
+pub const fn cost_len(w: usize, p: &C2fParams) -> usize {
+    let mut state = 0;
+    let mut k = 0;
+    while k < p.levels() {
+        let n = sgm::scratch_len(level_len(w, k), p.candidates(k));
+        if n > state {
+            state = n;
+        }
+        k += 1;
+    }
+    2 * row_cells(w, p) + 4 * w + 2 * state
+}
+
+/// `u32` elements of the SGM sums of both eyes.
+pub const fn sum_len(w: usize, p: &C2fParams) -> usize {
+    2 * row_cells(w, p)
+}
+
+/// `i32` elements of the per-row picks (left and right).
+pub const fn pick_len(w: usize) -> usize {
+    2 * w
+}
+
+/// `u8` elements of the window maps: levels 1 and 2 (both eyes), the
+/// coarser ones reusing them.
+pub const fn map_len(w: usize, h: usize, p: &C2fParams) -> usize {
+    let mut n = 0;
+    let mut k = 1;
+    while k <= 2 && k < p.levels() {
+        n += 2 * level_len(w, k) * level_len(h, k);
+        k += 1;
+    }
+    n
+}
+
+/// Scratch bytes of the engine at `w` x `h`, beyond the two input frames
+/// and the output.
+pub const fn scratch_bytes(w: usize, h: usize, p: &C2fParams) -> usize {
+    2 * grey_len(w, p)
+        + 3 * rgb_len(w, p)
+        + 4 * z_len(w, p)
+        + 12 * w
+        + 8 * score_len(w, p)
+        + 2 * cost_len(w, p)
+        + 4 * sum_len(w, p)
+        + 4 * pick_len(w)
+        + map_len(w, h, p)
+}
+
+/// Caller-provided scratch, sized by the `const fn`s of this module.
+pub struct C2fBuffers<'a> {
+    /// Grey rings ([`grey_len`]).
+    pub grey: &'a mut [u16],
+    /// RGB rows ([`rgb_len`]).
+    pub rgb: &'a mut [Rgb8],
+    /// Response rows ([`z_len`]).
+    pub z: &'a mut [Z],
+    /// y-pass row (`w`).
+    pub col: &'a mut [[i32; 3]],
+    /// Score rows ([`score_len`]).
+    pub scores: &'a mut [i64],
+    /// Costs, windows, voters, SGM states ([`cost_len`]).
+    pub costs: &'a mut [u16],
+    /// SGM sums ([`sum_len`]).
+    pub sums: &'a mut [u32],
+    /// Row picks ([`pick_len`]).
+    pub picks: &'a mut [i32],
+    /// Window maps ([`map_len`]).
+    pub maps: &'a mut [u8],
+}
+
+/// The set-up engine: checked parameters, kernels, thresholds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct C2f {
+    /// The parameters.
+    pub params: C2fParams,
+    /// The model of level 0 (kernels and thresholds, the same at every
+    /// level).
+    pub dem: Dem,
+    /// P1 in `Q8`.
+    pub p1_q8: u16,
+    /// P2 in `Q8`.
+    pub p2_q8: u16,
+    /// Ambiguity threshold on the path-sum margin: OFF when
+    /// `margin·2^16 < min_margin_sums`.
+    pub min_margin_sums: i64,
+}
+
+impl C2f {
+    /// Checks `params` and builds the kernels (one-time setup, floats via
+    /// `libm`).
+    ///
+    /// # Errors
+    /// [`StereoError::BadParams`].
+    #[allow(
+        clippy::float_arithmetic,
+        clippy::cast_possible_truncation,
+        clippy::cast_sign_loss
+    )]
+    pub fn new(params: &C2fParams) -> Result<Self, StereoError> {
+        let bad = |ok: bool, what| {
+            if ok {
+                Ok(())
+            } else {
+                Err(StereoError::BadParams(what))
+            }
+        };
+        bad(params.dem.levels == 1, "coarse to fine needs levels = 1")?;
+        bad(
+            params.dem.pool_radius == 0,
+            "coarse to fine needs pool_radius = 0",
+        )?;
+        bad(
+            (1..=MAX_COARSE).contains(&usize::from(params.coarse)),
+            "coarse levels must be 1..=3",
+        )?;
+        bad(
+            params.p1 >= 0.0 && params.p2 >= params.p1 && params.p2 <= 128.0,
+            "SGM penalties must satisfy 0 <= p1 <= p2 <= 128",
+        )?;
+        let dem = Dem::new(&params.dem)?;
+        let q8 = |v: f32| libm::roundf(v * 256.0) as u16;
+        let (p1_q8, p2_q8) = (q8(params.p1), q8(params.p2));
+        // Costs are at most 256·n: with P2 they must fit the SGM's u16.
+        let n_max = (0..params.levels())
+            .map(|k| params.candidates(k))
+            .max()
+            .unwrap_or(1);
+        bad(
+            256 * n_max + usize::from(p2_q8) <= usize::from(u16::MAX),
+            "too many candidates per pixel for the SGM costs",
+        )?;
+        // margin_sums / (256·5) < min_margin  ⇔  margin_sums·2^16 < q16·1280.
+        let min_margin_sums = dem.min_margin_q16.saturating_mul(256 * i64::from(PATHS));
+        Ok(Self {
+            params: *params,
+            dem,
+            p1_q8,
+            p2_q8,
+            min_margin_sums,
+        })
+    }
+
+    /// Checks the sizes of a run and the tables (one per level, level 0
+    /// first).
+    ///
+    /// # Errors
+    /// [`StereoError`]: mismatched sizes, a level below the filter
+    /// support, `max_disp` not below a level's width, a table of another
+    /// layout, or a table count other than `K + 1`.
+    pub fn check(
+        &self,
+        tables: &[DemTable<'_>],
+        left: (usize, usize),
+        right: (usize, usize),
+    ) -> Result<(), StereoError> {
+        if left != right {
+            return Err(StereoError::SizeMismatch { left, right });
+        }
+        if tables.len() != self.params.levels() {
+            return Err(StereoError::BadParams("one decoder table per level"));
+        }
+        let min = self.params.dem.min_size();
+        for (k, table) in tables.iter().enumerate() {
+            let p = self.params.level_params(k);
+            let size = (level_len(left.0, k), level_len(left.1, k));
+            if size.0 < min || size.1 < min {
+                return Err(StereoError::TooSmall { min, got: size });
+            }
+            if usize::from(p.max_disp) >= size.0 {
+                return Err(StereoError::MaxDispTooLarge {
+                    max_disp: p.max_disp,
+                    width: size.0,
+                });
+            }
+            let expected = p.layout();
+            if table.layout != expected {
+                return Err(StereoError::DecoderMismatch {
+                    got: table.layout,
+                    expected,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs the engine on a pair: every output cell goes to `sink(x, y,
+    /// cell)` row by row (left-referenced, `U8F8` px or OFF); `tables[k]` is
+    /// level `k`'s decoder.
+    ///
+    /// # Errors
+    /// As [`C2f::check`], and [`StereoError::Buffer`] for short buffers,
+    /// before any cell is produced.
+    pub fn run<S: RgbRows>(
+        &self,
+        tables: &[DemTable<'_>],
+        left: &S,
+        right: &S,
+        bufs: &mut C2fBuffers<'_>,
+        sink: &mut impl FnMut(usize, usize, DisparityCell),
+        probe: &mut impl Probe,
+    ) -> Result<StereoReport, StereoError> {
+        self.check(tables, left.size(), right.size())?;
+        let (w, h) = left.size();
+        let p = &self.params;
+        let need = [
+            ("grey", bufs.grey.len(), grey_len(w, p)),
+            ("rgb", bufs.rgb.len(), rgb_len(w, p)),
+            ("z", bufs.z.len(), z_len(w, p)),
+            ("col", bufs.col.len(), w),
+            ("scores", bufs.scores.len(), score_len(w, p)),
+            ("costs", bufs.costs.len(), cost_len(w, p)),
+            ("sums", bufs.sums.len(), sum_len(w, p)),
+            ("picks", bufs.picks.len(), pick_len(w)),
+            ("maps", bufs.maps.len(), map_len(w, h, p)),
+        ];
+        if let Some(&(what, got, needed)) = need.iter().find(|e| e.1 < e.2) {
+            return Err(StereoError::Buffer { what, needed, got });
+        }
+        let mut report = StereoReport::default();
+        let levels = p.levels();
+        // Maps of odd levels in the first part, of even levels in the
+        // second: a level reads its parent's part and writes its own.
+        let C2fBuffers {
+            grey,
+            rgb,
+            z,
+            col,
+            scores,
+            costs,
+            sums,
+            picks,
+            maps,
+        } = bufs;
+        let mut work = Work {
+            grey,
+            rgb,
+            z,
+            col,
+            scores,
+            costs,
+            sums,
+            picks,
+        };
+        let split = 2 * level_len(w, 1) * level_len(h, 1);
+        let (odd, even) = maps.split_at_mut(split.min(maps.len()));
+        for k in (0..levels).rev() {
+            let (mine, parent) = if k % 2 == 1 {
+                (&mut *odd, &*even)
+            } else {
+                (&mut *even, &*odd)
+            };
+            let table = tables.get(k).ok_or(StereoError::BadParams("no table"))?;
+            let pass = Pass::new(self, k, (w, h));
+            let parent = (k + 1 < levels).then_some(parent);
+            let out = if k == 0 {
+                Output::Sink(&mut *sink, &mut report)
+            } else {
+                Output::Map(mine)
+            };
+            pass.run(table, [left, right], &mut work, parent, out, probe)?;
+        }
+        Ok(report)
+    }
+}
+
+/// The scratch of one level's run (the maps aside).
+struct Work<'b, 'a> {
+    grey: &'b mut &'a mut [u16],
+    rgb: &'b mut &'a mut [Rgb8],
+    z: &'b mut &'a mut [Z],
+    col: &'b mut &'a mut [[i32; 3]],
+    scores: &'b mut &'a mut [i64],
+    costs: &'b mut &'a mut [u16],
+    sums: &'b mut &'a mut [u32],
+    picks: &'b mut &'a mut [i32],
+}
+
+/// Where a level's result goes.
+enum Output<'o, F> {
+    /// A coarse level: the windows of the next finer level.
+    Map(&'o mut [u8]),
+    /// Level 0: the OFF tests, then the sink.
+    Sink(&'o mut F, &'o mut StereoReport),
+}
+
+/// One level's run.
+struct Pass<'e> {
+    e: &'e C2f,
+    k: usize,
+    w: usize,
+    h: usize,
+    /// Frame size.
+    full: (usize, usize),
+    /// Candidates per pixel.
+    n: usize,
+    shifts: usize,
+    step: usize,
+    /// Whether the band applies (a windowed level with a band).
+    band: Option<usize>,
+}
+
+/// Splits `n` elements off the front of `*s`.
+fn take<'a, T>(
+    s: &mut &'a mut [T],
+    n: usize,
+    what: &'static str,
+) -> Result<&'a mut [T], StereoError> {
+    let got = s.len();
+    let (head, tail) = core::mem::take(s)
+        .split_at_mut_checked(n)
+        .ok_or(StereoError::Buffer {
+            what,
+            needed: n,
+            got,
+        })?;
+    *s = tail;
+    Ok(head)
+}
+
+/// Level-`k` RGB row `j` of `src` (rounded 2x2 means, `k` times) into
+/// `out` (`⌊w/2^k⌋` long), with `scratch` for the finer rows.
+fn level_row<S: RgbRows>(src: &S, k: usize, j: usize, out: &mut [Rgb8], scratch: &mut [Rgb8]) {
+    if k == 0 {
+        src.rgb_row(j, out);
+        return;
+    }
+    let fw = 2 * out.len();
+    let (a, rest) = scratch.split_at_mut(fw.min(scratch.len()));
+    let (b, rest) = rest.split_at_mut(fw.min(rest.len()));
+    level_row(src, k - 1, 2 * j, a, rest);
+    level_row(src, k - 1, 2 * j + 1, b, rest);
+    let mean = |p: [u8; 4]| {
+        let s: u16 = p.iter().map(|&v| u16::from(v)).sum();
+        ((s + 2) / 4) as u8
+    };
+    for ((o, a), b) in out.iter_mut().zip(a.chunks_exact(2)).zip(b.chunks_exact(2)) {
+        if let ([a0, a1], [b0, b1]) = (a, b) {
+            *o = Rgb8::new(
+                mean([a0.r, a1.r, b0.r, b1.r]),
+                mean([a0.g, a1.g, b0.g, b1.g]),
+                mean([a0.b, a1.b, b0.b, b1.b]),
+            );
+        }
+    }
+}
+
+/// One pixel's decision before the OFF tests.
+#[derive(Clone, Copy)]
+struct Decision {
+    /// `U8F8` bits.
+    disparity: i32,
+    /// Best path sum more than 1 px away minus the best (`None`: none).
+    margin: Option<u32>,
+}
+
+/// Argmin of `sums` (a window from `lo`, the first `valid` of them), the
+/// parabola through its neighbours in `U8F8`, and the margin.
+fn decide(sums: &[u32], lo: usize, valid: usize) -> Option<Decision> {
+    let s = sums.get(..valid)?;
+    let (mut best, mut sb) = (0usize, *s.first()?);
+    for (i, &v) in s.iter().enumerate().skip(1) {
+        if v < sb {
+            (best, sb) = (i, v);
+        }
+    }
+    let second = s
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i.abs_diff(best) > 1)
+        .map(|(_, &v)| v)
+        .min();
+    let mut disparity = ((lo + best) as i32) << 8;
+    if best > 0 && best + 1 < valid {
+        let (m, p) = (
+            i64::from(s.get(best - 1).copied().unwrap_or(sb)),
+            i64::from(s.get(best + 1).copied().unwrap_or(sb)),
+        );
+        let c = i64::from(sb);
+        // The reference's parabola on −sum: δ = (m − p) / (2 (m − 2c + p)).
+        let curv = m - 2 * c + p;
+        if curv > 0 {
+            let num = 128 * (m - p);
+            let delta = (2 * num + curv).div_euclid(2 * curv).clamp(-128, 128);
+            disparity += delta as i32;
+        }
+    }
+    Some(Decision {
+        disparity,
+        margin: second.map(|v| v - sb),
+    })
+}
+
+/// The normalised `Q8` costs of one pixel (module docs) from its scores
+/// `raw` (window candidates) and `total`: `valid` candidates from `lo`,
+/// the rest of the window the worst valid cost.
+fn costs_of(
+    raw: &[i64],
+    total: i64,
+    table: &DemTable<'_>,
+    lo: usize,
+    valid: usize,
+    out: &mut [u16],
+) {
+    let sh = (64 - total.leading_zeros()).saturating_sub(30);
+    let t = total >> sh;
+    let (wf, bf) = (u32::from(table.weight_frac), u32::from(table.bias_frac));
+    let n = |i: usize, r: i64| -> i64 {
+        ((r >> sh) << bf).saturating_sub((i64::from(table.bias_at(lo + i)) * t) << wf)
+    };
+    let best = raw
+        .iter()
+        .take(valid)
+        .enumerate()
+        .map(|(i, &r)| n(i, r))
+        .max()
+        .unwrap_or(0);
+    let gap = |i: usize, r: i64| best.saturating_sub(n(i, r)).max(0) as u64;
+    let gmax = raw
+        .iter()
+        .take(valid)
+        .enumerate()
+        .map(|(i, &r)| gap(i, r))
+        .max()
+        .unwrap_or(0);
+    let sh2 = (64 - gmax.leading_zeros()).saturating_sub(16);
+    let total_gap: u64 = raw
+        .iter()
+        .take(valid)
+        .enumerate()
+        .map(|(i, &r)| gap(i, r) >> sh2)
+        .sum();
+    let m = valid as u64;
+    let mut worst = 0u16;
+    for (i, (o, &r)) in out.iter_mut().zip(raw).enumerate().take(valid) {
+        let c = ((gap(i, r) >> sh2) * (256 * m) + total_gap / 2)
+            .checked_div(total_gap)
+            .unwrap_or(0);
+        *o = c.min(u64::from(u16::MAX)) as u16;
+        worst = worst.max(*o);
+    }
+    for o in out.iter_mut().skip(valid) {
+        *o = worst;
+    }
+}
+
+impl<'e> Pass<'e> {
+    fn new(e: &'e C2f, k: usize, full: (usize, usize)) -> Self {
+        let p = &e.params;
+        let layout = p.level_params(k).layout();
+        let windowed = k < usize::from(p.coarse);
+        Self {
+            e,
+            k,
+            w: level_len(full.0, k),
+            h: level_len(full.1, k),
+            full,
+            n: p.candidates(k),
+            shifts: layout.shifts(0),
+            step: usize::from(layout.shift_step.max(1)),
+            band: p.band.filter(|_| windowed).map(usize::from),
+        }
+    }
+
+    /// Whether a windowed pixel with window `lo` takes the vote of shift
+    /// `s`.
+    fn near(&self, lo: u16, s: usize) -> bool {
+        self.band.is_none_or(|b| {
+            let centre2 = 2 * usize::from(lo) + self.n - 1;
+            (2 * s).abs_diff(centre2) <= 2 * b
+        })
+    }
+
+    #[allow(clippy::too_many_lines)]
+    fn run<S: RgbRows, F: FnMut(usize, usize, DisparityCell)>(
+        &self,
+        table: &DemTable<'_>,
+        src: [&S; 2],
+        bufs: &mut Work<'_, '_>,
+        parent: Option<&[u8]>,
+        mut out: Output<'_, F>,
+        probe: &mut impl Probe,
+    ) -> Result<(), StereoError> {
+        let (w, h, n) = (self.w, self.h, self.n);
+        let dem = &self.e.dem;
+        let carriers = usize::from(dem.params.carriers);
+        let taps = 2 * usize::from(dem.params.radius) + 1;
+        let r = taps / 2;
+        let bank = Bank::new(dem.kernels.get(..carriers).unwrap_or(&[]));
+        // Split the scratch.
+        let mut grey = &mut **bufs.grey;
+        let rings = [
+            take(&mut grey, taps * w, "grey")?,
+            take(&mut grey, taps * w, "grey")?,
+        ];
+        let mut rgb = &mut **bufs.rgb;
+        let rgb_out = take(&mut rgb, w, "rgb")?;
+        let rgb_scratch = rgb;
+        let mut z = &mut **bufs.z;
+        let zs = [
+            take(&mut z, carriers * w, "z")?,
+            take(&mut z, carriers * w, "z")?,
+        ];
+        let mut col = &mut **bufs.col;
+        let col = take(&mut col, w, "col")?;
+        let stride = n + 1;
+        let mut sc = &mut **bufs.scores;
+        let (sl, sr) = (
+            take(&mut sc, w * stride, "scores")?,
+            take(&mut sc, w * stride, "scores")?,
+        );
+        let mut cs = &mut **bufs.costs;
+        let costs = [
+            take(&mut cs, w * n, "costs")?,
+            take(&mut cs, w * n, "costs")?,
+        ];
+        let los = [take(&mut cs, w, "costs")?, take(&mut cs, w, "costs")?];
+        let voters = [take(&mut cs, w, "costs")?, take(&mut cs, w, "costs")?];
+        let state = sgm::scratch_len(w, n);
+        let sgm_err = |_| StereoError::BadParams("SGM state");
+        let sgms = [
+            Sgm::new(
+                w,
+                n,
+                self.e.p1_q8,
+                self.e.p2_q8,
+                take(&mut cs, state, "costs")?,
+            )
+            .map_err(sgm_err)?,
+            Sgm::new(
+                w,
+                n,
+                self.e.p1_q8,
+                self.e.p2_q8,
+                take(&mut cs, state, "costs")?,
+            )
+            .map_err(sgm_err)?,
+        ];
+        let mut su = &mut **bufs.sums;
+        let sums = [take(&mut su, w * n, "sums")?, take(&mut su, w * n, "sums")?];
+        let picks = &mut **bufs.picks;
+        let (lp, rp) = picks.split_at_mut(w.min(picks.len()));
+        let [costs_l, costs_r] = costs;
+        let [lo_l, lo_r] = los;
+        let [vo_l, vo_r] = voters;
+        let [sum_l, sum_r] = sums;
+        let [ring_l, ring_r] = rings;
+        let [z_l, z_r] = zs;
+        let [mut sgm_l, mut sgm_r] = sgms;
+        let groups = (carriers * self.shifts) as u64;
+        let (wc, hc) = (
+            level_len(self.full.0, self.k + 1),
+            level_len(self.full.1, self.k + 1),
+        );
+        let mut next = 0;
+        for y in 0..h {
+            // Grey rows up to y + r, both eyes.
+            probe.enter(Step::Pyramid);
+            while next <= (y + r).min(h - 1) {
+                let slot = next % taps;
+                for (ring, s) in [&mut *ring_l, &mut *ring_r].into_iter().zip(src) {
+                    level_row(s, self.k, next, rgb_out, rgb_scratch);
+                    if let Some(dst) = ring.get_mut(slot * w..(slot + 1) * w) {
+                        grey_row(rgb_out, dst);
+                    }
+                }
+                next += 1;
+            }
+            probe.enter(Step::Filters);
+            for (ring, zrow) in [(&*ring_l, &mut *z_l), (&*ring_r, &mut *z_r)] {
+                let mut rows: [&[u16]; MAX_TAPS] = [&[]; MAX_TAPS];
+                for (t, dst) in rows.iter_mut().enumerate().take(taps) {
+                    let j = (y + t).saturating_sub(r).min(h - 1) % taps;
+                    *dst = ring.get(j * w..(j + 1) * w).unwrap_or(&[]);
+                }
+                bank.row(rows.get(..taps).unwrap_or(&[]), col, zrow);
+            }
+            // Windows of this row.
+            probe.enter(Step::Energies);
+            for (eye, lo) in [&mut *lo_l, &mut *lo_r].into_iter().enumerate() {
+                let row = parent.and_then(|m| {
+                    let yc = (y / 2).min(hc.saturating_sub(1));
+                    let base = eye * wc * hc + yc * wc;
+                    m.get(base..base + wc)
+                });
+                for (x, v) in lo.iter_mut().enumerate() {
+                    *v = row
+                        .and_then(|m| m.get((x / 2).min(wc.saturating_sub(1))))
+                        .map_or(0, |&b| u16::from(b));
+                }
+            }
+            sl.fill(0);
+            sr.fill(0);
+            vo_l.fill(0);
+            vo_r.fill(0);
+            // Cells and votes.
+            for x in 0..w {
+                let lo_x = lo_l.get(x).copied().unwrap_or(0);
+                for c in 0..carriers {
+                    let zl = z_l.get(c * w + x).copied().unwrap_or([0; 2]);
+                    let zrow = z_r.get(c * w..(c + 1) * w).unwrap_or(&[]);
+                    for ks in 0..self.shifts {
+                        let s = ks * self.step;
+                        let in_l = self.near(lo_x, s);
+                        let pr = x.checked_sub(s);
+                        let in_r =
+                            pr.is_some_and(|p| self.near(lo_r.get(p).copied().unwrap_or(0), s));
+                        if in_l && self.band.is_some() {
+                            if let Some(v) = vo_l.get_mut(x) {
+                                *v += 1;
+                            }
+                        }
+                        let Some(p) = pr.filter(|_| in_l || in_r) else {
+                            continue;
+                        };
+                        let [a, xr, xi] =
+                            energy(zl, zrow.get(p).copied()).map(|v| round_shift(v, 4));
+                        let wb = table.group_bytes(c * self.shifts + ks);
+                        let add = |sc: &mut [i64], px: usize, lo: u16| {
+                            let lo = usize::from(lo);
+                            let Some(dst) = sc.get_mut(px * stride..(px + 1) * stride) else {
+                                return;
+                            };
+                            let wts = wb.get(6 * lo..6 * (lo + n)).unwrap_or(&[]);
+                            for (d, c6) in dst.iter_mut().zip(wts.chunks_exact(6)) {
+                                if let [a0, a1, b0, b1, c0, c1] = *c6 {
+                                    *d += a * i64::from(i16::from_le_bytes([a0, a1]))
+                                        + xr * i64::from(i16::from_le_bytes([b0, b1]))
+                                        + xi * i64::from(i16::from_le_bytes([c0, c1]));
+                                }
+                            }
+                            if let Some(t) = dst.get_mut(n) {
+                                *t += 4 * a;
+                            }
+                        };
+                        if in_l {
+                            add(sl, x, lo_x);
+                        }
+                        if in_r {
+                            add(sr, p, lo_r.get(p).copied().unwrap_or(0));
+                            if self.band.is_some() {
+                                if let Some(v) = vo_r.get_mut(p) {
+                                    *v += 1;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            // Costs, aggregation, decisions.
+            probe.enter(Step::Readout);
+            let need = |total: i64, voters: u16| -> bool {
+                let cells = if self.band.is_some() {
+                    u64::from(voters)
+                } else {
+                    groups
+                };
+                total > 0 && (total as u64) >= dem.min_energy_q8 * 4 * cells
+            };
+            for (eye, (sc, cost)) in [(&*sl, &mut *costs_l), (&*sr, &mut *costs_r)]
+                .into_iter()
+                .enumerate()
+            {
+                let (lo, vo) = if eye == 0 {
+                    (&*lo_l, &*vo_l)
+                } else {
+                    (&*lo_r, &*vo_r)
+                };
+                for (x, ((raw, dst), (&lo, &v))) in sc
+                    .chunks_exact(stride)
+                    .zip(cost.chunks_exact_mut(n))
+                    .zip(lo.iter().zip(vo))
+                    .enumerate()
+                {
+                    let top = if eye == 0 { x } else { w - 1 - x };
+                    let lo = usize::from(lo);
+                    let total = raw.get(n).copied().unwrap_or(0);
+                    if !need(total, v) || lo > top {
+                        dst.fill(0);
+                        continue;
+                    }
+                    let valid = (top - lo + 1).min(n);
+                    costs_of(raw.get(..n).unwrap_or(&[]), total, table, lo, valid, dst);
+                }
+            }
+            probe.enter(Step::Sgm);
+            sgm_l.push_row(costs_l, lo_l, sum_l).map_err(sgm_err)?;
+            sgm_r.push_row(costs_r, lo_r, sum_r).map_err(sgm_err)?;
+            probe.enter(Step::Readout);
+            // Right-referenced decisions first: the left-right check reads
+            // them.
+            for (x, ((pk, raw), (&lo, s))) in rp
+                .iter_mut()
+                .zip(sr.chunks_exact(stride))
+                .zip(lo_r.iter().zip(sum_r.chunks_exact(n)))
+                .enumerate()
+            {
+                *pk = self
+                    .decision(raw, lo, s, w - 1 - x)
+                    .map_or(-1, |d| d.disparity);
+            }
+            for (x, ((pk, raw), ((&lo, s), &v))) in lp
+                .iter_mut()
+                .zip(sl.chunks_exact(stride))
+                .zip(lo_l.iter().zip(sum_l.chunks_exact(n)).zip(vo_l.iter()))
+                .enumerate()
+            {
+                let d = self.decision(raw, lo, s, x);
+                *pk = d.map_or(-1, |d| d.disparity);
+                if let Output::Sink(sink, report) = &mut out {
+                    let total = raw.get(n).copied().unwrap_or(0);
+                    let cell = self.off_tests(x, d, need(total, v), rp, report);
+                    sink(x, y, cell);
+                }
+            }
+            if let Output::Map(map) = &mut out {
+                self.windows_below(y, [&*lp, &*rp], map);
+            }
+        }
+        Ok(())
+    }
+
+    /// The decision of one pixel: its scores row `raw` (for the total),
+    /// window `lo`, path sums `sums`, last valid candidate `top`.
+    fn decision(&self, raw: &[i64], lo: u16, sums: &[u32], top: usize) -> Option<Decision> {
+        let lo = usize::from(lo);
+        let total = raw.get(self.n).copied().unwrap_or(0);
+        if total <= 0 || lo > top {
+            return None;
+        }
+        decide(sums, lo, (top - lo + 1).min(self.n))
+    }
+
+    /// Stores the next finer level's window `lo` for row `y` of both eyes'
+    /// decisions `picks` (`U8F8` bits, negative: none).
+    fn windows_below(&self, y: usize, picks: [&[i32]; 2], map: &mut [u8]) {
+        let p = &self.e.params;
+        let k = self.k.saturating_sub(1);
+        let (all_f, n_f) = (usize::from(p.level_max_disp(k)) + 1, p.candidates(k));
+        let radius = usize::from(p.radius);
+        for (eye, picks) in picks.into_iter().enumerate() {
+            let base = eye * self.w * self.h + y * self.w;
+            let Some(dst) = map.get_mut(base..base + self.w) else {
+                continue;
+            };
+            for (m, &d) in dst.iter_mut().zip(picks) {
+                let lo = usize::try_from((d + 64) >> 7).map_or(0, |c| {
+                    c.saturating_sub(radius).min(all_f.saturating_sub(n_f))
+                });
+                *m = lo.min(255) as u8;
+            }
+        }
+    }
+
+    /// The OFF tests of left pixel `x` (texture, ambiguity, left-right
+    /// against the right decisions `right`), counted in `report`.
+    fn off_tests(
+        &self,
+        x: usize,
+        d: Option<Decision>,
+        textured: bool,
+        right: &[i32],
+        report: &mut StereoReport,
+    ) -> DisparityCell {
+        let Some(d) = d.filter(|_| textured) else {
+            report.off_texture += 1;
+            return DisparityCell::OFF;
+        };
+        if d.margin
+            .is_some_and(|m| (i64::from(m) << 16) < self.e.min_margin_sums)
+        {
+            report.off_ambiguous += 1;
+            return DisparityCell::OFF;
+        }
+        let v = d.disparity;
+        let ok = self.e.dem.lr_tolerance_q8.is_none_or(|tol| {
+            let xr = x as i64 - i64::from((v + 128) >> 8);
+            usize::try_from(xr)
+                .ok()
+                .and_then(|xr| right.get(xr).copied())
+                .is_some_and(|b| b >= 0 && (b - v).abs() <= tol)
+        });
+        if !ok {
+            report.off_inconsistent += 1;
+            return DisparityCell::OFF;
+        }
+        report.on += 1;
+        let q = v.clamp(0, i32::from(u16::MAX - 1)) as u16;
+        DisparityCell::from_raw(U8F8::from_bits(q))
+    }
+}

@@ -1,0 +1,440 @@
+//! The coarse-to-fine engine of core (`protogist::stereo::c2f`) against the
+//! f32 reference `stereo_c2f` with the same settings (`--levels 1 --pool 0
+//! --sgm --paths 5 --c2f K --c2f-radius R --c2f-band B`): agreement on
+//! random-dot stereograms and on Aloe, flat input, scratch, bad input.
+
+use proptest::prelude::*;
+use protogist::disparity::DisparityCell;
+use protogist::image::{ImageView, Rgb8};
+use protogist::stereo::c2f::{self, C2f, C2fBuffers, C2fParams};
+use protogist::stereo::filters::Z;
+use protogist::stereo::{self as qs, StereoError, StereoReport};
+use protogist_host::io::{area_downscale, load_rgb, to_core_rgb, working_size};
+use protogist_host::reference::stereo::c2f::{level_params, stereo_c2f};
+use protogist_host::reference::stereo::table::DemTable as HostTable;
+use protogist_host::reference::stereo::train::random_dot_pair;
+use protogist_host::reference::stereo::{self as dem};
+use protogist_tests::data_file;
+use std::collections::HashMap;
+use std::sync::{Mutex, OnceLock};
+
+/// Owned scratch of the engine.
+struct Storage {
+    grey: Vec<u16>,
+    rgb: Vec<Rgb8>,
+    z: Vec<Z>,
+    col: Vec<[i32; 3]>,
+    scores: Vec<i64>,
+    costs: Vec<u16>,
+    sums: Vec<u32>,
+    picks: Vec<i32>,
+    maps: Vec<u8>,
+}
+
+impl Storage {
+    fn new(w: usize, h: usize, p: &C2fParams) -> Self {
+        Self {
+            grey: vec![0; c2f::grey_len(w, p)],
+            rgb: vec![Rgb8::new(0, 0, 0); c2f::rgb_len(w, p)],
+            z: vec![[0; 2]; c2f::z_len(w, p)],
+            col: vec![[0; 3]; w],
+            scores: vec![0; c2f::score_len(w, p)],
+            costs: vec![0; c2f::cost_len(w, p)],
+            sums: vec![0; c2f::sum_len(w, p)],
+            picks: vec![0; c2f::pick_len(w)],
+            maps: vec![0; c2f::map_len(w, h, p)],
+        }
+    }
+
+    fn bufs(&mut self) -> C2fBuffers<'_> {
+        C2fBuffers {
+            grey: &mut self.grey,
+            rgb: &mut self.rgb,
+            z: &mut self.z,
+            col: &mut self.col,
+            scores: &mut self.scores,
+            costs: &mut self.costs,
+            sums: &mut self.sums,
+            picks: &mut self.picks,
+            maps: &mut self.maps,
+        }
+    }
+}
+
+/// The reference's parameters for `p`.
+fn host_params(p: &C2fParams) -> dem::DemParams {
+    let d = &p.dem;
+    dem::DemParams {
+        max_disp: d.max_disp,
+        carriers: d.carriers,
+        levels: d.levels,
+        wavelength: d.wavelength,
+        sigma_per_wavelength: d.sigma_per_wavelength,
+        radius: d.radius,
+        shift_step: d.shift_step,
+        pool_radius: d.pool_radius,
+        min_energy: d.min_energy,
+        min_margin: d.min_margin,
+        lr_tolerance: d.lr_tolerance,
+        aggregation: dem::Aggregation::Sgm {
+            p1: p.p1,
+            p2: p.p2,
+            paths: 5,
+        },
+        ..dem::DemParams::default()
+    }
+}
+
+/// The decoder tables of every level of `p` (trained once per layout).
+fn tables(p: &C2fParams) -> Vec<Vec<u8>> {
+    static CACHE: OnceLock<Mutex<HashMap<u8, Vec<u8>>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+    let hp = host_params(p);
+    (0..=usize::from(p.coarse))
+        .map(|k| {
+            let lp = level_params(&hp, k);
+            let mut c = cache.lock().unwrap();
+            c.entry(lp.max_disp)
+                .or_insert_with(|| HostTable::from_decoder(&dem::train(&lp)).to_bytes())
+                .clone()
+        })
+        .collect()
+}
+
+/// Runs core on an RGB pair.
+fn run_core(
+    p: &C2fParams,
+    tables: &[Vec<u8>],
+    l: &[Rgb8],
+    r: &[Rgb8],
+    w: usize,
+    h: usize,
+) -> Result<(Vec<DisparityCell>, StereoReport), StereoError> {
+    let e = C2f::new(p)?;
+    let ts: Vec<qs::DemTable<'_>> = tables
+        .iter()
+        .map(|t| qs::DemTable::parse(t))
+        .collect::<Result<_, _>>()?;
+    let mut st = Storage::new(w, h, p);
+    let mut out = vec![DisparityCell::OFF; w * h];
+    let rep = e.run(
+        &ts,
+        &ImageView::packed(l, w, h).unwrap(),
+        &ImageView::packed(r, w, h).unwrap(),
+        &mut st.bufs(),
+        &mut |x, y, c| out[y * w + x] = c,
+        &mut (),
+    )?;
+    Ok((out, rep))
+}
+
+/// Runs the reference with the same tables.
+fn run_float(
+    p: &C2fParams,
+    tables: &[Vec<u8>],
+    l: &[Rgb8],
+    r: &[Rgb8],
+    w: usize,
+    h: usize,
+) -> dem::DisparityMapsF {
+    let decs: Vec<dem::Decoder> = tables
+        .iter()
+        .map(|t| HostTable::parse(t).unwrap().to_decoder())
+        .collect();
+    stereo_c2f(
+        &host_params(p),
+        &decs,
+        &ImageView::packed(l, w, h).unwrap(),
+        &ImageView::packed(r, w, h).unwrap(),
+        usize::from(p.radius),
+        p.band.map(usize::from),
+    )
+    .unwrap()
+}
+
+/// (% of pixels ON in both within 0.25 px, % of pixels whose OFF decision
+/// agrees, pixels ON in both).
+fn agreement(core: &[DisparityCell], float: &dem::DisparityMapsF) -> (f64, f64, usize) {
+    let (mut both, mut close, mut agree) = (0usize, 0usize, 0usize);
+    for (c, f) in core.iter().zip(&float.disparity_f32) {
+        let c = c.get().map(|v| v.to_num::<f32>());
+        agree += usize::from(c.is_some() == f.is_some());
+        if let (Some(c), Some(f)) = (c, f) {
+            both += 1;
+            close += usize::from((c - f).abs() <= 0.25);
+        }
+    }
+    (
+        100.0 * close as f64 / both.max(1) as f64,
+        100.0 * agree as f64 / core.len().max(1) as f64,
+        both,
+    )
+}
+
+/// Grey RDS pair as RGB.
+fn rds_rgb(w: usize, h: usize, d: usize, seed: u64) -> (Vec<Rgb8>, Vec<Rgb8>) {
+    let (l, r) = random_dot_pair(w, h, d, seed);
+    let rgb = |p: &dem::filters::Plane| {
+        p.data
+            .iter()
+            .map(|&v| {
+                let g = v.round().clamp(0.0, 255.0) as u8;
+                Rgb8::new(g, g, g)
+            })
+            .collect::<Vec<_>>()
+    };
+    (rgb(&l), rgb(&r))
+}
+
+fn params(max_disp: u8) -> C2fParams {
+    C2fParams {
+        dem: qs::DemParams {
+            max_disp,
+            ..C2fParams::DEFAULT.dem
+        },
+        ..C2fParams::DEFAULT
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(8))]
+
+    /// Random-dot pairs of uniform disparity: core agrees with the
+    /// reference (99 % within 0.25 px, 99 % of OFF decisions), and finds
+    /// the disparity.
+    #[test]
+    fn random_dot_pairs_agree(seed: u64, d in 0usize..=15, band in prop::option::of(1u8..=3)) {
+        let (w, h) = (96, 64);
+        let p = C2fParams { band, ..params(15) };
+        let ts = tables(&p);
+        let (l, r) = rds_rgb(w, h, d, seed);
+        let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
+        let float = run_float(&p, &ts, &l, &r, w, h);
+        let (close, agree, both) = agreement(&core, &float);
+        prop_assert!(both > w * h / 2, "only {both} pixels ON in both");
+        prop_assert!(close >= 99.0, "{close:.2} % within 0.25 px");
+        prop_assert!(agree >= 99.0, "{agree:.2} % OFF agreement");
+        prop_assert_eq!(rep.on, core.iter().filter(|c| c.get().is_some()).count());
+        // Interior pixels right of the search range: core misses d by more
+        // than 1 px on at most 1 % more of them than the reference.
+        let (bc, bf, n) = bad1(&core, &float, w, h, d);
+        prop_assert!(bc <= bf + n / 100, "bad-1 core {bc}, reference {bf}, of {n}");
+    }
+}
+
+/// Pixels (core, reference, all) of the interior right of the search range
+/// (x ≥ 31, 16 px from the other borders) off `d` by more than 1 px.
+fn bad1(
+    core: &[DisparityCell],
+    float: &dem::DisparityMapsF,
+    w: usize,
+    h: usize,
+    d: usize,
+) -> (usize, usize, usize) {
+    let (mut bc, mut bf, mut n) = (0, 0, 0);
+    for y in 16..h - 16 {
+        for x in 31..w - 16 {
+            n += 1;
+            let off = |v: f32| (v - d as f32).abs() > 1.0;
+            bc += usize::from(core[y * w + x].get().is_none_or(|v| off(v.to_num())));
+            bf += usize::from(float.disparity_f32[y * w + x].is_none_or(off));
+        }
+    }
+    (bc, bf, n)
+}
+
+/// The random-dot anchor through the engine: over d = 0..=15, bad-1 of the
+/// interior is below 5 % (the spec's bound), with and without a band.
+#[test]
+fn random_dots_bad1_below_5_percent() {
+    let (w, h) = (96, 64);
+    for band in [None, Some(2)] {
+        let p = C2fParams { band, ..params(15) };
+        let ts = tables(&p);
+        let (mut bad, mut all) = (0, 0);
+        for d in 0..=15usize {
+            let (l, r) = rds_rgb(w, h, d, 0xc2f0 + d as u64);
+            let (core, _) = run_core(&p, &ts, &l, &r, w, h).unwrap();
+            let float = run_float(&p, &ts, &l, &r, w, h);
+            let (bc, _, n) = bad1(&core, &float, w, h, d);
+            bad += bc;
+            all += n;
+        }
+        let pct = 100.0 * bad as f64 / all as f64;
+        println!("RDS bad-1 core c2f, band {band:?}: {pct:.2} %");
+        assert!(pct < 5.0, "band {band:?}: {pct}");
+    }
+}
+
+fn aloe_160() -> Option<(Vec<Rgb8>, Vec<Rgb8>, usize, usize)> {
+    let l = load_rgb(&data_file("aloe/aloeL.jpg")?).unwrap();
+    let r = load_rgb(&data_file("aloe/aloeR.jpg")?).unwrap();
+    let (w, h) = working_size(l.width(), l.height(), 160).unwrap();
+    Some((
+        to_core_rgb(&area_downscale(&l, w, h)),
+        to_core_rgb(&area_downscale(&r, w, h)),
+        w as usize,
+        h as usize,
+    ))
+}
+
+/// Aloe at 160 px with 32 disparities (needs `cargo xtask fetch-data`):
+/// the bounds, 99 % within 0.25 px and 99 % OFF agreement.
+#[test]
+fn aloe_160_d32_agrees() {
+    let Some((l, r, w, h)) = aloe_160() else {
+        return;
+    };
+    let p = params(31);
+    let ts = tables(&p);
+    let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
+    let float = run_float(&p, &ts, &l, &r, w, h);
+    let (close, agree, both) = agreement(&core, &float);
+    println!("aloe 160 c2f: {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
+    assert!(both > w * h / 2, "{both}");
+    assert!(close >= 99.0, "{close}");
+    assert!(agree >= 99.0, "{agree}");
+}
+
+/// Flat images have no texture: every pixel OFF, no panic.
+#[test]
+fn flat_images_give_an_all_off_map() {
+    let (w, h) = (80, 64);
+    let p = params(15);
+    let ts = tables(&p);
+    let img = vec![Rgb8::new(90, 120, 30); w * h];
+    let (out, rep) = run_core(&p, &ts, &img, &img, w, h).unwrap();
+    assert!(out.iter().all(|c| c.get().is_none()));
+    assert_eq!(rep.off_texture, w * h);
+}
+
+/// The scratch at 160x120 with 32 disparities, by the `const fn`: within
+/// the 96 KB.
+#[test]
+fn scratch_at_160x120() {
+    let b = c2f::scratch_bytes(160, 120, &C2fParams::DEFAULT);
+    println!("c2f scratch 160x120 D32: {b} bytes");
+    assert!(b <= 96 * 1024, "{b}");
+    // The buffers the const fns size are the ones the run needs: one
+    // element less in any of them is a typed error.
+    let p = params(15);
+    let ts = tables(&p);
+    let (w, h) = (96, 64);
+    let (l, r) = rds_rgb(w, h, 4, 7);
+    let parsed: Vec<qs::DemTable<'_>> =
+        ts.iter().map(|t| qs::DemTable::parse(t).unwrap()).collect();
+    let e = C2f::new(&p).unwrap();
+    let lv = ImageView::packed(&l, w, h).unwrap();
+    let rv = ImageView::packed(&r, w, h).unwrap();
+    for which in 0..9 {
+        let mut st = Storage::new(w, h, &p);
+        match which {
+            0 => st.grey.pop().map(drop),
+            1 => st.rgb.pop().map(drop),
+            2 => st.z.pop().map(drop),
+            3 => st.col.pop().map(drop),
+            4 => st.scores.pop().map(drop),
+            5 => st.costs.pop().map(drop),
+            6 => st.sums.pop().map(drop),
+            7 => st.picks.pop().map(drop),
+            _ => st.maps.pop().map(drop),
+        };
+        let mut cells = 0;
+        let got = e.run(
+            &parsed,
+            &lv,
+            &rv,
+            &mut st.bufs(),
+            &mut |_, _, _| cells += 1,
+            &mut (),
+        );
+        assert!(
+            matches!(got, Err(StereoError::Buffer { .. })),
+            "{which}: {got:?}"
+        );
+        assert_eq!(cells, 0, "{which}");
+    }
+}
+
+/// Bad input is a typed error before any cell is produced.
+#[test]
+fn bad_input_is_a_typed_error() {
+    let p = params(15);
+    let ts = tables(&p);
+    let parsed: Vec<qs::DemTable<'_>> =
+        ts.iter().map(|t| qs::DemTable::parse(t).unwrap()).collect();
+    let e = C2f::new(&p).unwrap();
+    let (w, h) = (64, 48);
+    let (l, r) = rds_rgb(w, h, 4, 7);
+    let lv = ImageView::packed(&l, w, h).unwrap();
+    let rv = ImageView::packed(&r, w, h).unwrap();
+    let mut st = Storage::new(w, h, &p);
+    let mut run =
+        |tables: &[qs::DemTable<'_>], a: &ImageView<'_, Rgb8>, b: &ImageView<'_, Rgb8>| {
+            let mut cells = 0;
+            let got = e.run(
+                tables,
+                a,
+                b,
+                &mut st.bufs(),
+                &mut |_, _, _| cells += 1,
+                &mut (),
+            );
+            (got, cells)
+        };
+    // Tables: too few, in the wrong order.
+    let (got, cells) = run(&parsed[..2], &lv, &rv);
+    assert!(matches!(got, Err(StereoError::BadParams(_))), "{got:?}");
+    assert_eq!(cells, 0);
+    let swapped = [parsed[1], parsed[0], parsed[2]];
+    let (got, _) = run(&swapped, &lv, &rv);
+    assert!(
+        matches!(got, Err(StereoError::DecoderMismatch { .. })),
+        "{got:?}"
+    );
+    // Sizes: different, and a coarse level below the filter support.
+    let small = ImageView::packed(&l[..w * 40], w, 40).unwrap();
+    let (got, _) = run(&parsed, &lv, &small);
+    assert!(
+        matches!(got, Err(StereoError::SizeMismatch { .. })),
+        "{got:?}"
+    );
+    let (got, _) = run(&parsed, &small, &small);
+    assert!(
+        matches!(
+            got,
+            Err(StereoError::TooSmall {
+                min: 15,
+                got: (16, 10)
+            })
+        ),
+        "{got:?}"
+    );
+    // Parameters the engine does not run.
+    for bad in [
+        C2fParams {
+            dem: qs::DemParams { levels: 2, ..p.dem },
+            ..p
+        },
+        C2fParams {
+            dem: qs::DemParams {
+                pool_radius: 1,
+                ..p.dem
+            },
+            ..p
+        },
+        C2fParams { coarse: 0, ..p },
+        C2fParams { coarse: 4, ..p },
+        C2fParams {
+            p1: 2.0,
+            p2: 1.0,
+            ..p
+        },
+        C2fParams { p2: f32::NAN, ..p },
+    ] {
+        assert!(
+            matches!(C2f::new(&bad), Err(StereoError::BadParams(_))),
+            "{bad:?}"
+        );
+    }
+}
