@@ -140,24 +140,31 @@ fn run_objects(edges: &[EdgeCell]) -> Result<String, objects::ObjectError> {
 
 /// The stereo stage on the 160x120 demo pair, as on the board.
 fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
+    use firmware_sim::pg::image::Rgb8;
     use firmware_sim::stereo_run::{self, len};
-    let (mut grey, mut z, mut col) = (
+    let (mut grey, mut rgb, mut z, mut col) = (
         vec![0u16; len::GREY],
+        vec![Rgb8::new(0, 0, 0); len::RGB],
         vec![[0i16; 2]; len::Z],
         vec![[0i32; 3]; len::COL],
     );
-    let (mut energy, mut scores, mut picks) = (
-        vec![0i32; len::ENERGY],
+    let (mut scores, mut costs, mut sums, mut picks, mut maps) = (
         vec![0i64; len::SCORES],
+        vec![0u16; len::COSTS],
+        vec![0u32; len::SUMS],
         vec![0i32; len::PICKS],
+        vec![0u8; len::MAPS],
     );
-    let mut bufs = firmware_sim::pg::stereo::StereoBuffers {
+    let mut bufs = firmware_sim::pg::stereo::c2f::C2fBuffers {
         grey: &mut grey,
+        rgb: &mut rgb,
         z: &mut z,
         col: &mut col,
-        energy: &mut energy,
         scores: &mut scores,
+        costs: &mut costs,
+        sums: &mut sums,
         picks: &mut picks,
+        maps: &mut maps,
     };
     let r = stereo_run::run(&mut bufs, &mut WallTicks(Instant::now()))?;
     let mut out = String::new();

@@ -223,15 +223,20 @@ fn run_stereo(
     ticks: &mut SysTicks,
     to_instructions: &impl Fn(u64) -> u64,
 ) -> Result<(), &'static str> {
-    use firmware_sim::pg::stereo::StereoBuffers;
+    use firmware_sim::pg::image::Rgb8;
+    use firmware_sim::pg::stereo::c2f::C2fBuffers;
     use firmware_sim::stereo_run::{self, len, ZCell};
-    let mut bufs = StereoBuffers {
+    const BLACK: Rgb8 = Rgb8::new(0, 0, 0);
+    let mut bufs = C2fBuffers {
         grey: singleton!(: [u16; len::GREY] = [0; len::GREY]).ok_or("stereo grey taken")?,
+        rgb: singleton!(: [Rgb8; len::RGB] = [BLACK; len::RGB]).ok_or("stereo rgb taken")?,
         z: singleton!(: [ZCell; len::Z] = [[0; 2]; len::Z]).ok_or("stereo z taken")?,
         col: singleton!(: [[i32; 3]; len::COL] = [[0; 3]; len::COL]).ok_or("stereo col taken")?,
-        energy: singleton!(: [i32; len::ENERGY] = [0; len::ENERGY]).ok_or("stereo energy taken")?,
         scores: singleton!(: [i64; len::SCORES] = [0; len::SCORES]).ok_or("stereo scores taken")?,
+        costs: singleton!(: [u16; len::COSTS] = [0; len::COSTS]).ok_or("stereo costs taken")?,
+        sums: singleton!(: [u32; len::SUMS] = [0; len::SUMS]).ok_or("stereo sums taken")?,
         picks: singleton!(: [i32; len::PICKS] = [0; len::PICKS]).ok_or("stereo picks taken")?,
+        maps: singleton!(: [u8; len::MAPS] = [0; len::MAPS]).ok_or("stereo maps taken")?,
     };
     let r = stereo_run::run(&mut bufs, ticks).map_err(|_| "stereo stage failed")?;
     stereo_run::write_report(out, &r, to_instructions).map_err(|_| "semihosting write failed")

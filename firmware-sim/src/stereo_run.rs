@@ -1,22 +1,29 @@
 //! The stereo stage on the board: the demo scene's 160x120 stereo pair,
-//! 32 disparities, row-streamed.
+//! 32 disparities, through the coarse-to-fine engine
+//! (`protogist::stereo::c2f`, docs/STEREO.md "The coarse-to-fine engine in
+//! core").
 //!
-//! The simulated stereo camera renders each grey row when the stage asks
-//! for it (`synth::SceneSpec::colour`), and each output row is folded into
-//! the checksum as it is produced, so only the stage's own scratch
-//! ([`stereo::scratch_bytes`]) is in RAM: neither frames nor the map. The
-//! decoder table for D = 32 (`data/dem_d32.bin`, written by
-//! `protogist train-dem --max-disp 31`) is a `const` in flash.
+//! The simulated stereo camera renders each RGB row when the engine asks
+//! for it (`synth::SceneSpec::colour`; the coarse levels ask for 2 and 4
+//! rows per level row), and each output row is folded into the checksum as
+//! it is produced, so only the engine's scratch ([`c2f::scratch_bytes`]) is
+//! in RAM: neither frames nor the map. The decoder tables of the three
+//! levels (`data/dem_c2f_l{0,1,2}.bin`, written by `protogist train-dem
+//! --levels 1 --max-disp 31 | 16 | 8`) are `const`s in flash.
+//!
+//! The full-search engine (`stereo::stereo_streamed`) ran here until
+//! 2026-11-21 (101,581 instructions/px, `git checkout 05f3e88 && cargo
+//! xtask firmware`); the two do not fit in RAM together with the rest of
+//! the firmware.
 
 use core::fmt::{self, Write};
 
 use crate::pg::checksum::Fnv1a;
 use crate::pg::disparity::DisparityCell;
-use crate::pg::stereo::filters::{grey, Z};
-use crate::pg::stereo::{
-    self, col_len, energy_len, grey_len, pick_len, score_len, z_len, Dem, DemParams, DemTable,
-    GreyRows, Probe, Step, StereoBuffers, StereoError, StereoReport,
-};
+use crate::pg::image::Rgb8;
+use crate::pg::stereo::c2f::{self, C2f, C2fBuffers, C2fParams, RgbRows};
+use crate::pg::stereo::filters::Z;
+use crate::pg::stereo::{DemTable, Probe, Step, StereoError, StereoReport};
 use crate::pg::synth::SceneSpec;
 use crate::Ticks;
 
@@ -24,33 +31,41 @@ use crate::Ticks;
 pub const WIDTH: usize = 160;
 /// Frame height.
 pub const HEIGHT: usize = 120;
-/// The parameters: the defaults with 32 disparities.
-pub const PARAMS: DemParams = DemParams {
-    max_disp: 31,
-    ..DemParams::DEFAULT
-};
-/// The decoder table trained for [`PARAMS`].
-pub const TABLE: &[u8] = include_bytes!("../data/dem_d32.bin");
+/// The parameters: the engine's defaults (32 disparities, 2 coarse levels,
+/// windows of 5, band 2).
+pub const PARAMS: C2fParams = C2fParams::DEFAULT;
+/// The decoder tables of levels 0, 1 and 2.
+pub const TABLES: [&[u8]; 3] = [
+    include_bytes!("../data/dem_c2f_l0.bin"),
+    include_bytes!("../data/dem_c2f_l1.bin"),
+    include_bytes!("../data/dem_c2f_l2.bin"),
+];
 
 /// Buffer lengths at [`WIDTH`] x [`HEIGHT`] for [`PARAMS`].
 pub mod len {
     use super::*;
-    /// Grey rings and planes (`u16`).
-    pub const GREY: usize = grey_len(WIDTH, HEIGHT, &PARAMS);
-    /// Response rings ([`Z`]).
-    pub const Z: usize = z_len(WIDTH, &PARAMS);
+    /// Grey rings (`u16`).
+    pub const GREY: usize = c2f::grey_len(WIDTH, &PARAMS);
+    /// RGB rows.
+    pub const RGB: usize = c2f::rgb_len(WIDTH, &PARAMS);
+    /// Response rows ([`Z`]).
+    pub const Z: usize = c2f::z_len(WIDTH, &PARAMS);
     /// y-pass row (`[i32; 3]`).
-    pub const COL: usize = col_len(WIDTH);
-    /// Energy chunk (`i32`).
-    pub const ENERGY: usize = energy_len(&PARAMS);
-    /// Score rings (`i64`).
-    pub const SCORES: usize = score_len(&PARAMS);
+    pub const COL: usize = WIDTH;
+    /// Score rows (`i64`).
+    pub const SCORES: usize = c2f::score_len(WIDTH, &PARAMS);
+    /// Costs, windows, voters, SGM states (`u16`).
+    pub const COSTS: usize = c2f::cost_len(WIDTH, &PARAMS);
+    /// SGM sums (`u32`).
+    pub const SUMS: usize = c2f::sum_len(WIDTH, &PARAMS);
     /// Row picks (`i32`).
-    pub const PICKS: usize = pick_len(WIDTH);
+    pub const PICKS: usize = c2f::pick_len(WIDTH);
+    /// Window maps (`u8`).
+    pub const MAPS: usize = c2f::map_len(WIDTH, HEIGHT, &PARAMS);
 }
 
 /// Scratch bytes of the run.
-pub const SCRATCH_BYTES: usize = stereo::scratch_bytes(WIDTH, HEIGHT, PARAMS.max_disp);
+pub const SCRATCH_BYTES: usize = c2f::scratch_bytes(WIDTH, HEIGHT, &PARAMS);
 
 /// One eye of the demo scene, rendered row by row.
 struct SceneEye<'s> {
@@ -58,15 +73,15 @@ struct SceneEye<'s> {
     right: bool,
 }
 
-impl GreyRows for SceneEye<'_> {
+impl RgbRows for SceneEye<'_> {
     fn size(&self) -> (usize, usize) {
         (WIDTH, HEIGHT)
     }
 
-    fn grey_row(&self, y: usize, out: &mut [u16]) {
+    fn rgb_row(&self, y: usize, out: &mut [Rgb8]) {
         let y = i32::try_from(y).unwrap_or(i32::MAX);
         for (x, o) in (0i32..).zip(out.iter_mut()) {
-            *o = grey(self.spec.colour(self.right, x, y));
+            *o = self.spec.colour(self.right, x, y);
         }
     }
 }
@@ -76,7 +91,7 @@ struct StepProbe<'t, T: Ticks> {
     ticks: &'t mut T,
     step: Option<Step>,
     since: u64,
-    spent: [u64; 4],
+    spent: [u64; 5],
 }
 
 fn index(s: Step) -> usize {
@@ -84,7 +99,8 @@ fn index(s: Step) -> usize {
         Step::Pyramid => 0,
         Step::Filters => 1,
         Step::Energies => 2,
-        Step::Readout => 3,
+        Step::Sgm => 3,
+        _ => 4,
     }
 }
 
@@ -112,8 +128,9 @@ pub struct StereoResult {
     pub checksum: u32,
     /// The stage's counts.
     pub report: StereoReport,
-    /// Ticks per step: grey/pyramid, filters, energies, read-out.
-    pub steps: [u64; 4],
+    /// Ticks per step: levels and grey, filters, cells and votes, SGM,
+    /// costs and decisions.
+    pub steps: [u64; 5],
     /// Ticks of setup (kernels, table parse).
     pub setup: u64,
     /// Ticks of the whole stage.
@@ -125,7 +142,7 @@ pub struct StereoResult {
 /// # Errors
 /// [`StereoError`] (a bad table or short buffers).
 pub fn run<T: Ticks>(
-    bufs: &mut StereoBuffers<'_>,
+    bufs: &mut C2fBuffers<'_>,
     ticks: &mut T,
 ) -> Result<StereoResult, StereoError> {
     let spec = SceneSpec::demo(WIDTH, HEIGHT);
@@ -140,8 +157,12 @@ pub fn run<T: Ticks>(
         },
     );
     let t0 = ticks.now();
-    let dem = Dem::new(&PARAMS)?;
-    let table = DemTable::parse(TABLE)?;
+    let engine = C2f::new(&PARAMS)?;
+    let tables = [
+        DemTable::parse(TABLES[0])?,
+        DemTable::parse(TABLES[1])?,
+        DemTable::parse(TABLES[2])?,
+    ];
     let t1 = ticks.now();
     let mut hash = Fnv1a::new();
     let mut sink = |_x: usize, _y: usize, c: DisparityCell| {
@@ -151,9 +172,9 @@ pub fn run<T: Ticks>(
         ticks,
         step: None,
         since: t1,
-        spent: [0; 4],
+        spent: [0; 5],
     };
-    let report = stereo::stereo_streamed(&dem, &table, &left, &right, bufs, &mut sink, &mut probe)?;
+    let report = engine.run(&tables, &left, &right, bufs, &mut sink, &mut probe)?;
     probe.close();
     let t2 = probe.ticks.now();
     Ok(StereoResult {
@@ -181,11 +202,12 @@ pub fn write_result(out: &mut impl Write, r: &StereoResult) -> fmt::Result {
 }
 
 /// The step names of [`StereoResult::steps`], as printed.
-pub const STEP_NAMES: [&str; 4] = [
-    "stereo-pyramid",
+pub const STEP_NAMES: [&str; 5] = [
+    "stereo-levels",
     "stereo-filters",
-    "stereo-energies",
-    "stereo-readout",
+    "stereo-cells-votes",
+    "stereo-sgm",
+    "stereo-costs-picks",
 ];
 
 /// Keeps the element type of the response ring nameable by callers.

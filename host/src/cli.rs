@@ -6,7 +6,7 @@
 //! protogist conspicuity --image FILE --out DIR [--width W]
 //! protogist stereo --left L --right R [--gt GT --gt-scale S] [--width W]
 //!                  [--max-disp D] [--pool R] [--levels L] [--table FILE] [--json] --out DIR
-//! protogist train-dem --out FILE [--max-disp D]
+//! protogist train-dem --out FILE [--max-disp D --levels L]
 //! protogist gen-shapes --out DIR [--classes N --per-class M --seed S --size PX]
 //! protogist train --dataset DIR --out model.json [--hidden H --epochs E]
 //!                 [--test-fraction F --seed S --gamma G]
@@ -80,6 +80,10 @@ pub enum Command {
         /// Largest disparity, px.
         #[arg(long, default_value_t = 15)]
         max_disp: u8,
+        /// Pyramid levels of the model (1 for each level of the
+        /// coarse-to-fine engine).
+        #[arg(long, default_value_t = 2)]
+        levels: u8,
     },
     /// Generate seeded binary silhouettes of parametric shapes (PNG, object
     /// white on black), one subfolder per class.
@@ -129,9 +133,14 @@ pub fn run(cli: Cli) -> Result<Summary> {
         }
         Some(Command::Stereo(opts)) => run_stereo(&opts),
         Some(Command::Run(opts)) => crate::run_cmd::run_pipeline(&opts),
-        Some(Command::TrainDem { out, max_disp }) => run_train_dem(
+        Some(Command::TrainDem {
+            out,
+            max_disp,
+            levels,
+        }) => run_train_dem(
             &DemParams {
                 max_disp,
+                levels,
                 ..DemParams::default()
             },
             &out,

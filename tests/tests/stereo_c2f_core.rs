@@ -438,3 +438,19 @@ fn bad_input_is_a_typed_error() {
         );
     }
 }
+
+/// The firmware's decoder tables are what `protogist train-dem --levels 1
+/// --max-disp 31 | 16 | 8` writes: the training reproduced bit for bit.
+#[test]
+fn firmware_tables_are_reproduced_by_training() {
+    let shipped: [&[u8]; 3] = [
+        include_bytes!("../../firmware-sim/data/dem_c2f_l0.bin"),
+        include_bytes!("../../firmware-sim/data/dem_c2f_l1.bin"),
+        include_bytes!("../../firmware-sim/data/dem_c2f_l2.bin"),
+    ];
+    let trained = tables(&C2fParams::DEFAULT);
+    assert_eq!(trained.len(), 3);
+    for (k, (t, s)) in trained.iter().zip(shipped).enumerate() {
+        assert!(t.as_slice() == s, "level {k}: the shipped table differs from training");
+    }
+}

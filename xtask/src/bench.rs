@@ -157,10 +157,14 @@ fn qemu_ipp(stdout: &str) -> Section {
 /// per step, and its scratch, from the firmware's `stereo` lines.
 fn stereo_m4(stdout: &str) -> Section {
     let mut body = String::from(
-        "`protogist::stereo` in the firmware (`firmware-sim/src/stereo_run.rs`): the demo scene's \
-         160x120 pair, 32 disparities (`max_disp` 31, table `firmware-sim/data/dem_d32.bin`), \
-         default parameters, rows streamed from the simulated camera and the map folded into the \
-         checksum row by row. Same QEMU setup as above.\n\n\
+        "The coarse-to-fine engine `protogist::stereo::c2f` in the firmware \
+         (`firmware-sim/src/stereo_run.rs`): the demo scene's 160x120 pair, 32 disparities \
+         (`C2fParams::DEFAULT`: `max_disp` 31, one pyramid level per c2f level, 2 coarse levels, \
+         windows of 5 candidates, band 2, 5-path SGM, no pooling; tables \
+         `firmware-sim/data/dem_c2f_l{0,1,2}.bin`), RGB rows rendered by the simulated camera as \
+         the engine asks for them and the map folded into the checksum row by row. Same QEMU \
+         setup as above. The `levels` step includes the camera's rendering: every level reads \
+         each frame pixel once, so 3 renders per eye (see the `capture` row above for one).\n\n\
          | step | instructions / pixel |\n|---|---|\n",
     );
     let mut total = None;
@@ -192,9 +196,9 @@ fn stereo_m4(stdout: &str) -> Section {
     body.push_str(&format!(
         "\n**Targets** (issue 3 §4): 1,500 instructions/px or fewer: **not reached, {total:.0}** \
          ({:.0}x); scratch ≤ 96 KB (98,304 bytes) beyond the two frames: **{scratch} bytes \
-         ({:.1} KB), reached** (`stereo::scratch_bytes(160, 120, 31)`). The read-out scores all \
-         32 candidates with all 72 cell groups (72 x 32 x 3 MAC per pixel, each vote added to a \
-         left- and a right-referenced score); see docs/STEREO.md, Fixed point.\n",
+         ({:.1} KB), reached** (`c2f::scratch_bytes(160, 120, &C2fParams::DEFAULT)`). The \
+         full-search engine took 101,581 instructions/px (`git checkout 05f3e88 && cargo xtask \
+         firmware`); see docs/STEREO.md, The coarse-to-fine engine in core.\n",
         total / 1500.0,
         scratch as f64 / 1024.0
     ));
@@ -817,7 +821,7 @@ mod stereo_tests {
         assert!(s.body.contains("**108554.7**"));
         assert!(s.body.contains("76616 bytes"));
         assert!(s.body.contains("0x4554b818"));
-        assert!(!s.body.contains("capture"));
+        assert!(!s.body.contains("| capture |"));
         assert_eq!(stereo_m4("ipp capture 160x120 1.0\n").body, super::NOT_YET);
     }
 }
