@@ -451,6 +451,9 @@ fn firmware_tables_are_reproduced_by_training() {
     let trained = tables(&C2fParams::DEFAULT);
     assert_eq!(trained.len(), 3);
     for (k, (t, s)) in trained.iter().zip(shipped).enumerate() {
-        assert!(t.as_slice() == s, "level {k}: the shipped table differs from training");
+        assert!(
+            t.as_slice() == s,
+            "level {k}: the shipped table differs from training"
+        );
     }
 }

@@ -38,7 +38,7 @@
 //! `n(d) = raw(d)·2^bf − bias(d)·T·2^wf` ([`super::readout::pick`]) give
 //! the SGM costs `C(d) = (max n − n(d)) · m / Σ_e (max n − n(e))` over the
 //! `m` valid candidates (the reference's gap to the best over the mean
-//! gap), in `Q8` (`u16`, at most `256·m`): the gaps are truncated to 16
+//! gap), in `Q8` (`u16`, at most `256·m`): the gaps are truncated to 15
 //! significant bits (block floating point per pixel) and the quotient
 //! rounded once. P1 and P2 are in the same `Q8` units; the 5 paths run in
 //! [`super::sgm::Sgm`] exactly. Pixels without evidence (below the
@@ -48,20 +48,20 @@
 //! away, per path, against `min_margin`.
 //!
 //! **Error bound** against the f32 reference: each cost is within
-//! `2^-8·(1/2 + m·2^-15·m)` mean gaps of the reference's (the rounding,
-//! and the truncation of each gap to 16 bits against a largest gap of at
-//! least `2^15` units), plus the energies' bound (ERROR_BOUNDS.md section
+//! `2^-8·(1/2 + m·2^-14·m)` mean gaps of the reference's (the rounding,
+//! and the truncation of each gap to 15 bits against a largest gap of at
+//! least `2^14` units), plus the energies' bound (ERROR_BOUNDS.md section
 //! 7). Path sums are exact on those costs, so decisions differ only where
 //! two candidates' sums are within the accumulated cost error, i.e. at
 //! near ties; the proptest of `tests/tests/stereo_c2f_core.rs` requires
 //! 99 % of the pixels valid in both to be within 0.25 px of the reference
 //! and 99 % of the OFF decisions to agree.
 
-use super::filters::{energy, grey_row, Bank, MAX_TAPS, Z};
+use super::filters::{grey_row, Bank, MAX_TAPS, Z};
 use super::sgm::{self, Sgm};
-use super::{Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport};
+use super::{Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport, MAX_CARRIERS};
 use crate::disparity::DisparityCell;
-use crate::fixed::{round_shift, U8F8};
+use crate::fixed::U8F8;
 use crate::image::{ImageView, Rgb8};
 
 /// Largest number of coarse levels.
@@ -637,10 +637,11 @@ fn decide(sums: &[u32], lo: usize, valid: usize) -> Option<Decision> {
 }
 
 /// The normalised `Q8` costs of one pixel (module docs) from its scores
-/// `raw` (window candidates) and `total`: `valid` candidates from `lo`,
-/// the rest of the window the worst valid cost.
+/// `raw` (window candidates, overwritten with the scores `n(d)`) and
+/// `total`: `valid` candidates from `lo`, the rest of the window the worst
+/// valid cost.
 fn costs_of(
-    raw: &[i64],
+    raw: &mut [i64],
     total: i64,
     table: &DemTable<'_>,
     lo: usize,
@@ -650,42 +651,28 @@ fn costs_of(
     let sh = (64 - total.leading_zeros()).saturating_sub(30);
     let t = total >> sh;
     let (wf, bf) = (u32::from(table.weight_frac), u32::from(table.bias_frac));
-    let n = |i: usize, r: i64| -> i64 {
-        ((r >> sh) << bf).saturating_sub((i64::from(table.bias_at(lo + i)) * t) << wf)
-    };
-    let best = raw
-        .iter()
-        .take(valid)
-        .enumerate()
-        .map(|(i, &r)| n(i, r))
-        .max()
-        .unwrap_or(0);
-    let gap = |i: usize, r: i64| best.saturating_sub(n(i, r)).max(0) as u64;
-    let gmax = raw
-        .iter()
-        .take(valid)
-        .enumerate()
-        .map(|(i, &r)| gap(i, r))
-        .max()
-        .unwrap_or(0);
-    let sh2 = (64 - gmax.leading_zeros()).saturating_sub(16);
-    let total_gap: u64 = raw
-        .iter()
-        .take(valid)
-        .enumerate()
-        .map(|(i, &r)| gap(i, r) >> sh2)
-        .sum();
-    let m = valid as u64;
-    let mut worst = 0u16;
-    for (i, (o, &r)) in out.iter_mut().zip(raw).enumerate().take(valid) {
-        let c = ((gap(i, r) >> sh2) * (256 * m) + total_gap / 2)
+    let scores = raw.get_mut(..valid).unwrap_or(&mut []);
+    for (d, r) in (lo..).zip(scores.iter_mut()) {
+        *r = ((*r >> sh) << bf).saturating_sub((i64::from(table.bias_at(d)) * t) << wf);
+    }
+    let best = scores.iter().copied().max().unwrap_or(0);
+    let worst = scores.iter().copied().min().unwrap_or(0);
+    // Gaps `best − n(d)` truncated to 15 significant bits.
+    let sh2 = (64 - best.abs_diff(worst).leading_zeros()).saturating_sub(15);
+    let gap = |v: i64| (best.abs_diff(v) >> sh2) as u32;
+    let total_gap: u32 = scores.iter().map(|&v| gap(v)).sum();
+    // At most 2^15 · 256 · 256 = 2^31: no overflow.
+    let scale = 256 * valid as u32;
+    let mut hi = 0u16;
+    for (o, &v) in out.iter_mut().zip(scores.iter()) {
+        let c = (gap(v) * scale + total_gap / 2)
             .checked_div(total_gap)
             .unwrap_or(0);
-        *o = c.min(u64::from(u16::MAX)) as u16;
-        worst = worst.max(*o);
+        *o = c.min(u32::from(u16::MAX)) as u16;
+        hi = hi.max(*o);
     }
     for o in out.iter_mut().skip(valid) {
-        *o = worst;
+        *o = hi;
     }
 }
 
@@ -839,27 +826,43 @@ impl<'e> Pass<'e> {
             vo_l.fill(0);
             vo_r.fill(0);
             // Cells and votes.
+            let banded = self.band.is_some();
+            let per_shift = carriers as u16;
             for x in 0..w {
                 let lo_x = lo_l.get(x).copied().unwrap_or(0);
-                for c in 0..carriers {
-                    let zl = z_l.get(c * w + x).copied().unwrap_or([0; 2]);
-                    let zrow = z_r.get(c * w..(c + 1) * w).unwrap_or(&[]);
-                    for ks in 0..self.shifts {
-                        let s = ks * self.step;
-                        let in_l = self.near(lo_x, s);
-                        let pr = x.checked_sub(s);
-                        let in_r =
-                            pr.is_some_and(|p| self.near(lo_r.get(p).copied().unwrap_or(0), s));
-                        if in_l && self.band.is_some() {
-                            if let Some(v) = vo_l.get_mut(x) {
-                                *v += 1;
-                            }
+                // The left responses and their |z|², shared by every shift.
+                let mut left = [([0i32; 2], 0i32); MAX_CARRIERS];
+                for (c, l) in left.iter_mut().enumerate().take(carriers) {
+                    let z = z_l.get(c * w + x).copied().unwrap_or([0; 2]);
+                    let (re, im) = (i32::from(z[0]), i32::from(z[1]));
+                    *l = ([re, im], re * re + im * im);
+                }
+                for ks in 0..self.shifts {
+                    let s = ks * self.step;
+                    let in_l = self.near(lo_x, s);
+                    let pr = x.checked_sub(s);
+                    let lo_p = pr.and_then(|p| lo_r.get(p).copied());
+                    let in_r = lo_p.is_some_and(|l| self.near(l, s));
+                    if banded {
+                        if let Some(v) = vo_l.get_mut(x).filter(|_| in_l) {
+                            *v += per_shift;
                         }
-                        let Some(p) = pr.filter(|_| in_l || in_r) else {
-                            continue;
-                        };
-                        let [a, xr, xi] =
-                            energy(zl, zrow.get(p).copied()).map(|v| round_shift(v, 4));
+                        if let Some(v) = pr.and_then(|p| vo_r.get_mut(p)).filter(|_| in_r) {
+                            *v += per_shift;
+                        }
+                    }
+                    let Some(p) = pr.filter(|_| in_l || in_r) else {
+                        continue;
+                    };
+                    for (c, &([lr, li], el)) in left.iter().enumerate().take(carriers) {
+                        let z = z_r.get(c * w + p).copied().unwrap_or([0; 2]);
+                        let (rr, ri) = (i32::from(z[0]), i32::from(z[1]));
+                        // Exact in i32: |z| components below 2^14.01, so
+                        // A < 2^30.1 (module docs of `filters`), then Q12 → Q8.
+                        let q8 = |v: i32| i64::from((v + 8) >> 4);
+                        let a = q8(el + rr * rr + ri * ri);
+                        let xr = q8(lr * rr + li * ri);
+                        let xi = q8(li * rr - lr * ri);
                         let wb = table.group_bytes(c * self.shifts + ks);
                         let add = |sc: &mut [i64], px: usize, lo: u16| {
                             let lo = usize::from(lo);
@@ -881,13 +884,8 @@ impl<'e> Pass<'e> {
                         if in_l {
                             add(sl, x, lo_x);
                         }
-                        if in_r {
-                            add(sr, p, lo_r.get(p).copied().unwrap_or(0));
-                            if self.band.is_some() {
-                                if let Some(v) = vo_r.get_mut(p) {
-                                    *v += 1;
-                                }
-                            }
+                        if let Some(lo) = lo_p.filter(|_| in_r) {
+                            add(sr, p, lo);
                         }
                     }
                 }
@@ -902,7 +900,7 @@ impl<'e> Pass<'e> {
                 };
                 total > 0 && (total as u64) >= dem.min_energy_q8 * 4 * cells
             };
-            for (eye, (sc, cost)) in [(&*sl, &mut *costs_l), (&*sr, &mut *costs_r)]
+            for (eye, (sc, cost)) in [(&mut *sl, &mut *costs_l), (&mut *sr, &mut *costs_r)]
                 .into_iter()
                 .enumerate()
             {
@@ -912,7 +910,7 @@ impl<'e> Pass<'e> {
                     (&*lo_r, &*vo_r)
                 };
                 for (x, ((raw, dst), (&lo, &v))) in sc
-                    .chunks_exact(stride)
+                    .chunks_exact_mut(stride)
                     .zip(cost.chunks_exact_mut(n))
                     .zip(lo.iter().zip(vo))
                     .enumerate()
@@ -925,7 +923,7 @@ impl<'e> Pass<'e> {
                         continue;
                     }
                     let valid = (top - lo + 1).min(n);
-                    costs_of(raw.get(..n).unwrap_or(&[]), total, table, lo, valid, dst);
+                    costs_of(raw, total, table, lo, valid, dst);
                 }
             }
             probe.enter(Step::Sgm);

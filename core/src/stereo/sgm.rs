@@ -252,19 +252,19 @@ impl<'a> Sgm<'a> {
         {
             o.fill(0);
             // Left→right from x − 1.
-            step(c, l, before.map(|b| (&**h, b)), p1, p2, tmp);
-            commit(tmp, h, o);
+            step(c, l, before.map(|b| (&**h, b)), p1, p2, tmp, o);
+            commit(tmp, h);
             before = Some(l);
             // Top→bottom from (x, y − 1).
             let above = prev_lo.get(x).copied().filter(|_| !first);
-            step(c, l, above.map(|a| (&*v, a)), p1, p2, tmp);
-            commit(tmp, v, o);
+            step(c, l, above.map(|a| (&*v, a)), p1, p2, tmp, o);
+            commit(tmp, v);
             // From (x + 1, y − 1).
             let Some(slot) = diag.next() else { break };
             let right = prev_lo.get(x + 1).copied().filter(|_| !first);
             let prev = right.zip(diag.peek()).map(|(a, s)| (&**s, a));
-            step(c, l, prev, p1, p2, tmp);
-            commit(tmp, slot, o);
+            step(c, l, prev, p1, p2, tmp, o);
+            commit(tmp, slot);
         }
 
         // Backward sweep: right→left, and the diagonal from the upper left,
@@ -278,8 +278,8 @@ impl<'a> Sgm<'a> {
             .enumerate()
             .rev()
         {
-            step(c, l, before.map(|b| (&**h, b)), p1, p2, tmp);
-            commit(tmp, h, o);
+            step(c, l, before.map(|b| (&**h, b)), p1, p2, tmp, o);
+            commit(tmp, h);
             before = Some(l);
             let Some(slot) = diag.next() else { break };
             let left = x
@@ -288,8 +288,8 @@ impl<'a> Sgm<'a> {
                 .copied()
                 .filter(|_| !first);
             let prev = left.zip(diag.peek()).map(|(a, s)| (&**s, a));
-            step(c, l, prev, p1, p2, tmp);
-            commit(tmp, slot, o);
+            step(c, l, prev, p1, p2, tmp, o);
+            commit(tmp, slot);
         }
 
         for (p, &l) in prev_lo.iter_mut().zip(lo) {
@@ -303,41 +303,50 @@ impl<'a> Sgm<'a> {
 /// One step of a path into `new`: the pixel's costs `c` over its window
 /// `lo..lo + n`, and the predecessor's `L` over its window (`None`: no
 /// predecessor, `L = C`). Candidates outside the predecessor's window are
-/// `+∞`. Needs `c + P2 <= 65535` (checked by the caller).
-fn step(c: &[u16], lo: u16, prev: Option<(&[u16], u16)>, p1: u32, p2: u32, new: &mut [u16]) {
+/// `+∞`. Needs `c + P2 <= 65535` (checked by the caller). Each new value
+/// is also added to `out`.
+fn step(
+    c: &[u16],
+    lo: u16,
+    prev: Option<(&[u16], u16)>,
+    p1: u32,
+    p2: u32,
+    new: &mut [u16],
+    out: &mut [u32],
+) {
     let Some((prev, plo)) = prev else {
-        for (o, &cd) in new.iter_mut().zip(c) {
+        for ((o, s), &cd) in new.iter_mut().zip(out).zip(c) {
             *o = cd;
+            *s += u32::from(cd);
         }
         return;
     };
+    /// Larger than any `L − min + P1` (both below 2^17), and no overflow.
+    const INF: u32 = 1 << 30;
     let min = prev.iter().copied().min().map_or(0, u32::from);
-    let plo = usize::from(plo);
-    // `L − min` of the predecessor at candidate `d` (`None` outside its window).
-    let at = |d: usize| {
-        d.checked_sub(plo)
+    // `L − min` of the predecessor at candidates `lo − 1, lo, ..` (`INF`
+    // outside its window), read once each.
+    let off = i32::from(lo) - i32::from(plo);
+    let at = |j: i32| {
+        usize::try_from(j)
+            .ok()
             .and_then(|j| prev.get(j))
-            .map(|&v| u32::from(v).saturating_sub(min))
+            .map_or(INF, |&v| u32::from(v).saturating_sub(min))
     };
-    for (d, (o, &cd)) in (usize::from(lo)..).zip(new.iter_mut().zip(c)) {
-        let mut m = p2;
-        if let Some(v) = at(d) {
-            m = m.min(v);
-        }
-        if let Some(v) = d.checked_sub(1).and_then(at) {
-            m = m.min(v + p1);
-        }
-        if let Some(v) = at(d + 1) {
-            m = m.min(v + p1);
-        }
-        *o = u16::try_from(u32::from(cd) + m).unwrap_or(u16::MAX);
+    let (mut below, mut here) = (at(off - 1), at(off));
+    for (j, ((o, s), &cd)) in (off + 1..).zip(new.iter_mut().zip(out).zip(c)) {
+        let above = at(j);
+        let m = p2.min(here).min(below.min(above) + p1);
+        let v = u32::from(cd) + m;
+        *o = u16::try_from(v).unwrap_or(u16::MAX);
+        *s += v;
+        (below, here) = (here, above);
     }
 }
 
-/// Stores a path's new `L` and adds it to the output.
-fn commit(new: &[u16], state: &mut [u16], out: &mut [u32]) {
-    for ((s, o), &v) in state.iter_mut().zip(out).zip(new) {
+/// Stores a path's new `L`.
+fn commit(new: &[u16], state: &mut [u16]) {
+    for (s, &v) in state.iter_mut().zip(new) {
         *s = v;
-        *o += u32::from(v);
     }
 }
