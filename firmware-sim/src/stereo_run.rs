@@ -135,6 +135,10 @@ pub struct StereoResult {
     pub setup: u64,
     /// Ticks of the whole stage.
     pub total: u64,
+    /// Ticks the simulated camera takes to render the rows the engine asks
+    /// for (each frame pixel once per level and eye), measured alone: part
+    /// of the `levels` step, the camera's cost rather than the engine's.
+    pub camera: u64,
 }
 
 /// Runs the stage on the demo pair.
@@ -177,12 +181,24 @@ pub fn run<T: Ticks>(
     let report = engine.run(&tables, &left, &right, bufs, &mut sink, &mut probe)?;
     probe.close();
     let t2 = probe.ticks.now();
+    // The camera alone: the same row renders, into the RGB scratch.
+    let levels = usize::from(PARAMS.coarse) + 1;
+    let row = bufs.rgb.get_mut(..WIDTH).unwrap_or(&mut []);
+    for _ in 0..levels {
+        for eye in [&left, &right] {
+            for y in 0..HEIGHT {
+                eye.rgb_row(y, row);
+            }
+        }
+    }
+    let t3 = probe.ticks.now();
     Ok(StereoResult {
         checksum: hash.finish(),
         report,
         steps: probe.spent,
         setup: t1 - t0,
         total: t2 - t0,
+        camera: t3 - t2,
     })
 }
 
@@ -225,6 +241,13 @@ pub fn write_report(
         crate::app::write_ipp(out, name, WIDTH, HEIGHT, to_instructions(t))?;
     }
     crate::app::write_ipp(out, "stereo-setup", WIDTH, HEIGHT, to_instructions(r.setup))?;
+    crate::app::write_ipp(
+        out,
+        "stereo-camera-within-levels",
+        WIDTH,
+        HEIGHT,
+        to_instructions(r.camera),
+    )?;
     crate::app::write_ipp(out, "stereo", WIDTH, HEIGHT, to_instructions(r.total))?;
     writeln!(out, "scratch stereo {WIDTH}x{HEIGHT} {SCRATCH_BYTES}")
 }

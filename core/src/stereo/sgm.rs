@@ -252,18 +252,18 @@ impl<'a> Sgm<'a> {
         {
             o.fill(0);
             // Left→right from x − 1.
-            step(c, l, before.map(|b| (&**h, b)), p1, p2, tmp, o);
+            step_any(c, l, before.map(|b| (&**h, b)), p1, p2, tmp, o);
             commit(tmp, h);
             before = Some(l);
             // Top→bottom from (x, y − 1).
             let above = prev_lo.get(x).copied().filter(|_| !first);
-            step(c, l, above.map(|a| (&*v, a)), p1, p2, tmp, o);
+            step_any(c, l, above.map(|a| (&*v, a)), p1, p2, tmp, o);
             commit(tmp, v);
             // From (x + 1, y − 1).
             let Some(slot) = diag.next() else { break };
             let right = prev_lo.get(x + 1).copied().filter(|_| !first);
             let prev = right.zip(diag.peek()).map(|(a, s)| (&**s, a));
-            step(c, l, prev, p1, p2, tmp, o);
+            step_any(c, l, prev, p1, p2, tmp, o);
             commit(tmp, slot);
         }
 
@@ -278,7 +278,7 @@ impl<'a> Sgm<'a> {
             .enumerate()
             .rev()
         {
-            step(c, l, before.map(|b| (&**h, b)), p1, p2, tmp, o);
+            step_any(c, l, before.map(|b| (&**h, b)), p1, p2, tmp, o);
             commit(tmp, h);
             before = Some(l);
             let Some(slot) = diag.next() else { break };
@@ -288,7 +288,7 @@ impl<'a> Sgm<'a> {
                 .copied()
                 .filter(|_| !first);
             let prev = left.zip(diag.peek()).map(|(a, s)| (&**s, a));
-            step(c, l, prev, p1, p2, tmp, o);
+            step_any(c, l, prev, p1, p2, tmp, o);
             commit(tmp, slot);
         }
 
@@ -297,6 +297,75 @@ impl<'a> Sgm<'a> {
         }
         self.rows = self.rows.saturating_add(1);
         Ok(())
+    }
+}
+
+/// [`step`], with windows of 5 (the engine's fine levels) unrolled.
+#[inline(always)]
+fn step_any(
+    c: &[u16],
+    lo: u16,
+    prev: Option<(&[u16], u16)>,
+    p1: u32,
+    p2: u32,
+    new: &mut [u16],
+    out: &mut [u32],
+) {
+    if c.len() == 5 {
+        step_fixed::<5>(c, lo, prev, p1, p2, new, out);
+    } else {
+        step(c, lo, prev, p1, p2, new, out);
+    }
+}
+
+/// [`step`] for windows of `N <= 6` candidates: the predecessor's values
+/// are gathered once into a padded array, then every candidate is a
+/// straight-line min (the same integers as [`step`]).
+#[inline(always)]
+fn step_fixed<const N: usize>(
+    c: &[u16],
+    lo: u16,
+    prev: Option<(&[u16], u16)>,
+    p1: u32,
+    p2: u32,
+    new: &mut [u16],
+    out: &mut [u32],
+) {
+    const INF: u32 = 1 << 30;
+    let (Ok(c), Ok(new), Ok(out)) = (
+        <&[u16; N]>::try_from(c),
+        <&mut [u16; N]>::try_from(new),
+        <&mut [u32; N]>::try_from(out),
+    ) else {
+        return;
+    };
+    let Some((prev, plo)) = prev else {
+        for ((o, s), &cd) in new.iter_mut().zip(out.iter_mut()).zip(c) {
+            *o = cd;
+            *s += u32::from(cd);
+        }
+        return;
+    };
+    let min = prev.iter().copied().min().map_or(0, u32::from);
+    let off = i32::from(lo) - i32::from(plo);
+    // `ext[j]` = `L − min` of the predecessor at candidate `lo − 1 + j`.
+    let mut ext = [INF; 8];
+    for (j, e) in (off - 1..).zip(ext.iter_mut().take(N + 2)) {
+        if let Some(&v) = usize::try_from(j).ok().and_then(|j| prev.get(j)) {
+            *e = u32::from(v).saturating_sub(min);
+        }
+    }
+    for (((o, s), &cd), w) in new
+        .iter_mut()
+        .zip(out.iter_mut())
+        .zip(c)
+        .zip(ext.windows(3))
+    {
+        if let [below, here, above] = *w {
+            let v = u32::from(cd) + p2.min(here).min(below.min(above) + p1);
+            *o = u16::try_from(v).unwrap_or(u16::MAX);
+            *s += v;
+        }
     }
 }
 
