@@ -59,7 +59,7 @@
 
 use super::filters::{grey_row, Bank, MAX_TAPS, Z};
 use super::sgm::{self, Sgm};
-use super::{Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport, MAX_CARRIERS};
+use super::{Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport};
 use crate::disparity::DisparityCell;
 use crate::fixed::U8F8;
 use crate::image::{ImageView, Rgb8};
@@ -694,13 +694,19 @@ impl<'e> Pass<'e> {
         }
     }
 
-    /// Whether a windowed pixel with window `lo` takes the vote of shift
-    /// `s`.
-    fn near(&self, lo: u16, s: usize) -> bool {
-        self.band.is_none_or(|b| {
-            let centre2 = 2 * usize::from(lo) + self.n - 1;
-            (2 * s).abs_diff(centre2) <= 2 * b
-        })
+    /// The shift indices whose votes a pixel with window `lo` takes: those
+    /// with `|s − centre| <= band` (centre `lo + (n − 1)/2`), or all.
+    fn shift_range(&self, lo: u16) -> core::ops::Range<usize> {
+        let Some(b) = self.band else {
+            return 0..self.shifts;
+        };
+        let centre2 = 2 * usize::from(lo) + self.n - 1;
+        // 2s in [centre2 − 2b, centre2 + 2b], s = ks·step.
+        let (lo2, hi2) = (centre2.saturating_sub(2 * b), centre2 + 2 * b);
+        let step2 = 2 * self.step;
+        let first = lo2.div_ceil(step2);
+        let last = (hi2 / step2 + 1).min(self.shifts);
+        first.min(last)..last
     }
 
     #[allow(clippy::too_many_lines)]
@@ -825,67 +831,62 @@ impl<'e> Pass<'e> {
             sr.fill(0);
             vo_l.fill(0);
             vo_r.fill(0);
-            // Cells and votes.
+            // Cells and votes: each pixel of each eye takes the votes of the
+            // shifts in its band (the cell of left x and right x − s).
             let banded = self.band.is_some();
-            let per_shift = carriers as u16;
-            for x in 0..w {
-                let lo_x = lo_l.get(x).copied().unwrap_or(0);
-                // The left responses and their |z|², shared by every shift.
-                let mut left = [([0i32; 2], 0i32); MAX_CARRIERS];
-                for (c, l) in left.iter_mut().enumerate().take(carriers) {
-                    let z = z_l.get(c * w + x).copied().unwrap_or([0; 2]);
-                    let (re, im) = (i32::from(z[0]), i32::from(z[1]));
-                    *l = ([re, im], re * re + im * im);
-                }
-                for ks in 0..self.shifts {
-                    let s = ks * self.step;
-                    let in_l = self.near(lo_x, s);
-                    let pr = x.checked_sub(s);
-                    let lo_p = pr.and_then(|p| lo_r.get(p).copied());
-                    let in_r = lo_p.is_some_and(|l| self.near(l, s));
-                    if banded {
-                        if let Some(v) = vo_l.get_mut(x).filter(|_| in_l) {
-                            *v += per_shift;
+            for (eye, (sc, (lo, vo))) in [
+                (&mut *sl, (&*lo_l, &mut *vo_l)),
+                (&mut *sr, (&*lo_r, &mut *vo_r)),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                for (px, ((dst, &lo), v)) in sc
+                    .chunks_exact_mut(stride)
+                    .zip(lo.iter())
+                    .zip(vo.iter_mut())
+                    .enumerate()
+                {
+                    let (wts_lo, wts_hi) = (6 * usize::from(lo), 6 * (usize::from(lo) + n));
+                    for ks in self.shift_range(lo) {
+                        let s = ks * self.step;
+                        // The cell's left and right pixels.
+                        let (xl, xr) = if eye == 0 {
+                            (px, px.checked_sub(s))
+                        } else {
+                            (px + s, Some(px).filter(|_| px + s < w))
+                        };
+                        if banded && (eye == 0 || xr.is_some()) {
+                            *v += carriers as u16;
                         }
-                        if let Some(v) = pr.and_then(|p| vo_r.get_mut(p)).filter(|_| in_r) {
-                            *v += per_shift;
-                        }
-                    }
-                    let Some(p) = pr.filter(|_| in_l || in_r) else {
-                        continue;
-                    };
-                    for (c, &([lr, li], el)) in left.iter().enumerate().take(carriers) {
-                        let z = z_r.get(c * w + p).copied().unwrap_or([0; 2]);
-                        let (rr, ri) = (i32::from(z[0]), i32::from(z[1]));
-                        // Exact in i32: |z| components below 2^14.01, so
-                        // A < 2^30.1 (module docs of `filters`), then Q12 → Q8.
-                        let q8 = |v: i32| i64::from((v + 8) >> 4);
-                        let a = q8(el + rr * rr + ri * ri);
-                        let xr = q8(lr * rr + li * ri);
-                        let xi = q8(li * rr - lr * ri);
-                        let wb = table.group_bytes(c * self.shifts + ks);
-                        let add = |sc: &mut [i64], px: usize, lo: u16| {
-                            let lo = usize::from(lo);
-                            let Some(dst) = sc.get_mut(px * stride..(px + 1) * stride) else {
-                                return;
-                            };
-                            let wts = wb.get(6 * lo..6 * (lo + n)).unwrap_or(&[]);
+                        let Some(xr) = xr else {
+                            continue;
+                        };
+                        for c in 0..carriers {
+                            let l = z_l.get(c * w + xl).copied().unwrap_or([0; 2]);
+                            let r = z_r.get(c * w + xr).copied().unwrap_or([0; 2]);
+                            let (lr, li) = (i32::from(l[0]), i32::from(l[1]));
+                            let (rr, ri) = (i32::from(r[0]), i32::from(r[1]));
+                            // Exact in i32: |z| components below 2^14.01, so
+                            // A < 2^30.1 (`filters`), then Q12 → Q8.
+                            let q8 = |v: i32| i64::from((v + 8) >> 4);
+                            let a = q8(lr * lr + li * li + rr * rr + ri * ri);
+                            let xre = q8(lr * rr + li * ri);
+                            let xim = q8(li * rr - lr * ri);
+                            let wts = table
+                                .group_bytes(c * self.shifts + ks)
+                                .get(wts_lo..wts_hi)
+                                .unwrap_or(&[]);
                             for (d, c6) in dst.iter_mut().zip(wts.chunks_exact(6)) {
                                 if let [a0, a1, b0, b1, c0, c1] = *c6 {
                                     *d += a * i64::from(i16::from_le_bytes([a0, a1]))
-                                        + xr * i64::from(i16::from_le_bytes([b0, b1]))
-                                        + xi * i64::from(i16::from_le_bytes([c0, c1]));
+                                        + xre * i64::from(i16::from_le_bytes([b0, b1]))
+                                        + xim * i64::from(i16::from_le_bytes([c0, c1]));
                                 }
                             }
                             if let Some(t) = dst.get_mut(n) {
                                 *t += 4 * a;
                             }
-                        };
-                        if in_l {
-                            add(sl, x, lo_x);
-                        }
-                        if let Some(lo) = lo_p.filter(|_| in_r) {
-                            add(sr, p, lo);
                         }
                     }
                 }

@@ -250,21 +250,17 @@ impl<'a> Sgm<'a> {
             .zip(up.chunks_exact_mut(n))
             .enumerate()
         {
-            o.fill(0);
-            // Left→right from x − 1.
-            step_any(c, l, before.map(|b| (&**h, b)), p1, p2, tmp, o);
-            commit(tmp, h);
+            // Left→right from x − 1 (the first path: sets `o`).
+            step_self(c, l, h, before, (p1, p2), tmp, o, true);
             before = Some(l);
             // Top→bottom from (x, y − 1).
             let above = prev_lo.get(x).copied().filter(|_| !first);
-            step_any(c, l, above.map(|a| (&*v, a)), p1, p2, tmp, o);
-            commit(tmp, v);
+            step_self(c, l, v, above, (p1, p2), tmp, o, false);
             // From (x + 1, y − 1).
             let Some(slot) = diag.next() else { break };
             let right = prev_lo.get(x + 1).copied().filter(|_| !first);
             let prev = right.zip(diag.peek()).map(|(a, s)| (&**s, a));
-            step_any(c, l, prev, p1, p2, tmp, o);
-            commit(tmp, slot);
+            step_from(c, l, prev, (p1, p2), slot, o);
         }
 
         // Backward sweep: right→left, and the diagonal from the upper left,
@@ -278,8 +274,7 @@ impl<'a> Sgm<'a> {
             .enumerate()
             .rev()
         {
-            step_any(c, l, before.map(|b| (&**h, b)), p1, p2, tmp, o);
-            commit(tmp, h);
+            step_self(c, l, h, before, (p1, p2), tmp, o, false);
             before = Some(l);
             let Some(slot) = diag.next() else { break };
             let left = x
@@ -288,8 +283,7 @@ impl<'a> Sgm<'a> {
                 .copied()
                 .filter(|_| !first);
             let prev = left.zip(diag.peek()).map(|(a, s)| (&**s, a));
-            step_any(c, l, prev, p1, p2, tmp, o);
-            commit(tmp, slot);
+            step_from(c, l, prev, (p1, p2), slot, o);
         }
 
         for (p, &l) in prev_lo.iter_mut().zip(lo) {
@@ -300,61 +294,98 @@ impl<'a> Sgm<'a> {
     }
 }
 
-/// [`step`], with windows of 5 (the engine's fine levels) unrolled.
+/// A step whose predecessor is `state` itself, at window `plo` (the
+/// horizontal and vertical paths; `None`: no predecessor): `state` becomes
+/// the pixel's `L`, added to `out` (or stored, with `set`).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn step_any(
+fn step_self(
     c: &[u16],
     lo: u16,
-    prev: Option<(&[u16], u16)>,
-    p1: u32,
-    p2: u32,
-    new: &mut [u16],
+    state: &mut [u16],
+    plo: Option<u16>,
+    pen: (u32, u32),
+    tmp: &mut [u16],
     out: &mut [u32],
+    set: bool,
 ) {
-    if c.len() == 5 {
-        step_fixed::<5>(c, lo, prev, p1, p2, new, out);
-    } else {
-        step(c, lo, prev, p1, p2, new, out);
+    if let (Ok(c5), Ok(s5)) = (
+        <&[u16; 5]>::try_from(c),
+        <&mut [u16; 5]>::try_from(&mut *state),
+    ) {
+        let ext = plo.map(|p| gather(&s5[..], p, lo));
+        apply(c5, ext, pen, s5, out, set);
+        return;
     }
+    for (t, &v) in tmp.iter_mut().zip(state.iter()) {
+        *t = v;
+    }
+    step(c, lo, plo.map(|p| (&*tmp, p)), pen, state, out, set);
 }
 
-/// [`step`] for windows of `N <= 6` candidates: the predecessor's values
-/// are gathered once into a padded array, then every candidate is a
-/// straight-line min (the same integers as [`step`]).
+/// A step from another slot `prev` (the diagonals) into `state`, added to
+/// `out`.
 #[inline(always)]
-fn step_fixed<const N: usize>(
+fn step_from(
     c: &[u16],
     lo: u16,
     prev: Option<(&[u16], u16)>,
-    p1: u32,
-    p2: u32,
-    new: &mut [u16],
+    pen: (u32, u32),
+    state: &mut [u16],
     out: &mut [u32],
 ) {
-    const INF: u32 = 1 << 30;
-    let (Ok(c), Ok(new), Ok(out)) = (
-        <&[u16; N]>::try_from(c),
-        <&mut [u16; N]>::try_from(new),
-        <&mut [u32; N]>::try_from(out),
-    ) else {
+    if let (Ok(c5), Ok(s5)) = (
+        <&[u16; 5]>::try_from(c),
+        <&mut [u16; 5]>::try_from(&mut *state),
+    ) {
+        let ext = prev.map(|(p, plo)| gather(p, plo, lo));
+        apply(c5, ext, pen, s5, out, false);
         return;
-    };
-    let Some((prev, plo)) = prev else {
-        for ((o, s), &cd) in new.iter_mut().zip(out.iter_mut()).zip(c) {
-            *o = cd;
-            *s += u32::from(cd);
-        }
-        return;
-    };
+    }
+    step(c, lo, prev, pen, state, out, false);
+}
+
+/// Larger than any `L − min + P1` (both below 2^17), and no overflow.
+const INF: u32 = 1 << 30;
+
+/// The predecessor's `L − min` (window from `plo`) at candidates `lo − 1 ..
+/// lo + 6` (`INF` outside its window): a window of up to 6 from `lo`
+/// with both neighbours.
+#[inline(always)]
+fn gather(prev: &[u16], plo: u16, lo: u16) -> [u32; 8] {
     let min = prev.iter().copied().min().map_or(0, u32::from);
     let off = i32::from(lo) - i32::from(plo);
-    // `ext[j]` = `L − min` of the predecessor at candidate `lo − 1 + j`.
     let mut ext = [INF; 8];
-    for (j, e) in (off - 1..).zip(ext.iter_mut().take(N + 2)) {
+    for (j, e) in (off - 1..).zip(ext.iter_mut()) {
         if let Some(&v) = usize::try_from(j).ok().and_then(|j| prev.get(j)) {
             *e = u32::from(v).saturating_sub(min);
         }
     }
+    ext
+}
+
+/// The recurrence for a window of `N <= 6` from the gathered predecessor
+/// (`None`: `L = C`), the same integers as [`step`].
+#[inline(always)]
+fn apply<const N: usize>(
+    c: &[u16; N],
+    ext: Option<[u32; 8]>,
+    (p1, p2): (u32, u32),
+    new: &mut [u16; N],
+    out: &mut [u32],
+    set: bool,
+) {
+    let Some(ext) = ext else {
+        for ((o, s), &cd) in new.iter_mut().zip(out.iter_mut()).zip(c) {
+            *o = cd;
+            *s = if set {
+                u32::from(cd)
+            } else {
+                *s + u32::from(cd)
+            };
+        }
+        return;
+    };
     for (((o, s), &cd), w) in new
         .iter_mut()
         .zip(out.iter_mut())
@@ -364,7 +395,7 @@ fn step_fixed<const N: usize>(
         if let [below, here, above] = *w {
             let v = u32::from(cd) + p2.min(here).min(below.min(above) + p1);
             *o = u16::try_from(v).unwrap_or(u16::MAX);
-            *s += v;
+            *s = if set { v } else { *s + v };
         }
     }
 }
@@ -373,25 +404,27 @@ fn step_fixed<const N: usize>(
 /// `lo..lo + n`, and the predecessor's `L` over its window (`None`: no
 /// predecessor, `L = C`). Candidates outside the predecessor's window are
 /// `+∞`. Needs `c + P2 <= 65535` (checked by the caller). Each new value
-/// is also added to `out`.
+/// is also added to `out` (or stored, with `set`).
 fn step(
     c: &[u16],
     lo: u16,
     prev: Option<(&[u16], u16)>,
-    p1: u32,
-    p2: u32,
+    (p1, p2): (u32, u32),
     new: &mut [u16],
     out: &mut [u32],
+    set: bool,
 ) {
     let Some((prev, plo)) = prev else {
         for ((o, s), &cd) in new.iter_mut().zip(out).zip(c) {
             *o = cd;
-            *s += u32::from(cd);
+            *s = if set {
+                u32::from(cd)
+            } else {
+                *s + u32::from(cd)
+            };
         }
         return;
     };
-    /// Larger than any `L − min + P1` (both below 2^17), and no overflow.
-    const INF: u32 = 1 << 30;
     let min = prev.iter().copied().min().map_or(0, u32::from);
     // `L − min` of the predecessor at candidates `lo − 1, lo, ..` (`INF`
     // outside its window), read once each.
@@ -408,14 +441,7 @@ fn step(
         let m = p2.min(here).min(below.min(above) + p1);
         let v = u32::from(cd) + m;
         *o = u16::try_from(v).unwrap_or(u16::MAX);
-        *s += v;
+        *s = if set { v } else { *s + v };
         (below, here) = (here, above);
-    }
-}
-
-/// Stores a path's new `L`.
-fn commit(new: &[u16], state: &mut [u16]) {
-    for (s, &v) in state.iter_mut().zip(new) {
-        *s = v;
     }
 }
