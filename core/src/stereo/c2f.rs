@@ -617,17 +617,15 @@ fn decide(sums: &[u32], lo: usize, valid: usize) -> Option<Decision> {
         .min();
     let mut disparity = ((lo + best) as i32) << 8;
     if best > 0 && best + 1 < valid {
-        let (m, p) = (
-            i64::from(s.get(best - 1).copied().unwrap_or(sb)),
-            i64::from(s.get(best + 1).copied().unwrap_or(sb)),
-        );
-        let c = i64::from(sb);
+        // Path sums are below 5·65535 < 2^19, so every term fits in i32.
+        let at = |i: usize| s.get(i).map_or(0, |&v| v as i32);
+        let (m, c, p) = (at(best - 1), sb as i32, at(best + 1));
         // The reference's parabola on −sum: δ = (m − p) / (2 (m − 2c + p)).
         let curv = m - 2 * c + p;
         if curv > 0 {
             let num = 128 * (m - p);
             let delta = (2 * num + curv).div_euclid(2 * curv).clamp(-128, 128);
-            disparity += delta as i32;
+            disparity += delta;
         }
     }
     Some(Decision {
@@ -652,11 +650,12 @@ fn costs_of(
     let t = total >> sh;
     let (wf, bf) = (u32::from(table.weight_frac), u32::from(table.bias_frac));
     let scores = raw.get_mut(..valid).unwrap_or(&mut []);
+    let (mut best, mut worst) = (i64::MIN, i64::MAX);
     for (d, r) in (lo..).zip(scores.iter_mut()) {
         *r = ((*r >> sh) << bf).saturating_sub((i64::from(table.bias_at(d)) * t) << wf);
+        best = best.max(*r);
+        worst = worst.min(*r);
     }
-    let best = scores.iter().copied().max().unwrap_or(0);
-    let worst = scores.iter().copied().min().unwrap_or(0);
     // Gaps `best − n(d)` truncated to 15 significant bits.
     let sh2 = (64 - best.abs_diff(worst).leading_zeros()).saturating_sub(15);
     let gap = |v: i64| (best.abs_diff(v) >> sh2) as u32;
