@@ -544,10 +544,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         Panel::new("disparity", disparity_panel(&est.disparity, w, h, max)),
     ];
     if let Some(raw) = &est.raw {
-        panels.push(Panel::new(
-            "disparity_raw",
-            disparity_panel(raw, w, h, max),
-        ));
+        panels.push(Panel::new("disparity_raw", disparity_panel(raw, w, h, max)));
     }
     let mut json = serde_json::json!({
         "left": opts.left.display().to_string(),

@@ -91,18 +91,18 @@ pub fn plan(opts: &StereoOptions, width: usize) -> Result<Plan> {
         r.preset.is_some(),
         "runs its own settings; give the options explicitly",
     )?;
-    given(
-        "table",
-        opts.table.is_some(),
-        "trains one table per level",
-    )?;
+    given("table", opts.table.is_some(), "trains one table per level")?;
     given("complete", opts.complete, "does not complete the map")?;
     given(
         "colour",
         opts.colour.is_some_and(|c| c != Colour::Grey),
         "runs grey only",
     )?;
-    given("chroma-weight", opts.chroma_weight.is_some(), "runs grey only")?;
+    given(
+        "chroma-weight",
+        opts.chroma_weight.is_some(),
+        "runs grey only",
+    )?;
     given(
         "refine",
         opts.refine.is_some_and(|v| v != 0),
@@ -299,7 +299,10 @@ mod tests {
         assert_eq!((p.coarse, p.radius, p.band), (3, 3, Some(1)));
         assert_eq!((p.p1, p.p2), (0.5, 4.0));
         assert_eq!((p.dem.min_margin, p.dem.lr_tolerance), (0.75, -1.0));
-        assert_eq!((p.dem.max_disp, p.dem.levels, p.dem.pool_radius), (31, 1, 0));
+        assert_eq!(
+            (p.dem.max_disp, p.dem.levels, p.dem.pool_radius),
+            (31, 1, 0)
+        );
     }
 
     #[test]
@@ -330,6 +333,9 @@ mod tests {
         }
         // Penalties the engine rejects: its own typed error.
         let e = plan(&parse("--c2f 2 --p1 2 --p2 1"), 160).unwrap_err();
-        assert!(matches!(e, HostError::Engine(_) | HostError::Stereo(_)), "{e}");
+        assert!(
+            matches!(e, HostError::Engine(_) | HostError::Stereo(_)),
+            "{e}"
+        );
     }
 }
