@@ -65,6 +65,10 @@ pub enum HostError {
     /// The stereo stage rejected its input or parameters.
     #[error("stereo: {0}")]
     Stereo(#[from] StereoError),
+    /// The fixed-point stereo engine (`protogist stereo --engine core`)
+    /// rejected its input, parameters or buffers.
+    #[error("stereo engine (core): {0}")]
+    Engine(#[from] protogist::stereo::StereoError),
     /// A decoder table that cannot be used.
     #[error("{}: {source}", path.display())]
     Table {

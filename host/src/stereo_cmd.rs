@@ -10,11 +10,14 @@ use crate::reference::stereo::table::{DemTable, DEFAULT_TABLE};
 use crate::reference::stereo::{self as dem, Decoder, DemParams, StereoError};
 use crate::summary::Summary;
 use image::{Rgb, RgbImage};
+use protogist::disparity::DisparityCell;
 use protogist::image::ImageView;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub mod engine;
 pub mod preset;
+pub use engine::Engine;
 pub use preset::Preset;
 
 /// Options of `protogist stereo`.
@@ -76,10 +79,19 @@ pub struct StereoOptions {
     pub out: PathBuf,
 }
 
-/// Read-out options of `protogist stereo`: a named preset, semi-global
-/// aggregation and the OFF thresholds (all default to the model's).
+/// Read-out options of `protogist stereo`: the engine, a named preset,
+/// semi-global aggregation and the OFF thresholds (all default to the
+/// model's).
 #[derive(Clone, Debug, Default, PartialEq, clap::Args)]
 pub struct ReadoutOptions {
+    /// Implementation: `reference` (f32, every option) or `core` (the
+    /// fixed-point coarse-to-fine engine, single thread). `core` runs
+    /// `--levels 1 --pool 0 --sgm --paths 5`, grey, `--refine 0`, and these
+    /// are its defaults, so `--engine core --c2f 2` alone is valid; it
+    /// needs `--c2f 1..=3`, and any other value, `--preset`, `--table`,
+    /// `--colour` other than grey or `--complete` is an error.
+    #[arg(long, value_enum, default_value_t = Engine::Reference)]
+    pub engine: Engine,
     /// Named settings (f32 reference; options given explicitly override
     /// them): `held-out`, chosen on the Middlebury Motorcycle pair
     /// (docs/STEREO.md, "Settings chosen on a held-out pair").
@@ -140,6 +152,15 @@ pub const SGM_PATHS: u8 = 5;
 /// [`HostError::Io`], [`HostError::Table`] for a bad table,
 /// [`HostError::Stereo`] when it was trained for other parameters.
 pub fn decoder_for(params: &DemParams, table: Option<&Path>) -> Result<Decoder> {
+    Ok(table_for(params, table)?.to_decoder())
+}
+
+/// The integer table behind [`decoder_for`] (the same choice and checks):
+/// what core's engines parse.
+///
+/// # Errors
+/// As [`decoder_for`].
+pub fn table_for(params: &DemParams, table: Option<&Path>) -> Result<DemTable> {
     let parse = |bytes: &[u8], path: &Path| {
         DemTable::parse(bytes).map_err(|source| HostError::Table {
             path: path.to_path_buf(),
@@ -163,7 +184,7 @@ pub fn decoder_for(params: &DemParams, table: Option<&Path>) -> Result<Decoder> 
         }
         .into());
     }
-    Ok(t.to_decoder())
+    Ok(t)
 }
 
 /// `protogist train-dem`: trains for `params` and writes the table.
@@ -330,12 +351,78 @@ pub fn load_pair(
     })
 }
 
-/// `protogist stereo`: loads, downscales, runs the DEM, writes the panels
-/// and, with GT, the error map and metrics.
+/// One run of an engine on the pair, before the report.
+struct Estimate {
+    /// The engine that ran.
+    engine: Engine,
+    /// The map, left-referenced (what `--complete` starts from).
+    cells: Vec<DisparityCell>,
+    /// The same in px (`None`: OFF).
+    disparity: Vec<Option<f32>>,
+    /// The reference's argmax before the OFF tests (the core engine does
+    /// not expose it).
+    raw: Option<Vec<Option<f32>>>,
+    /// Pixels OFF for lack of texture, as ambiguous, by the left-right
+    /// check.
+    off: [usize; 3],
+    /// Time to train (or load) the decoders, ms.
+    train_ms: f64,
+    /// Time of the stage's run, ms.
+    run_ms: f64,
+}
+
+/// A map of cells in px (`None`: OFF).
+fn cells_f32(cells: &[DisparityCell]) -> Vec<Option<f32>> {
+    cells
+        .iter()
+        .map(|c| c.get().map(|d| d.to_num::<f32>()))
+        .collect()
+}
+
+/// The f32 reference on the packed `w x h` pair: `params`, coarse to fine
+/// with `search`.
+fn run_reference(
+    opts: &StereoOptions,
+    params: &DemParams,
+    search: Option<preset::Search>,
+    pair: &Pair,
+) -> Result<Estimate> {
+    let (w, h) = (pair.width, pair.height);
+    let t_train = Instant::now();
+    let mut decoders = vec![decoder_for(params, opts.table.as_deref())?];
+    for k in 1..=search.map_or(0, |c| c.levels) {
+        decoders.push(decoder_for(&dem::c2f::level_params(params, k), None)?);
+    }
+    let train_ms = t_train.elapsed().as_secs_f64() * 1e3;
+    let t_run = Instant::now();
+    let (lv, rv) = (
+        ImageView::packed(&pair.left, w, h)?,
+        ImageView::packed(&pair.right, w, h)?,
+    );
+    let maps = if let Some(c) = search {
+        dem::c2f::stereo_c2f(params, &decoders, &lv, &rv, c.radius, c.band)?
+    } else {
+        dem::stereo(params, &decoders[0], &lv, &rv)?
+    };
+    let run_ms = t_run.elapsed().as_secs_f64() * 1e3;
+    Ok(Estimate {
+        engine: Engine::Reference,
+        cells: maps.disparity,
+        disparity: maps.disparity_f32,
+        raw: Some(maps.left_raw),
+        off: [maps.off_texture, maps.off_ambiguous, maps.off_inconsistent],
+        train_ms,
+        run_ms,
+    })
+}
+
+/// `protogist stereo`: loads, downscales, runs the DEM (the f32 reference,
+/// or core's engine with `--engine core`), writes the panels and, with GT,
+/// the error map and metrics.
 ///
 /// # Errors
 /// [`HostError`] for unreadable or mismatched inputs, bad GT, parameters
-/// the stage rejects, or an unwritable output directory.
+/// the stage (or the engine) rejects, or an unwritable output directory.
 pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     let start = Instant::now();
     let pair = load_pair(
@@ -346,10 +433,19 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         opts.width,
     )?;
     let (ow, oh) = pair.input_size;
-    let (lp, rp, gt_small) = (pair.left, pair.right, pair.gt);
     let (w, h) = (pair.width, pair.height);
-    let params = preset::params_for(opts, w)?;
-    let complete = preset::complete(opts);
+    let plan = match opts.readout.engine {
+        Engine::Reference => None,
+        Engine::Core => Some(engine::plan(opts, w)?),
+    };
+    let (params, search, complete) = match &plan {
+        Some(p) => (p.params, Some(p.search), false),
+        None => (
+            preset::params_for(opts, w)?,
+            preset::search(opts)?,
+            preset::complete(opts),
+        ),
+    };
     params.check()?;
     // Size checks first: training for a hopeless size is wasted time.
     if usize::from(params.max_disp) >= w {
@@ -362,31 +458,37 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     // The coarsest level searched (the pair itself without `--c2f`) must
     // hold the filters.
     let min = params.min_size();
-    let search = preset::search(opts)?;
     let coarse_levels = search.map_or(0, |c| c.levels);
     let coarsest = (w >> coarse_levels, h >> coarse_levels);
     if coarsest.0 < min || coarsest.1 < min {
         return Err(StereoError::TooSmall { min, got: coarsest }.into());
     }
-    let t_train = Instant::now();
-    let mut decoders = vec![decoder_for(&params, opts.table.as_deref())?];
-    for k in 1..=coarse_levels {
-        decoders.push(decoder_for(&dem::c2f::level_params(&params, k), None)?);
-    }
-    let decoder = &decoders[0];
-    let train_ms = t_train.elapsed().as_secs_f64() * 1e3;
-    let t_run = Instant::now();
-    let (lv, rv) = (ImageView::packed(&lp, w, h)?, ImageView::packed(&rp, w, h)?);
-    let maps = if let Some(c) = search {
-        dem::c2f::stereo_c2f(&params, &decoders, &lv, &rv, c.radius, c.band)?
-    } else {
-        dem::stereo(&params, decoder, &lv, &rv)?
+    let est = match &plan {
+        Some(p) => {
+            let r = engine::run(p, &pair.left, &pair.right, w, h)?;
+            Estimate {
+                engine: Engine::Core,
+                disparity: cells_f32(&r.cells),
+                cells: r.cells,
+                raw: None,
+                off: [
+                    r.report.off_texture,
+                    r.report.off_ambiguous,
+                    r.report.off_inconsistent,
+                ],
+                train_ms: r.train_ms,
+                run_ms: r.run_ms,
+            }
+        }
+        None => run_reference(opts, &params, search, &pair)?,
     };
-    let run_ms = t_run.elapsed().as_secs_f64() * 1e3;
+    let (train_ms, run_ms) = (est.train_ms, est.run_ms);
+    let (lp, gt_small) = (pair.left, pair.gt);
 
     let mut s = Summary::new(format!("protogist stereo: {}", opts.left.display()));
     s.push("input", format!("{ow}x{oh}"));
     s.push("working size", format!("{w}x{h}"));
+    s.push("engine", est.engine.name());
     s.push("max disparity", params.max_disp);
     s.push("pool radius", params.pool_radius);
     s.push("levels", params.levels);
@@ -425,23 +527,25 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     let n = (w * h) as f64;
     s.push("decoder ms", format!("{train_ms:.1}"));
     s.push("stereo ms", format!("{run_ms:.1}"));
-    let on = maps.disparity_f32.iter().filter(|d| d.is_some()).count();
+    let on = est.disparity.iter().filter(|d| d.is_some()).count();
     s.push("ON %", format!("{:.1}", 100.0 * on as f64 / n));
     s.push(
         "OFF texture/ambiguous/left-right %",
         format!(
             "{:.1} / {:.1} / {:.1}",
-            100.0 * maps.off_texture as f64 / n,
-            100.0 * maps.off_ambiguous as f64 / n,
-            100.0 * maps.off_inconsistent as f64 / n
+            100.0 * est.off[0] as f64 / n,
+            100.0 * est.off[1] as f64 / n,
+            100.0 * est.off[2] as f64 / n
         ),
     );
     let max = f32::from(params.max_disp);
     let mut panels = vec![
         Panel::new("left", rgb_from(&lp, w, h)),
-        Panel::new("disparity", disparity_panel(&maps.disparity_f32, w, h, max)),
-        Panel::new("disparity_raw", disparity_panel(&maps.left_raw, w, h, max)),
+        Panel::new("disparity", disparity_panel(&est.disparity, w, h, max)),
     ];
+    if let Some(raw) = &est.raw {
+        panels.push(Panel::new("disparity_raw", disparity_panel(raw, w, h, max)));
+    }
     let mut json = serde_json::json!({
         "left": opts.left.display().to_string(),
         "width": w, "height": h,
@@ -450,6 +554,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         "colour": format!("{:?}", params.colour).to_lowercase(),
         "chroma_weight": params.chroma_weight,
         "on_fraction": on as f64 / n,
+        "engine": est.engine.name(),
         "stereo_ms": run_ms,
     });
     if let Some(p) = opts.readout.preset {
@@ -460,8 +565,8 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             "levels": c.levels, "radius": c.radius, "band": c.band,
         });
     }
-    let model_f32 = maps.disparity_f32.clone();
-    let mut final_f32 = maps.disparity_f32;
+    let model_f32 = est.disparity.clone();
+    let mut final_f32 = est.disparity;
     if complete {
         let t = Instant::now();
         let edges = crate::stages::run_conspicuity(
@@ -475,7 +580,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             &protogist::complete::CompleteParams::default(),
             &edges.edges,
             &edges.smoothed,
-            &maps.disparity,
+            &est.cells,
             w,
             h,
         )?;
@@ -488,10 +593,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             ),
         );
         json["completion_ms"] = serde_json::json!(ms);
-        final_f32 = done
-            .iter()
-            .map(|c| c.get().map(|d| d.to_num::<f32>()))
-            .collect();
+        final_f32 = cells_f32(&done);
         panels.push(Panel::new(
             "disparity_completed",
             disparity_panel(&final_f32, w, h, max),
@@ -499,11 +601,13 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     }
     if let Some(gt) = gt_small {
         let m = metrics(&final_f32, &gt.data);
-        let raw = metrics(&maps.left_raw, &gt.data);
         let gmax = gt.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
         s.push("GT max disparity px", format!("{gmax:.1}"));
         push_metrics(&mut s, "final", &m);
-        push_metrics(&mut s, "raw argmax", &raw);
+        let raw = est.raw.as_ref().map(|r| metrics(r, &gt.data));
+        if let Some(raw) = &raw {
+            push_metrics(&mut s, "raw argmax", raw);
+        }
         panels.push(Panel::new("gt", disparity_panel(&gt.data, w, h, max)));
         panels.push(Panel::new("error", error_panel(&final_f32, &gt)));
         json["gt_max_disp"] = serde_json::json!(gmax);
@@ -513,7 +617,9 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             push_metrics(&mut s, "model (before completion)", &before);
             json["model"] = metrics_json(&before);
         }
-        json["raw_argmax"] = metrics_json(&raw);
+        if let Some(raw) = &raw {
+            json["raw_argmax"] = metrics_json(raw);
+        }
     }
     finish(&opts.out, panels, &mut s, start)?;
     if opts.json {

@@ -89,3 +89,59 @@ impl SegmentStorage {
         )
     }
 }
+
+/// Owned storage for [`protogist::stereo::c2f::C2fBuffers`] at one size.
+pub struct C2fStorage {
+    /// Grey rings.
+    pub grey: Vec<u16>,
+    /// RGB rows.
+    pub rgb: Vec<protogist::image::Rgb8>,
+    /// Response rows.
+    pub z: Vec<protogist::stereo::filters::Z>,
+    /// y-pass row.
+    pub col: Vec<[i32; 3]>,
+    /// Score rows.
+    pub scores: Vec<i64>,
+    /// Costs, windows, voters, SGM states.
+    pub costs: Vec<u16>,
+    /// SGM sums.
+    pub sums: Vec<u32>,
+    /// Row picks.
+    pub picks: Vec<i32>,
+    /// Window maps.
+    pub maps: Vec<u8>,
+}
+
+impl C2fStorage {
+    /// Storage for a `width x height` pair, sized by the engine's
+    /// `const fn`s.
+    pub fn new(width: usize, height: usize, p: &protogist::stereo::c2f::C2fParams) -> Self {
+        use protogist::stereo::c2f as c;
+        Self {
+            grey: vec![0; c::grey_len(width, p)],
+            rgb: vec![protogist::image::Rgb8::new(0, 0, 0); c::rgb_len(width, p)],
+            z: vec![[0; 2]; c::z_len(width, p)],
+            col: vec![[0; 3]; width],
+            scores: vec![0; c::score_len(width, p)],
+            costs: vec![0; c::cost_len(width, p)],
+            sums: vec![0; c::sum_len(width, p)],
+            picks: vec![0; c::pick_len(width)],
+            maps: vec![0; c::map_len(width, height, p)],
+        }
+    }
+
+    /// The engine's view of the storage.
+    pub fn buffers(&mut self) -> protogist::stereo::c2f::C2fBuffers<'_> {
+        protogist::stereo::c2f::C2fBuffers {
+            grey: &mut self.grey,
+            rgb: &mut self.rgb,
+            z: &mut self.z,
+            col: &mut self.col,
+            scores: &mut self.scores,
+            costs: &mut self.costs,
+            sums: &mut self.sums,
+            picks: &mut self.picks,
+            maps: &mut self.maps,
+        }
+    }
+}

@@ -408,7 +408,11 @@ fn dem_aloe() -> Section {
          fine (5 candidates from the groups near them at the fine levels; the ms still score \
          every candidate): docs/STEREO.md, section Coarse-to-fine with SGM. The \
          `--preset held-out` rows are the setting chosen on the held-out Motorcycle pair (next \
-         section), run here once with no change.\n\n{STEREO_TABLE_HEAD}",
+         section), run here once with no change. The `--engine core` rows run core's \
+         fixed-point coarse-to-fine engine (`protogist::stereo::c2f`, the firmware's stage: \
+         grey, one level, no pooling, 5 SGM paths, windows ±2, band 2), ms its run alone, \
+         single thread; the `--engine reference` rows beside them are the same settings in \
+         the f32 reference.\n\n{STEREO_TABLE_HEAD}",
     );
     // (width, D, extra options); every row runs with `--refine 0` unless it
     // names another radius.
@@ -450,7 +454,26 @@ fn dem_aloe() -> Section {
         "2",
     ];
     let held_out: &[&str] = &["--preset", "held-out"];
-    let rows: [(&str, &str, &[&str]); 18] = [
+    // The same coarse-to-fine setting through core's fixed-point engine
+    // and through the f32 reference (`--engine core` runs `--levels 1
+    // --pool 0 --sgm --paths 5`, grey, by default).
+    const ENGINE_CORE: [&str; 6] = ["--engine", "core", "--c2f", "2", "--c2f-band", "2"];
+    const ENGINE_REF: [&str; 13] = [
+        "--engine",
+        "reference",
+        "--levels",
+        "1",
+        "--pool",
+        "0",
+        "--sgm",
+        "--paths",
+        "5",
+        "--c2f",
+        "2",
+        "--c2f-band",
+        "2",
+    ];
+    let rows: [(&str, &str, &[&str]); 22] = [
         ("160", "32", &[]),
         ("160", "32", &["--refine", "1"]),
         ("160", "32", &["--complete"]),
@@ -460,6 +483,8 @@ fn dem_aloe() -> Section {
         ("160", "32", &c320),
         ("160", "32", &C2F),
         ("160", "32", held_out),
+        ("160", "32", &ENGINE_CORE),
+        ("160", "32", &ENGINE_REF),
         ("320", "64", &[]),
         ("320", "64", &["--refine", "1"]),
         ("320", "64", &["--complete"]),
@@ -469,6 +494,8 @@ fn dem_aloe() -> Section {
         ("320", "64", &c160),
         ("320", "64", &C2F),
         ("320", "64", held_out),
+        ("320", "64", &ENGINE_CORE),
+        ("320", "64", &ENGINE_REF),
     ];
     for (w, d, extra) in rows {
         body.push_str(&stereo_row([&l, &r, &gt], w, d, extra));
