@@ -60,16 +60,25 @@ def grid_p2_width():
     return s
 
 
+def grid_engine():
+    """Third grid: the parameters of core's coarse-to-fine engine (grey, one
+    level, no pooling, 5 paths, windows of 5, band 2: the firmware's
+    structure), P2 and the ambiguity margin."""
+    return [f"--engine core --c2f 2 --c2f-band 2 --p2 {p2} --min-margin {m}"
+            for p2 in ("4", "8", "16") for m in ("0", "0.5", "1")]
+
+
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--pair", choices=PAIRS, default="motorcycle")
     p.add_argument("--data", required=True, help="data root (holds aloe/ and motorcycle/)")
     p.add_argument("--bin", default="target/release/protogist")
-    p.add_argument("--grid", choices=("main", "p2-width"), default="main")
+    p.add_argument("--grid", choices=("main", "p2-width", "engine"), default="main")
     p.add_argument("--only", action="append", help="run only these option strings")
     a = p.parse_args()
     left, right, gt = (f"{a.data}/{f}" for f in PAIRS[a.pair])
-    settings = a.only or (grid() if a.grid == "main" else grid_p2_width())
+    grids = {"main": grid, "p2-width": grid_p2_width, "engine": grid_engine}
+    settings = a.only or grids[a.grid]()
     out = tempfile.mkdtemp(prefix="stereo-grid-")
     for opts in settings:
         for w, d in SIZES:
