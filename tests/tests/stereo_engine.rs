@@ -61,10 +61,11 @@ fn with_engine(mut opts: StereoOptions, engine: Engine, setting: Setting) -> Ste
     opts
 }
 
-/// `--c2f 2 --c2f-band 2`: the firmware's setting.
+/// `--c2f 2 --c2f-band 2 --p2 4`: the firmware's setting.
 fn firmware(o: &mut StereoOptions) {
     o.readout.c2f = Some(2);
     o.readout.c2f_band = Some(2);
+    o.readout.p2 = Some(4.0);
 }
 
 /// Every mapped option away from its default: `--c2f 1 --c2f-radius 3 --p1
@@ -82,7 +83,7 @@ fn mapped(o: &mut StereoOptions) {
 fn core_and_reference_agree_on_aloe_160() {
     let dir = tempfile::tempdir().unwrap();
     let settings: [(&str, Setting); 2] = [
-        ("--c2f 2 --c2f-band 2", firmware),
+        ("--c2f 2 --c2f-band 2 --p2 4", firmware),
         ("mapped options", mapped),
     ];
     for (name, setting) in settings {

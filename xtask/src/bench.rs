@@ -410,7 +410,7 @@ fn dem_aloe() -> Section {
          `--preset held-out` rows are the setting chosen on the held-out Motorcycle pair (next \
          section), run here once with no change. The `--engine core` rows run core's \
          fixed-point coarse-to-fine engine (`protogist::stereo::c2f`, the firmware's stage: \
-         grey, one level, no pooling, 5 SGM paths, windows ±2, band 2), ms its run alone, \
+         grey, one level, no pooling, 5 SGM paths, windows ±2, band 2, P2 4 chosen on Motorcycle), ms its run alone, \
          single thread; the `--engine reference` rows beside them are the same settings in \
          the f32 reference.\n\n{STEREO_TABLE_HEAD}",
     );
@@ -457,8 +457,17 @@ fn dem_aloe() -> Section {
     // The same coarse-to-fine setting through core's fixed-point engine
     // and through the f32 reference (`--engine core` runs `--levels 1
     // --pool 0 --sgm --paths 5`, grey, by default).
-    const ENGINE_CORE: [&str; 6] = ["--engine", "core", "--c2f", "2", "--c2f-band", "2"];
-    const ENGINE_REF: [&str; 13] = [
+    const ENGINE_CORE: [&str; 8] = [
+        "--engine",
+        "core",
+        "--c2f",
+        "2",
+        "--c2f-band",
+        "2",
+        "--p2",
+        "4",
+    ];
+    const ENGINE_REF: [&str; 15] = [
         "--engine",
         "reference",
         "--levels",
@@ -472,6 +481,8 @@ fn dem_aloe() -> Section {
         "2",
         "--c2f-band",
         "2",
+        "--p2",
+        "4",
     ];
     let rows: [(&str, &str, &[&str]); 22] = [
         ("160", "32", &[]),

@@ -115,8 +115,10 @@ pub struct C2fParams {
 
 impl C2fParams {
     /// `--levels 1 --pool 0 --sgm --paths 5 --c2f 2 --c2f-radius 2
-    /// --c2f-band 2` of the reference with `max_disp` 31 (the firmware's
-    /// 32 disparities), P1 0.25 and P2 16 (the reference's SGM defaults).
+    /// --c2f-band 2 --p2 4` of the reference with `max_disp` 31 (the
+    /// firmware's 32 disparities) and P1 0.25: P2 and the margin (0) chosen
+    /// on the held-out Motorcycle pair (docs/STEREO.md, "The coarse-to-fine
+    /// engine in core").
     pub const DEFAULT: Self = Self {
         dem: DemParams {
             max_disp: 31,
@@ -128,7 +130,7 @@ impl C2fParams {
         radius: 2,
         band: Some(2),
         p1: 0.25,
-        p2: 16.0,
+        p2: 4.0,
     };
 
     /// `max_disp` of level `k`: `⌈D / 2^k⌉`.

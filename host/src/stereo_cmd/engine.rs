@@ -267,12 +267,15 @@ mod tests {
     #[test]
     fn c2f_alone_is_the_engine_default() {
         let p = plan(&parse("--c2f 2"), 160).unwrap();
-        // The engine's own defaults (those of the firmware) without the band:
-        // the host's and core's model defaults agree.
+        // The firmware's setting (`C2fParams::DEFAULT`) with the reference's
+        // read-out defaults (every group, P2 16; the firmware's band 2 and
+        // P2 4 are given explicitly): the host's and core's model defaults
+        // agree.
         assert_eq!(
             p.engine,
             C2fParams {
                 band: None,
+                p2: super::super::SGM_P2,
                 ..C2fParams::DEFAULT
             }
         );
