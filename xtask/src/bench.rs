@@ -401,8 +401,9 @@ fn dem_aloe() -> Section {
          `--complete` rows score the map after the pipeline's completion over conspicuity \
          regions (`protogist::complete`, docs/SEGMENT.md), ms without it. The `--sgm` rows \
          follow the box pooling with semi-global aggregation of the normalised Poisson costs \
-         (5 one-pass paths, P1 0.25, P2 16; an f32-reference experiment, not yet in core: \
-         docs/STEREO.md, section Semi-global aggregation). The `--colour luv` rows add colour \
+         (5 one-pass paths, P1 0.25, P2 16, f32 reference: docs/STEREO.md, section \
+         Semi-global aggregation; core runs SGM only in its coarse-to-fine engine, the \
+         `--engine core` rows). The `--colour luv` rows add colour \
          channels, 8 paths and the settings named, chosen on Aloe itself (no held-out pair): \
          docs/STEREO.md, section SGM with colour channels. The `--c2f` row searches coarse to \
          fine (5 candidates from the groups near them at the fine levels; the ms still score \
