@@ -380,3 +380,43 @@ pub mod nets {
         .expect("a valid network writes")
     }
 }
+
+/// A random-dot stereogram of uniform disparity `d`
+/// (`reference::stereo::train::random_dot_pair`, dots 0 or 255) as grey RGB
+/// pixels.
+pub fn rds_rgb(w: usize, h: usize, d: usize, seed: u64) -> (Vec<Rgb8>, Vec<Rgb8>) {
+    let (l, r) = protogist_host::reference::stereo::train::random_dot_pair(w, h, d, seed);
+    let rgb = |p: &protogist_host::reference::stereo::filters::Plane| {
+        p.data
+            .iter()
+            .map(|&v| {
+                let g = v.round().clamp(0.0, 255.0) as u8;
+                Rgb8::new(g, g, g)
+            })
+            .collect::<Vec<_>>()
+    };
+    (rgb(&l), rgb(&r))
+}
+
+/// Agreement of a fixed-point stereo map with its f32 reference: (% of the
+/// pixels ON in both within 0.25 px, % of the pixels whose OFF decision
+/// agrees, pixels ON in both), the end-to-end measures.
+pub fn stereo_agreement(
+    core: &[protogist::disparity::DisparityCell],
+    float: &protogist_host::reference::stereo::DisparityMapsF,
+) -> (f64, f64, usize) {
+    let (mut both, mut close, mut agree) = (0usize, 0usize, 0usize);
+    for (c, f) in core.iter().zip(&float.disparity_f32) {
+        let c = c.get().map(|v| v.to_num::<f32>());
+        agree += usize::from(c.is_some() == f.is_some());
+        if let (Some(c), Some(f)) = (c, f) {
+            both += 1;
+            close += usize::from((c - f).abs() <= 0.25);
+        }
+    }
+    (
+        100.0 * close as f64 / both.max(1) as f64,
+        100.0 * agree as f64 / core.len().max(1) as f64,
+        both,
+    )
+}

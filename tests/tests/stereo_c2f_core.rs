@@ -6,60 +6,16 @@
 use proptest::prelude::*;
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
-use protogist::stereo::c2f::{self, C2f, C2fBuffers, C2fParams};
-use protogist::stereo::filters::Z;
+use protogist::stereo::c2f::{self, C2f, C2fParams};
 use protogist::stereo::{self as qs, StereoError, StereoReport};
 use protogist_host::io::{area_downscale, load_rgb, to_core_rgb, working_size};
 use protogist_host::reference::stereo::c2f::{level_params, stereo_c2f};
 use protogist_host::reference::stereo::table::DemTable as HostTable;
-use protogist_host::reference::stereo::train::random_dot_pair;
 use protogist_host::reference::stereo::{self as dem};
-use protogist_tests::data_file;
+use protogist_host::storage::C2fStorage;
+use protogist_tests::{data_file, rds_rgb, stereo_agreement};
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
-
-/// Owned scratch of the engine.
-struct Storage {
-    grey: Vec<u16>,
-    rgb: Vec<Rgb8>,
-    z: Vec<Z>,
-    col: Vec<[i32; 3]>,
-    scores: Vec<i64>,
-    costs: Vec<u16>,
-    sums: Vec<u32>,
-    picks: Vec<i32>,
-    maps: Vec<u8>,
-}
-
-impl Storage {
-    fn new(w: usize, h: usize, p: &C2fParams) -> Self {
-        Self {
-            grey: vec![0; c2f::grey_len(w, p)],
-            rgb: vec![Rgb8::new(0, 0, 0); c2f::rgb_len(w, p)],
-            z: vec![[0; 2]; c2f::z_len(w, p)],
-            col: vec![[0; 3]; w],
-            scores: vec![0; c2f::score_len(w, p)],
-            costs: vec![0; c2f::cost_len(w, p)],
-            sums: vec![0; c2f::sum_len(w, p)],
-            picks: vec![0; c2f::pick_len(w)],
-            maps: vec![0; c2f::map_len(w, h, p)],
-        }
-    }
-
-    fn bufs(&mut self) -> C2fBuffers<'_> {
-        C2fBuffers {
-            grey: &mut self.grey,
-            rgb: &mut self.rgb,
-            z: &mut self.z,
-            col: &mut self.col,
-            scores: &mut self.scores,
-            costs: &mut self.costs,
-            sums: &mut self.sums,
-            picks: &mut self.picks,
-            maps: &mut self.maps,
-        }
-    }
-}
 
 /// The reference's parameters for `p`.
 fn host_params(p: &C2fParams) -> dem::DemParams {
@@ -115,13 +71,13 @@ fn run_core(
         .iter()
         .map(|t| qs::DemTable::parse(t))
         .collect::<Result<_, _>>()?;
-    let mut st = Storage::new(w, h, p);
+    let mut st = C2fStorage::new(w, h, p);
     let mut out = vec![DisparityCell::OFF; w * h];
     let rep = e.run(
         &ts,
         &ImageView::packed(l, w, h).unwrap(),
         &ImageView::packed(r, w, h).unwrap(),
-        &mut st.bufs(),
+        &mut st.buffers(),
         &mut |x, y, c| out[y * w + x] = c,
         &mut (),
     )?;
@@ -152,40 +108,6 @@ fn run_float(
     .unwrap()
 }
 
-/// (% of pixels ON in both within 0.25 px, % of pixels whose OFF decision
-/// agrees, pixels ON in both).
-fn agreement(core: &[DisparityCell], float: &dem::DisparityMapsF) -> (f64, f64, usize) {
-    let (mut both, mut close, mut agree) = (0usize, 0usize, 0usize);
-    for (c, f) in core.iter().zip(&float.disparity_f32) {
-        let c = c.get().map(|v| v.to_num::<f32>());
-        agree += usize::from(c.is_some() == f.is_some());
-        if let (Some(c), Some(f)) = (c, f) {
-            both += 1;
-            close += usize::from((c - f).abs() <= 0.25);
-        }
-    }
-    (
-        100.0 * close as f64 / both.max(1) as f64,
-        100.0 * agree as f64 / core.len().max(1) as f64,
-        both,
-    )
-}
-
-/// Grey RDS pair as RGB.
-fn rds_rgb(w: usize, h: usize, d: usize, seed: u64) -> (Vec<Rgb8>, Vec<Rgb8>) {
-    let (l, r) = random_dot_pair(w, h, d, seed);
-    let rgb = |p: &dem::filters::Plane| {
-        p.data
-            .iter()
-            .map(|&v| {
-                let g = v.round().clamp(0.0, 255.0) as u8;
-                Rgb8::new(g, g, g)
-            })
-            .collect::<Vec<_>>()
-    };
-    (rgb(&l), rgb(&r))
-}
-
 fn params(max_disp: u8) -> C2fParams {
     C2fParams {
         dem: qs::DemParams {
@@ -210,7 +132,7 @@ proptest! {
         let (l, r) = rds_rgb(w, h, d, seed);
         let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
         let float = run_float(&p, &ts, &l, &r, w, h);
-        let (close, agree, both) = agreement(&core, &float);
+        let (close, agree, both) = stereo_agreement(&core, &float);
         prop_assert!(both > w * h / 2, "only {both} pixels ON in both");
         prop_assert!(close >= 99.0, "{close:.2} % within 0.25 px");
         prop_assert!(agree >= 99.0, "{agree:.2} % OFF agreement");
@@ -289,7 +211,7 @@ fn aloe_160_d32_agrees() {
     let ts = tables(&p);
     let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
     let float = run_float(&p, &ts, &l, &r, w, h);
-    let (close, agree, both) = agreement(&core, &float);
+    let (close, agree, both) = stereo_agreement(&core, &float);
     println!("aloe 160 c2f: {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
     assert!(both > w * h / 2, "{both}");
     assert!(close >= 99.0, "{close}");
@@ -327,7 +249,7 @@ fn scratch_at_160x120() {
     let lv = ImageView::packed(&l, w, h).unwrap();
     let rv = ImageView::packed(&r, w, h).unwrap();
     for which in 0..9 {
-        let mut st = Storage::new(w, h, &p);
+        let mut st = C2fStorage::new(w, h, &p);
         match which {
             0 => st.grey.pop().map(drop),
             1 => st.rgb.pop().map(drop),
@@ -344,7 +266,7 @@ fn scratch_at_160x120() {
             &parsed,
             &lv,
             &rv,
-            &mut st.bufs(),
+            &mut st.buffers(),
             &mut |_, _, _| cells += 1,
             &mut (),
         );
@@ -368,7 +290,7 @@ fn bad_input_is_a_typed_error() {
     let (l, r) = rds_rgb(w, h, 4, 7);
     let lv = ImageView::packed(&l, w, h).unwrap();
     let rv = ImageView::packed(&r, w, h).unwrap();
-    let mut st = Storage::new(w, h, &p);
+    let mut st = C2fStorage::new(w, h, &p);
     let mut run =
         |tables: &[qs::DemTable<'_>], a: &ImageView<'_, Rgb8>, b: &ImageView<'_, Rgb8>| {
             let mut cells = 0;
@@ -376,7 +298,7 @@ fn bad_input_is_a_typed_error() {
                 tables,
                 a,
                 b,
-                &mut st.bufs(),
+                &mut st.buffers(),
                 &mut |_, _, _| cells += 1,
                 &mut (),
             );

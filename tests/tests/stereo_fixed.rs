@@ -12,9 +12,8 @@ use protogist_host::io::{area_downscale, load_rgb, to_core_rgb, working_size};
 use protogist_host::reference::stereo::filters as ff;
 use protogist_host::reference::stereo::population as fp;
 use protogist_host::reference::stereo::table::{DemTable as HostTable, DEFAULT_TABLE};
-use protogist_host::reference::stereo::train::random_dot_pair;
 use protogist_host::reference::stereo::{self as dem};
-use protogist_tests::data_file;
+use protogist_tests::{data_file, rds_rgb, stereo_agreement};
 
 /// Owned scratch of the stage.
 struct Storage {
@@ -108,37 +107,6 @@ fn run_float(
         &ImageView::packed(r, w, h).unwrap(),
     )
     .unwrap()
-}
-
-/// (% of pixels ON in both within 0.25 px, % of pixels whose OFF decision
-/// agrees, pixels ON in both).
-fn agreement(core: &[DisparityCell], float: &dem::DisparityMapsF) -> (f64, f64, usize) {
-    let (mut both, mut close, mut agree) = (0usize, 0usize, 0usize);
-    for (c, f) in core.iter().zip(&float.disparity_f32) {
-        let c = c.get().map(|v| v.to_num::<f32>());
-        agree += usize::from(c.is_some() == f.is_some());
-        if let (Some(c), Some(f)) = (c, f) {
-            both += 1;
-            close += usize::from((c - f).abs() <= 0.25);
-        }
-    }
-    (
-        100.0 * close as f64 / both.max(1) as f64,
-        100.0 * agree as f64 / core.len().max(1) as f64,
-        both,
-    )
-}
-
-/// Grey RDS pair as RGB.
-fn rds_rgb(w: usize, h: usize, d: usize, seed: u64) -> (Vec<Rgb8>, Vec<Rgb8>) {
-    let (l, r) = random_dot_pair(w, h, d, seed);
-    let rgb = |p: &ff::Plane| {
-        p.data
-            .iter()
-            .map(|&v| Rgb8::new(v as u8, v as u8, v as u8))
-            .collect()
-    };
-    (rgb(&l), rgb(&r))
 }
 
 // ---------------------------------------------------------------------------
@@ -348,7 +316,7 @@ fn random_dots_end_to_end_agree() {
         let (l, r) = rds_rgb(w, h, d, 0x5eed_0000 + d as u64);
         let (q, _) = run_core(&p, DEFAULT_TABLE, &l, &r, w, h).unwrap();
         let f = run_float(&p, DEFAULT_TABLE, &l, &r, w, h);
-        let (close, agree, both) = agreement(&q, &f);
+        let (close, agree, both) = stereo_agreement(&q, &f);
         eprintln!("RDS d={d}: within 0.25 px {close:.2} % of {both}, OFF agree {agree:.2} %");
         close_n += close * both as f64 / 100.0;
         both_n += both;
@@ -372,7 +340,7 @@ proptest! {
         let (l, r) = rds_rgb(w, h, d, seed);
         let (q, _) = run_core(&p, DEFAULT_TABLE, &l, &r, w, h).unwrap();
         let f = run_float(&p, DEFAULT_TABLE, &l, &r, w, h);
-        let (close, agree, both) = agreement(&q, &f);
+        let (close, agree, both) = stereo_agreement(&q, &f);
         prop_assert!(both > 0);
         prop_assert!(close >= 99.0, "d={d} pool={pool}: {close} % within 0.25 px");
         prop_assert!(agree >= 99.0, "d={d} pool={pool}: OFF agree {agree} %");
@@ -404,7 +372,7 @@ fn aloe_160_d32_end_to_end_agrees() {
     let table = HostTable::from_decoder(&dem::train(&host_params(&p))).to_bytes();
     let (q, rep) = run_core(&p, &table, &l, &r, w, h).unwrap();
     let f = run_float(&p, &table, &l, &r, w, h);
-    let (close, agree, both) = agreement(&q, &f);
+    let (close, agree, both) = stereo_agreement(&q, &f);
     eprintln!(
         "Aloe {w}x{h} D=32: within 0.25 px {close:.2} % of {both} ON in both, OFF agree {agree:.2} %; core {rep:?}; float ON {}",
         f.disparity_f32.iter().filter(|v| v.is_some()).count()

@@ -58,6 +58,7 @@
 //! and 99 % of the OFF decisions to agree.
 
 use super::filters::{grey_row, Bank, MAX_TAPS, Z};
+use super::readout::take;
 use super::sgm::{self, Sgm};
 use super::{Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport};
 use crate::disparity::DisparityCell;
@@ -545,24 +546,6 @@ struct Pass<'e> {
     step: usize,
     /// Whether the band applies (a windowed level with a band).
     band: Option<usize>,
-}
-
-/// Splits `n` elements off the front of `*s`.
-fn take<'a, T>(
-    s: &mut &'a mut [T],
-    n: usize,
-    what: &'static str,
-) -> Result<&'a mut [T], StereoError> {
-    let got = s.len();
-    let (head, tail) = core::mem::take(s)
-        .split_at_mut_checked(n)
-        .ok_or(StereoError::Buffer {
-            what,
-            needed: n,
-            got,
-        })?;
-    *s = tail;
-    Ok(head)
 }
 
 /// Level-`k` RGB row `j` of `src` (rounded 2x2 means, `k` times) into

@@ -105,8 +105,9 @@ impl Tap {
     }
 }
 
-/// Moves the first `n` elements of `*s` out.
-fn take<'a, T>(
+/// Moves the first `n` elements of `*s` out ([`StereoError::Buffer`] if
+/// there are fewer).
+pub(super) fn take<'a, T>(
     s: &mut &'a mut [T],
     n: usize,
     what: &'static str,
