@@ -420,3 +420,18 @@ pub fn stereo_agreement(
         both,
     )
 }
+
+/// The Aloe pair area-downscaled to 160 px wide, as core RGB pixels
+/// (`None` without the data; see [`data_file`]).
+pub fn aloe_160_rgb() -> Option<(Vec<Rgb8>, Vec<Rgb8>, usize, usize)> {
+    use protogist_host::io::{area_downscale, load_rgb, to_core_rgb, working_size};
+    let l = load_rgb(&data_file("aloe/aloeL.jpg")?).unwrap();
+    let r = load_rgb(&data_file("aloe/aloeR.jpg")?).unwrap();
+    let (w, h) = working_size(l.width(), l.height(), 160).unwrap();
+    Some((
+        to_core_rgb(&area_downscale(&l, w, h)),
+        to_core_rgb(&area_downscale(&r, w, h)),
+        w as usize,
+        h as usize,
+    ))
+}

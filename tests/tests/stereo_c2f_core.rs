@@ -8,12 +8,11 @@ use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
 use protogist::stereo::c2f::{self, C2f, C2fParams};
 use protogist::stereo::{self as qs, StereoError, StereoReport};
-use protogist_host::io::{area_downscale, load_rgb, to_core_rgb, working_size};
 use protogist_host::reference::stereo::c2f::{level_params, stereo_c2f};
 use protogist_host::reference::stereo::table::DemTable as HostTable;
 use protogist_host::reference::stereo::{self as dem};
 use protogist_host::storage::C2fStorage;
-use protogist_tests::{data_file, rds_rgb, stereo_agreement};
+use protogist_tests::{aloe_160_rgb, rds_rgb, stereo_agreement};
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
@@ -188,23 +187,11 @@ fn random_dots_bad1_below_5_percent() {
     }
 }
 
-fn aloe_160() -> Option<(Vec<Rgb8>, Vec<Rgb8>, usize, usize)> {
-    let l = load_rgb(&data_file("aloe/aloeL.jpg")?).unwrap();
-    let r = load_rgb(&data_file("aloe/aloeR.jpg")?).unwrap();
-    let (w, h) = working_size(l.width(), l.height(), 160).unwrap();
-    Some((
-        to_core_rgb(&area_downscale(&l, w, h)),
-        to_core_rgb(&area_downscale(&r, w, h)),
-        w as usize,
-        h as usize,
-    ))
-}
-
 /// Aloe at 160 px with 32 disparities (needs `cargo xtask fetch-data`):
 /// the bounds, 99 % within 0.25 px and 99 % OFF agreement.
 #[test]
 fn aloe_160_d32_agrees() {
-    let Some((l, r, w, h)) = aloe_160() else {
+    let Some((l, r, w, h)) = aloe_160_rgb() else {
         return;
     };
     let p = params(31);

@@ -8,12 +8,11 @@ use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, ImageViewMut, Rgb8};
 use protogist::stereo::filters::{self as qf, Gabor, Z};
 use protogist::stereo::{self as qs, Dem, StereoBuffers, StereoError, StereoReport, TableError};
-use protogist_host::io::{area_downscale, load_rgb, to_core_rgb, working_size};
 use protogist_host::reference::stereo::filters as ff;
 use protogist_host::reference::stereo::population as fp;
 use protogist_host::reference::stereo::table::{DemTable as HostTable, DEFAULT_TABLE};
 use protogist_host::reference::stereo::{self as dem};
-use protogist_tests::{data_file, rds_rgb, stereo_agreement};
+use protogist_tests::{aloe_160_rgb, rds_rgb, stereo_agreement};
 
 /// Owned scratch of the stage.
 struct Storage {
@@ -347,22 +346,9 @@ proptest! {
     }
 }
 
-/// Aloe pair area-downscaled to 160 px wide.
-fn aloe_160() -> Option<(Vec<Rgb8>, Vec<Rgb8>, usize, usize)> {
-    let l = load_rgb(&data_file("aloe/aloeL.jpg")?).unwrap();
-    let r = load_rgb(&data_file("aloe/aloeR.jpg")?).unwrap();
-    let (w, h) = working_size(l.width(), l.height(), 160).unwrap();
-    Some((
-        to_core_rgb(&area_downscale(&l, w, h)),
-        to_core_rgb(&area_downscale(&r, w, h)),
-        w as usize,
-        h as usize,
-    ))
-}
-
 #[test]
 fn aloe_160_d32_end_to_end_agrees() {
-    let Some((l, r, w, h)) = aloe_160() else {
+    let Some((l, r, w, h)) = aloe_160_rgb() else {
         return;
     };
     let p = qs::DemParams {
