@@ -249,5 +249,15 @@ pub fn write_report(
         to_instructions(r.camera),
     )?;
     crate::app::write_ipp(out, "stereo", WIDTH, HEIGHT, to_instructions(r.total))?;
+    // The engine alone: the frames are the engine's input, and a camera's
+    // DMA would leave them in memory (the renders are deterministic, so the
+    // difference is exact).
+    crate::app::write_ipp(
+        out,
+        "stereo-engine",
+        WIDTH,
+        HEIGHT,
+        to_instructions(r.total.saturating_sub(r.camera)),
+    )?;
     writeln!(out, "scratch stereo {WIDTH}x{HEIGHT} {SCRATCH_BYTES}")
 }

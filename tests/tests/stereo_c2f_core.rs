@@ -137,9 +137,19 @@ proptest! {
         prop_assert!(agree >= 99.0, "{agree:.2} % OFF agreement");
         prop_assert_eq!(rep.on, core.iter().filter(|c| c.get().is_some()).count());
         // Interior pixels right of the search range: core misses d by more
-        // than 1 px on at most 1 % more of them than the reference.
+        // than 1 px on at most 1 % more of them than the reference, plus
+        // one coarse pixel's footprint: a near tie at the coarsest level
+        // (within the error bound, docs/ERROR_BOUNDS.md 7.5) may flip one
+        // coarse decision, which moves the windows of its 4^K level-0
+        // pixels (seed 8876650933446886780, d 5, band 3: one 4x4 block
+        // OFF by the left-right check, kept in the regressions file; in 150
+        // other random cases core's count never exceeded the reference's).
         let (bc, bf, n) = bad1(&core, &float, w, h, d);
-        prop_assert!(bc <= bf + n / 100, "bad-1 core {bc}, reference {bf}, of {n}");
+        let footprint = 1 << (2 * p.coarse);
+        prop_assert!(
+            bc <= bf + n / 100 + footprint,
+            "bad-1 core {bc}, reference {bf}, of {n}"
+        );
     }
 }
 

@@ -619,6 +619,62 @@ fn decide(sums: &[u32], lo: usize, valid: usize) -> Option<Decision> {
     })
 }
 
+/// The cells of one pixel and carrier: for each (weight group, other
+/// eye's response) of `cells`, the cell of `pair(other) = (left, right)`
+/// votes into `win` (the group's first `n` candidates); returns the sum of
+/// the cells' totals (`4A` each).
+#[inline(always)]
+fn cells<'g, 'z>(
+    win: &mut [i64],
+    cells: impl Iterator<Item = (&'g [u8], &'z Z)>,
+    pair: impl Fn(&Z) -> (Z, Z),
+    n: usize,
+) -> i64 {
+    let mut sum = 0i64;
+    for (group, other) in cells {
+        let (l, r) = pair(other);
+        let (lr, li) = (i32::from(l[0]), i32::from(l[1]));
+        let (rr, ri) = (i32::from(r[0]), i32::from(r[1]));
+        // Exact in i32: |z| components below 2^14.01, so A < 2^30.1
+        // (`filters`), then Q12 → Q8.
+        let q8 = |v: i32| (v + 8) >> 4;
+        let a = q8(lr * lr + li * li + rr * rr + ri * ri);
+        let xre = q8(lr * rr + li * ri);
+        let xim = q8(li * rr - lr * ri);
+        sum += 4 * i64::from(a);
+        vote(win, group.get(..6 * n).unwrap_or(&[]), [a, xre, xim]);
+    }
+    sum
+}
+
+/// Adds one cell's votes to a window's scores `win`: `a·wa + xre·wb +
+/// xim·wc` per candidate, from the candidates' weight bytes `wts` (6 per
+/// candidate: `wa, wb, wc`, little-endian `i16`).
+#[inline(always)]
+fn vote(win: &mut [i64], wts: &[u8], [a, xre, xim]: [i32; 3]) {
+    let one = |d: &mut i64, c6: &[u8]| {
+        if let [a0, a1, b0, b1, c0, c1] = *c6 {
+            let w = |lo: u8, hi: u8| i32::from(i16::from_le_bytes([lo, hi]));
+            *d += i64::from(a) * i64::from(w(a0, a1))
+                + i64::from(xre) * i64::from(w(b0, b1))
+                + i64::from(xim) * i64::from(w(c0, c1));
+        }
+    };
+    // The engine's windows of 5, unrolled.
+    if let (Ok(d5), Ok(w5)) = (
+        <&mut [i64; 5]>::try_from(&mut *win),
+        <&[u8; 30]>::try_from(wts),
+    ) {
+        for (d, c6) in d5.iter_mut().zip(w5.chunks_exact(6)) {
+            one(d, c6);
+        }
+        return;
+    }
+    for (d, c6) in win.iter_mut().zip(wts.chunks_exact(6)) {
+        one(d, c6);
+    }
+}
+
 /// The normalised `Q8` costs of one pixel (module docs) from its scores
 /// `raw` (window candidates, overwritten with the scores `n(d)`) and
 /// `total`: `valid` candidates from `lo`, the rest of the window the worst
@@ -641,15 +697,20 @@ fn costs_of(
         best = best.max(*r);
         worst = worst.min(*r);
     }
-    // Gaps `best − n(d)` truncated to 15 significant bits.
+    // Gaps `best − n(d)` truncated to 15 significant bits (so they fit
+    // `out` until they become costs).
     let sh2 = (64 - best.abs_diff(worst).leading_zeros()).saturating_sub(15);
-    let gap = |v: i64| (best.abs_diff(v) >> sh2) as u32;
-    let total_gap: u32 = scores.iter().map(|&v| gap(v)).sum();
+    let mut total_gap = 0u32;
+    for (o, &v) in out.iter_mut().zip(scores.iter()) {
+        let gap = (best.abs_diff(v) >> sh2) as u16;
+        *o = gap;
+        total_gap += u32::from(gap);
+    }
     // At most 2^15 · 256 · 256 = 2^31: no overflow.
     let scale = 256 * valid as u32;
     let mut hi = 0u16;
-    for (o, &v) in out.iter_mut().zip(scores.iter()) {
-        let c = (gap(v) * scale + total_gap / 2)
+    for o in out.iter_mut().take(valid) {
+        let c = (u32::from(*o) * scale + total_gap / 2)
             .checked_div(total_gap)
             .unwrap_or(0);
         *o = c.min(u32::from(u16::MAX)) as u16;
@@ -811,70 +872,15 @@ impl<'e> Pass<'e> {
                         .map_or(0, |&b| u16::from(b));
                 }
             }
-            sl.fill(0);
-            sr.fill(0);
-            vo_l.fill(0);
-            vo_r.fill(0);
             // Cells and votes: each pixel of each eye takes the votes of the
             // shifts in its band (the cell of left x and right x − s).
-            let banded = self.band.is_some();
-            for (eye, (sc, (lo, vo))) in [
-                (&mut *sl, (&*lo_l, &mut *vo_l)),
-                (&mut *sr, (&*lo_r, &mut *vo_r)),
-            ]
-            .into_iter()
-            .enumerate()
-            {
-                for (px, ((dst, &lo), v)) in sc
-                    .chunks_exact_mut(stride)
-                    .zip(lo.iter())
-                    .zip(vo.iter_mut())
-                    .enumerate()
-                {
-                    let (wts_lo, wts_hi) = (6 * usize::from(lo), 6 * (usize::from(lo) + n));
-                    for ks in self.shift_range(lo) {
-                        let s = ks * self.step;
-                        // The cell's left and right pixels.
-                        let (xl, xr) = if eye == 0 {
-                            (px, px.checked_sub(s))
-                        } else {
-                            (px + s, Some(px).filter(|_| px + s < w))
-                        };
-                        if banded && (eye == 0 || xr.is_some()) {
-                            *v += carriers as u16;
-                        }
-                        let Some(xr) = xr else {
-                            continue;
-                        };
-                        for c in 0..carriers {
-                            let l = z_l.get(c * w + xl).copied().unwrap_or([0; 2]);
-                            let r = z_r.get(c * w + xr).copied().unwrap_or([0; 2]);
-                            let (lr, li) = (i32::from(l[0]), i32::from(l[1]));
-                            let (rr, ri) = (i32::from(r[0]), i32::from(r[1]));
-                            // Exact in i32: |z| components below 2^14.01, so
-                            // A < 2^30.1 (`filters`), then Q12 → Q8.
-                            let q8 = |v: i32| i64::from((v + 8) >> 4);
-                            let a = q8(lr * lr + li * li + rr * rr + ri * ri);
-                            let xre = q8(lr * rr + li * ri);
-                            let xim = q8(li * rr - lr * ri);
-                            let wts = table
-                                .group_bytes(c * self.shifts + ks)
-                                .get(wts_lo..wts_hi)
-                                .unwrap_or(&[]);
-                            for (d, c6) in dst.iter_mut().zip(wts.chunks_exact(6)) {
-                                if let [a0, a1, b0, b1, c0, c1] = *c6 {
-                                    *d += a * i64::from(i16::from_le_bytes([a0, a1]))
-                                        + xre * i64::from(i16::from_le_bytes([b0, b1]))
-                                        + xim * i64::from(i16::from_le_bytes([c0, c1]));
-                                }
-                            }
-                            if let Some(t) = dst.get_mut(n) {
-                                *t += 4 * a;
-                            }
-                        }
-                    }
-                }
-            }
+            self.votes(
+                table,
+                [&*z_l, &*z_r],
+                [&*lo_l, &*lo_r],
+                [&mut *sl, &mut *sr],
+                [&mut *vo_l, &mut *vo_r],
+            );
             // Costs, aggregation, decisions.
             probe.enter(Step::Readout);
             let need = |total: i64, voters: u16| -> bool {
@@ -946,6 +952,104 @@ impl<'e> Pass<'e> {
             }
         }
         Ok(())
+    }
+
+    /// The cells and votes of one row: for each pixel of each eye (left,
+    /// right), its window's scores and total (`n + 1` per pixel, in
+    /// `scores`) from the cells of the shifts [`Pass::shift_range`] of its
+    /// window `lo` (the cell of left `x` and right `x − s`), and with a
+    /// band the number of groups voting (`voters`).
+    fn votes(
+        &self,
+        table: &DemTable<'_>,
+        z: [&[Z]; 2],
+        lo: [&[u16]; 2],
+        scores: [&mut [i64]; 2],
+        voters: [&mut [u16]; 2],
+    ) {
+        let [lo_l, lo_r] = lo;
+        let [sc_l, sc_r] = scores;
+        let [vo_l, vo_r] = voters;
+        self.votes_eye::<true>(table, z, lo_l, sc_l, vo_l);
+        self.votes_eye::<false>(table, z, lo_r, sc_r, vo_r);
+    }
+
+    /// [`Pass::votes`] of one eye (`LEFT`: left-referenced), carrier by
+    /// carrier.
+    #[inline(never)]
+    fn votes_eye<const LEFT: bool>(
+        &self,
+        table: &DemTable<'_>,
+        [z_l, z_r]: [&[Z]; 2],
+        lo: &[u16],
+        scores: &mut [i64],
+        voters: &mut [u16],
+    ) {
+        let (w, n, step) = (self.w, self.n, self.step);
+        let carriers = usize::from(self.e.dem.params.carriers);
+        let bytes = table.weight_bytes();
+        // Group `c·shifts + ks` starts at `6N·(c·shifts + ks)`.
+        let n6 = 6 * table.disparities();
+        // The groups voting: `carriers` per shift whose cell is inside.
+        for (px, (v, &lo)) in voters.iter_mut().zip(lo).enumerate() {
+            *v = if self.band.is_some() {
+                let inside = self
+                    .shift_range(lo)
+                    .filter(|&ks| LEFT || px + ks * step < w)
+                    .count();
+                (inside * carriers) as u16
+            } else {
+                0
+            };
+        }
+        scores.fill(0);
+        for (c, (pl, pr)) in z_l
+            .chunks_exact(w)
+            .zip(z_r.chunks_exact(w))
+            .take(carriers)
+            .enumerate()
+        {
+            let base = c * self.shifts * n6;
+            let (own_plane, other_plane) = if LEFT { (pl, pr) } else { (pr, pl) };
+            for (px, ((dst, &lo), own)) in scores
+                .chunks_exact_mut(n + 1)
+                .zip(lo)
+                .zip(own_plane)
+                .enumerate()
+            {
+                let (win, total) = dst.split_at_mut(n);
+                let range = self.shift_range(lo);
+                // The shifts whose cell lies inside the row: `s <= x` (left),
+                // `x + s < w` (right).
+                let last = if LEFT { px / step } else { (w - 1 - px) / step };
+                let count = (last + 1).min(range.end).saturating_sub(range.start);
+                let groups = bytes
+                    .get(base + range.start * n6 + 6 * usize::from(lo)..)
+                    .unwrap_or(&[])
+                    .chunks(n6)
+                    .take(count);
+                let first = range.start * step;
+                let sum = if LEFT {
+                    let others = other_plane
+                        .get(..(px + 1).saturating_sub(first))
+                        .unwrap_or(&[])
+                        .iter()
+                        .rev()
+                        .step_by(step);
+                    cells(win, groups.zip(others), |o| (*own, *o), n)
+                } else {
+                    let others = other_plane
+                        .get(px + first..)
+                        .unwrap_or(&[])
+                        .iter()
+                        .step_by(step);
+                    cells(win, groups.zip(others), |o| (*o, *own), n)
+                };
+                if let Some(t) = total.first_mut() {
+                    *t += sum;
+                }
+            }
+        }
     }
 
     /// The decision of one pixel: its scores row `raw` (for the total),

@@ -290,6 +290,12 @@ impl<'a> DemTable<'a> {
         self.weights.get(g * n6..(g + 1) * n6).unwrap_or(&[])
     }
 
+    /// Every group's raw weight bytes: group `g`'s triple of disparity `d`
+    /// at `6·(g·N + d)` ([`DemTable::group_bytes`]).
+    pub const fn weight_bytes(&self) -> &'a [u8] {
+        self.weights
+    }
+
     /// The weights `[a, b, c]` of group `g`, one per disparity.
     pub fn group(&self, g: usize) -> impl ExactSizeIterator<Item = [i16; 3]> + 'a {
         self.group_bytes(g).chunks_exact(6).map(|c| {
