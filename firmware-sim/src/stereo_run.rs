@@ -214,6 +214,15 @@ pub fn write_result(out: &mut impl Write, r: &StereoResult) -> fmt::Result {
         out,
         "stereo off texture={} ambiguous={} inconsistent={}",
         r.report.off_texture, r.report.off_ambiguous, r.report.off_inconsistent
+    )?;
+    // Tenths of a cell per pixel, in integers (no float formatting).
+    let tenths = (r.report.cells * 10 + WIDTH * HEIGHT / 2) / (WIDTH * HEIGHT);
+    writeln!(
+        out,
+        "stereo cells {WIDTH}x{HEIGHT} {} ({}.{} per pixel)",
+        r.report.cells,
+        tenths / 10,
+        tenths % 10
     )
 }
 

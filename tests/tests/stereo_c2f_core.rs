@@ -227,6 +227,34 @@ fn flat_images_give_an_all_off_map() {
     assert_eq!(rep.off_texture, w * h);
 }
 
+/// The engine's count of cells: without a band every pixel of every level
+/// evaluates the cells of every shift `s = 2·ks` inside the row (`s <= x`
+/// left-referenced, `x + s < w` right-referenced), for each carrier; with
+/// a band, fewer.
+#[test]
+fn the_cell_count_is_every_shift_inside_the_row() {
+    let (w, h) = (96, 64);
+    let (l, r) = rds_rgb(w, h, 4, 7);
+    let all = C2fParams { band: None, ..params(15) };
+    let ts = tables(&all);
+    let (_, rep) = run_core(&all, &ts, &l, &r, w, h).unwrap();
+    let carriers = usize::from(all.dem.carriers);
+    let step = usize::from(all.dem.shift_step);
+    let expected: usize = (0..=usize::from(all.coarse))
+        .map(|k| {
+            let (wk, hk) = (w >> k, h >> k);
+            let shifts = (usize::from(all.level_max_disp(k)) + 1).div_ceil(step);
+            // Left x and right w − 1 − x see the same shifts.
+            let row: usize = (0..wk).map(|x| shifts.min(x / step + 1)).sum();
+            2 * carriers * hk * row
+        })
+        .sum();
+    assert_eq!(rep.cells, expected);
+    let banded = C2fParams { band: Some(2), ..all };
+    let (_, rep_b) = run_core(&banded, &ts, &l, &r, w, h).unwrap();
+    assert!(rep_b.cells > 0 && rep_b.cells < expected / 2, "{}", rep_b.cells);
+}
+
 /// The scratch at 160x120 with 32 disparities, by the `const fn`: within
 /// the 96 KB.
 #[test]

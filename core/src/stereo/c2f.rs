@@ -506,7 +506,7 @@ impl C2f {
             } else {
                 Output::Map(mine)
             };
-            pass.run(table, [left, right], &mut work, parent, out, probe)?;
+            report.cells += pass.run(table, [left, right], &mut work, parent, out, probe)?;
         }
         Ok(report)
     }
@@ -763,7 +763,7 @@ impl<'e> Pass<'e> {
         parent: Option<&[u8]>,
         mut out: Output<'_, F>,
         probe: &mut impl Probe,
-    ) -> Result<(), StereoError> {
+    ) -> Result<usize, StereoError> {
         let (w, h, n) = (self.w, self.h, self.n);
         let dem = &self.e.dem;
         let carriers = usize::from(dem.params.carriers);
@@ -836,6 +836,7 @@ impl<'e> Pass<'e> {
             level_len(self.full.1, self.k + 1),
         );
         let mut next = 0;
+        let mut cells = 0;
         for y in 0..h {
             // Grey rows up to y + r, both eyes.
             probe.enter(Step::Pyramid);
@@ -874,7 +875,7 @@ impl<'e> Pass<'e> {
             }
             // Cells and votes: each pixel of each eye takes the votes of the
             // shifts in its band (the cell of left x and right x − s).
-            self.votes(
+            cells += self.votes(
                 table,
                 [&*z_l, &*z_r],
                 [&*lo_l, &*lo_r],
@@ -951,14 +952,15 @@ impl<'e> Pass<'e> {
                 self.windows_below(y, [&*lp, &*rp], map);
             }
         }
-        Ok(())
+        Ok(cells)
     }
 
     /// The cells and votes of one row: for each pixel of each eye (left,
     /// right), its window's scores and total (`n + 1` per pixel, in
     /// `scores`) from the cells of the shifts [`Pass::shift_range`] of its
     /// window `lo` (the cell of left `x` and right `x − s`), and with a
-    /// band the number of groups voting (`voters`).
+    /// band the number of groups voting (`voters`). Returns the number of
+    /// cells evaluated.
     fn votes(
         &self,
         table: &DemTable<'_>,
@@ -966,12 +968,12 @@ impl<'e> Pass<'e> {
         lo: [&[u16]; 2],
         scores: [&mut [i64]; 2],
         voters: [&mut [u16]; 2],
-    ) {
+    ) -> usize {
         let [lo_l, lo_r] = lo;
         let [sc_l, sc_r] = scores;
         let [vo_l, vo_r] = voters;
-        self.votes_eye::<true>(table, z, lo_l, sc_l, vo_l);
-        self.votes_eye::<false>(table, z, lo_r, sc_r, vo_r);
+        self.votes_eye::<true>(table, z, lo_l, sc_l, vo_l)
+            + self.votes_eye::<false>(table, z, lo_r, sc_r, vo_r)
     }
 
     /// [`Pass::votes`] of one eye (`LEFT`: left-referenced), carrier by
@@ -984,8 +986,9 @@ impl<'e> Pass<'e> {
         lo: &[u16],
         scores: &mut [i64],
         voters: &mut [u16],
-    ) {
+    ) -> usize {
         let (w, n, step) = (self.w, self.n, self.step);
+        let mut evaluated = 0;
         let carriers = usize::from(self.e.dem.params.carriers);
         let bytes = table.weight_bytes();
         // Group `c·shifts + ks` starts at `6N·(c·shifts + ks)`.
@@ -1023,6 +1026,7 @@ impl<'e> Pass<'e> {
                 // `x + s < w` (right).
                 let last = if LEFT { px / step } else { (w - 1 - px) / step };
                 let count = (last + 1).min(range.end).saturating_sub(range.start);
+                evaluated += count;
                 let groups = bytes
                     .get(base + range.start * n6 + 6 * usize::from(lo)..)
                     .unwrap_or(&[])
@@ -1050,6 +1054,7 @@ impl<'e> Pass<'e> {
                 }
             }
         }
+        evaluated
     }
 
     /// The decision of one pixel: its scores row `raw` (for the total),

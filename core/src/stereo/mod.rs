@@ -490,6 +490,11 @@ pub struct StereoReport {
     pub off_ambiguous: usize,
     /// Pixels OFF by the left-right check.
     pub off_inconsistent: usize,
+    /// Binocular complex cells evaluated (one per carrier and cell
+    /// position; every level and eye): the coarse-to-fine engine's
+    /// measure of its decoding work ([`c2f`]); 0 for the full-search
+    /// engines, which evaluate every cell.
+    pub cells: usize,
 }
 
 /// The steps a [`Probe`] is told about.
