@@ -235,7 +235,10 @@ fn flat_images_give_an_all_off_map() {
 fn the_cell_count_is_every_shift_inside_the_row() {
     let (w, h) = (96, 64);
     let (l, r) = rds_rgb(w, h, 4, 7);
-    let all = C2fParams { band: None, ..params(15) };
+    let all = C2fParams {
+        band: None,
+        ..params(15)
+    };
     let ts = tables(&all);
     let (_, rep) = run_core(&all, &ts, &l, &r, w, h).unwrap();
     let carriers = usize::from(all.dem.carriers);
@@ -250,9 +253,16 @@ fn the_cell_count_is_every_shift_inside_the_row() {
         })
         .sum();
     assert_eq!(rep.cells, expected);
-    let banded = C2fParams { band: Some(2), ..all };
+    let banded = C2fParams {
+        band: Some(2),
+        ..all
+    };
     let (_, rep_b) = run_core(&banded, &ts, &l, &r, w, h).unwrap();
-    assert!(rep_b.cells > 0 && rep_b.cells < expected / 2, "{}", rep_b.cells);
+    assert!(
+        rep_b.cells > 0 && rep_b.cells < expected / 2,
+        "{}",
+        rep_b.cells
+    );
 }
 
 /// The scratch at 160x120 with 32 disparities, by the `const fn`: within
