@@ -689,20 +689,44 @@ fn costs_of(
 ) {
     let sh = (64 - total.leading_zeros()).saturating_sub(30);
     let t = total >> sh;
+    // `n(d) = 2^m·u(d)`, `m = min(wf, bf)`: `u(d) = (raw(d) >> sh)·2^(bf −
+    // m) − bias(d)·t·2^(wf − m)`, one shift by 0. Exact, and no
+    // saturation: `|raw| <= 2^14·total + 2^27` (`|X| <= A/2` per cell,
+    // `|w| <= 2^15`), so `|raw >> sh| < 2^44.01`, `|bias·t| < 2^45`, and
+    // with `wf, bf <= 15` (`DemTable::parse`) `|n(d)| < 2^61`.
     let (wf, bf) = (u32::from(table.weight_frac), u32::from(table.bias_frac));
+    let m = wf.min(bf);
+    let (eb, ew) = (bf - m, wf - m);
     let scores = raw.get_mut(..valid).unwrap_or(&mut []);
     let (mut best, mut worst) = (i64::MIN, i64::MAX);
     for (d, r) in (lo..).zip(scores.iter_mut()) {
-        *r = ((*r >> sh) << bf).saturating_sub((i64::from(table.bias_at(d)) * t) << wf);
+        let b = i64::from(table.bias_at(d)) * t;
+        let v = *r >> sh;
+        *r = if ew == 0 {
+            (v << eb).saturating_sub(b)
+        } else {
+            v.saturating_sub(b << ew)
+        };
         best = best.max(*r);
         worst = worst.min(*r);
     }
-    // Gaps `best − n(d)` truncated to 15 significant bits (so they fit
-    // `out` until they become costs).
-    let sh2 = (64 - best.abs_diff(worst).leading_zeros()).saturating_sub(15);
+    // Gaps `best − n(d) = 2^m·(best − u(d))` truncated to 15 significant
+    // bits (so they fit `out` until they become costs).
+    let span = best.abs_diff(worst);
+    let bits = if span == 0 {
+        0
+    } else {
+        64 - span.leading_zeros() + m
+    };
+    let sh2 = bits.saturating_sub(15);
     let mut total_gap = 0u32;
     for (o, &v) in out.iter_mut().zip(scores.iter()) {
-        let gap = (best.abs_diff(v) >> sh2) as u16;
+        let du = best.abs_diff(v);
+        let gap = if sh2 >= m {
+            du >> (sh2 - m)
+        } else {
+            du << (m - sh2)
+        } as u16;
         *o = gap;
         total_gap += u32::from(gap);
     }
