@@ -224,10 +224,14 @@ impl<'a> Sgm<'a> {
             }
         }
         let max = self.max_cost();
-        if let Some((index, &cost)) = costs.iter().enumerate().find(|&(_, &c)| c > max) {
-            return Err(SgmError::CostTooLarge { index, cost, max });
+        // `c + P2 < 2^17`, so bit 16 of the OR is set iff some `c > max`.
+        let p2 = u32::from(self.p2);
+        if costs.iter().fold(0, |a, &c| a | (u32::from(c) + p2)) > 0xffff {
+            if let Some((index, &cost)) = costs.iter().enumerate().find(|&(_, &c)| c > max) {
+                return Err(SgmError::CostTooLarge { index, cost, max });
+            }
         }
-        let (p1, p2) = (u32::from(self.p1), u32::from(self.p2));
+        let p1 = u32::from(self.p1);
         let first = self.rows == 0;
         let Self {
             up,
@@ -271,11 +275,6 @@ struct Rows<'r> {
     pen: (u32, u32),
 }
 
-/// A predecessor's `L − min L` as seen from a pixel's window: at each of
-/// the pixel's candidates, then just below its first and just above its
-/// last (`INF` outside the predecessor's window).
-type Seen<const N: usize> = ([u32; N], u32, u32);
-
 impl Rows<'_> {
     /// The rows of `N` candidates. State (`up`, `from_left`, `from_right`):
     /// each pixel's `L − min L`, in `u16` (`L <= 65535`, checked by the
@@ -298,7 +297,7 @@ impl Rows<'_> {
         } else {
             INF
         };
-        let none: Seen<N> = ([0; N], 0, 0);
+        let zero = [0u16; N];
 
         // Forward sweep: left→right, top→bottom, and the diagonal from the
         // upper right, which reads slot x + 1 before slot x is overwritten.
@@ -323,16 +322,12 @@ impl Rows<'_> {
                 return;
             };
             let mut acc = [0u32; N];
-            hs = recur(c, seen(&hs, l, hlo, hpad), pen, &mut acc);
+            hs = settle(path(c, &hs, (l, hlo), hpad, pen), &mut acc);
             (hlo, hpad) = (l, INF);
-            *v = recur(c, seen(v, l, vlo, pad), pen, &mut acc);
+            *v = settle(path(c, v, (l, vlo), pad, pen), &mut acc);
             let from = next.as_deref().and_then(arr).zip(right_lo.next());
-            *s = recur(
-                c,
-                from.map_or(none, |(p, &plo)| seen(p, l, plo, pad)),
-                pen,
-                &mut acc,
-            );
+            let (p, plo, pd) = from.map_or((&zero, l, 0), |(p, &plo)| (p, plo, pad));
+            *s = settle(path(c, p, (l, plo), pd, pen), &mut acc);
             *o = acc;
             slot = next;
         }
@@ -358,15 +353,11 @@ impl Rows<'_> {
                 return;
             };
             let mut acc = *o;
-            hs = recur(c, seen(&hs, l, hlo, hpad), pen, &mut acc);
+            hs = settle(path(c, &hs, (l, hlo), hpad, pen), &mut acc);
             (hlo, hpad) = (l, INF);
             let from = next.as_deref().and_then(arr).zip(left_lo.next());
-            *s = recur(
-                c,
-                from.map_or(none, |(p, &plo)| seen(p, l, plo, pad)),
-                pen,
-                &mut acc,
-            );
+            let (p, plo, pd) = from.map_or((&zero, l, 0), |(p, &plo)| (p, plo, pad));
+            *s = settle(path(c, p, (l, plo), pd, pen), &mut acc);
             *o = acc;
             slot = next;
         }
@@ -443,20 +434,36 @@ fn arr<const N: usize>(c: &[u16]) -> Option<&[u16; N]> {
     <&[u16; N]>::try_from(c).ok()
 }
 
-/// The predecessor state `p` (window from `plo`, `L − min L`) seen from a
-/// pixel whose window starts at `lo`; `pad` stands for candidates outside
-/// `p`'s window (`INF`, or 0 for the zero state of a missing predecessor).
+/// One step of a path for `N` candidates: the pixel's costs `c` (window
+/// from `lo`) and its predecessor's state `p` (`L − min L`, window from
+/// `plo`; `pad` stands for candidates outside it: `INF`, or 0 for the zero
+/// state of a missing predecessor). Returns the pixel's `L` and `min L`.
+/// Needs `c + P2 <= 65535` (checked by the caller).
 #[inline(always)]
-fn seen<const N: usize>(p: &[u16; N], lo: u16, plo: u16, pad: u32) -> Seen<N> {
+fn path<const N: usize>(
+    c: &[u16; N],
+    p: &[u16; N],
+    (lo, plo): (u16, u16),
+    pad: u32,
+    pen: (u32, u32),
+) -> ([u32; N], u32) {
     if lo == plo {
-        return (p.map(u32::from), pad, pad);
+        recur(c, (p.map(u32::from), pad, pad), pen)
+    } else {
+        path_shifted(c, p, i32::from(lo) - i32::from(plo), pad, pen)
     }
-    seen_shifted(p, i32::from(lo) - i32::from(plo), pad)
 }
 
-/// [`seen`] for windows `off = lo − plo != 0` apart.
+/// [`path`] for windows `off = lo − plo != 0` apart (out of line: the
+/// common case `off = 0` stays in registers).
 #[inline(never)]
-fn seen_shifted<const N: usize>(p: &[u16; N], off: i32, pad: u32) -> Seen<N> {
+fn path_shifted<const N: usize>(
+    c: &[u16; N],
+    p: &[u16; N],
+    off: i32,
+    pad: u32,
+    pen: (u32, u32),
+) -> ([u32; N], u32) {
     let at = |j: i32| {
         usize::try_from(j)
             .ok()
@@ -467,34 +474,35 @@ fn seen_shifted<const N: usize>(p: &[u16; N], off: i32, pad: u32) -> Seen<N> {
     for (j, e) in (off..).zip(here.iter_mut()) {
         *e = at(j);
     }
-    (here, at(off - 1), at(off + N as i32))
+    recur(c, (here, at(off - 1), at(off + N as i32)), pen)
 }
 
-/// One step of a path for `N` candidates: the pixel's costs `c` and its
-/// predecessor as [`seen`]; adds `L` to `acc` and returns `L − min L`.
-/// Needs `c + P2 <= 65535` (checked by the caller).
+/// The recurrence from the predecessor's `L − min L` at the pixel's
+/// candidates (`here`), just below the first and just above the last:
+/// `L` and `min L`.
 #[inline(always)]
 fn recur<const N: usize>(
     c: &[u16; N],
-    (here, below, above): Seen<N>,
+    (here, below, above): ([u32; N], u32, u32),
     (p1, p2): (u32, u32),
-    acc: &mut [u32; N],
-) -> [u16; N] {
+) -> ([u32; N], u32) {
     let mut l = [0u32; N];
     let mut min = u32::MAX;
     let mut below = below;
     let aboves = here.iter().skip(1).copied().chain(core::iter::once(above));
-    for ((((v, s), &cd), &h), a) in l
-        .iter_mut()
-        .zip(acc.iter_mut())
-        .zip(c)
-        .zip(&here)
-        .zip(aboves)
-    {
+    for (((v, &cd), &h), a) in l.iter_mut().zip(c).zip(&here).zip(aboves) {
         *v = u32::from(cd) + p2.min(h).min(below.min(a) + p1);
-        *s += *v;
         min = min.min(*v);
         below = h;
+    }
+    (l, min)
+}
+
+/// Adds a step's `L` to `acc` and returns the state `L − min L`.
+#[inline(always)]
+fn settle<const N: usize>((l, min): ([u32; N], u32), acc: &mut [u32; N]) -> [u16; N] {
+    for (s, &v) in acc.iter_mut().zip(&l) {
+        *s += v;
     }
     l.map(|v| (v - min) as u16)
 }
