@@ -594,12 +594,11 @@ fn decide(sums: &[u32], lo: usize, valid: usize) -> Option<Decision> {
             (best, sb) = (i, v);
         }
     }
-    let second = s
-        .iter()
-        .enumerate()
-        .filter(|&(i, _)| i.abs_diff(best) > 1)
-        .map(|(_, &v)| v)
-        .min();
+    // The best sum more than 1 px away: before `best − 1` or after
+    // `best + 1`.
+    let before = s.get(..best.saturating_sub(1)).unwrap_or(&[]);
+    let after = s.get(best + 2..).unwrap_or(&[]);
+    let second = before.iter().chain(after).copied().min();
     let mut disparity = ((lo + best) as i32) << 8;
     if best > 0 && best + 1 < valid {
         // Path sums are below 5·65535 < 2^19, so every term fits in i32.
@@ -688,27 +687,45 @@ fn costs_of(
     out: &mut [u16],
 ) {
     let sh = (64 - total.leading_zeros()).saturating_sub(30);
-    let t = total >> sh;
+    // Below 2^30 for the callers' `total > 0`, so `i32`.
+    let t = i64::from(i32::try_from(total >> sh).unwrap_or(i32::MAX));
     // `n(d) = 2^m·u(d)`, `m = min(wf, bf)`: `u(d) = (raw(d) >> sh)·2^(bf −
-    // m) − bias(d)·t·2^(wf − m)`, one shift by 0. Exact, and no
-    // saturation: `|raw| <= 2^14·total + 2^27` (`|X| <= A/2` per cell,
-    // `|w| <= 2^15`), so `|raw >> sh| < 2^44.01`, `|bias·t| < 2^45`, and
-    // with `wf, bf <= 15` (`DemTable::parse`) `|n(d)| < 2^61`.
+    // m) − bias(d)·t·2^(wf − m)`. Exact, and far from overflow (so the
+    // reference's saturation never acts): `|raw| <= 2^14·total + 2^27`
+    // (`|X| <= A/2` per cell, `|w| <= 2^15`), so `|raw >> sh| < 2^44.01`,
+    // `|bias·t| < 2^45`, and with `wf, bf <= 15` (`DemTable::parse`)
+    // `|n(d)| < 2^61`. The powers of two multiply (cheaper than 64-bit
+    // variable shifts on the M4).
     let (wf, bf) = (u32::from(table.weight_frac), u32::from(table.bias_frac));
     let m = wf.min(bf);
-    let (eb, ew) = (bf - m, wf - m);
+    let (pb, pw) = (i64::from(1u32 << (bf - m)), i64::from(1u32 << (wf - m)));
     let scores = raw.get_mut(..valid).unwrap_or(&mut []);
+    if sh > 0 {
+        for r in scores.iter_mut() {
+            *r >>= sh;
+        }
+    }
     let (mut best, mut worst) = (i64::MIN, i64::MAX);
-    for (d, r) in (lo..).zip(scores.iter_mut()) {
-        let b = i64::from(table.bias_at(d)) * t;
-        let v = *r >> sh;
-        *r = if ew == 0 {
-            (v << eb).saturating_sub(b)
-        } else {
-            v.saturating_sub(b << ew)
-        };
+    let mut fold = |r: &mut i64, bias: i16| {
+        *r = r
+            .wrapping_mul(pb)
+            .wrapping_sub((i64::from(bias) * t).wrapping_mul(pw));
         best = best.max(*r);
         worst = worst.min(*r);
+    };
+    match table.bias_bytes().get(2 * lo..2 * (lo + valid)) {
+        Some(bias) => {
+            for (r, b) in scores.iter_mut().zip(bias.chunks_exact(2)) {
+                if let [b0, b1] = *b {
+                    fold(r, i16::from_le_bytes([b0, b1]));
+                }
+            }
+        }
+        None => {
+            for (d, r) in (lo..).zip(scores.iter_mut()) {
+                fold(r, table.bias_at(d));
+            }
+        }
     }
     // Gaps `best − n(d) = 2^m·(best − u(d))` truncated to 15 significant
     // bits (so they fit `out` until they become costs).
@@ -721,7 +738,8 @@ fn costs_of(
     let sh2 = bits.saturating_sub(15);
     let mut total_gap = 0u32;
     for (o, &v) in out.iter_mut().zip(scores.iter()) {
-        let du = best.abs_diff(v);
+        // `best >= v`, both within ±2^61: the difference is exact.
+        let du = best.wrapping_sub(v) as u64;
         let gap = if sh2 >= m {
             du >> (sh2 - m)
         } else {

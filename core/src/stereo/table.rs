@@ -318,6 +318,11 @@ impl<'a> DemTable<'a> {
         })
     }
 
+    /// The raw little-endian bias bytes: disparity `d`'s at `2d`.
+    pub const fn bias_bytes(&self) -> &'a [u8] {
+        self.bias
+    }
+
     /// The bias per disparity.
     pub fn bias(&self) -> impl ExactSizeIterator<Item = i16> + 'a {
         self.bias.chunks_exact(2).map(i16_of)
