@@ -284,12 +284,12 @@ fn fits(g: impl Fn(usize) -> i32, taps: usize) -> bool {
 }
 
 /// One carrier's halves: `[kx_re (even), kx_im (odd)]`, `[ky_re (even),
-/// ky_im (odd)]`, and its DC term.
+/// ky_im (odd)]`, and its DC term (which the bank needs to fit `i32`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct Halves {
     kx: [[i32; 2]; MAX_RADIUS + 1],
     ky: [[i32; 2]; MAX_RADIUS + 1],
-    dc: [i64; 2],
+    dc32: [i32; 2],
 }
 
 /// Carriers computed from one y pass: `a` from its own (`ky_a`), `b`
@@ -328,7 +328,8 @@ struct Unit {
 /// exact in `i32` with pre-added pixels (`|g·(v ± v')| ≤ 2^14·131070 <
 /// 2^31` and every partial sum is at most `65535·Σ|g|`); a pre-added pair
 /// of y sums needs `Σ|ky| ≤ 2^14` (checked: `2·65535·2^14 < 2^31`; the
-/// envelope has `Σ = 2^14`, all taps ≥ 0); the x sums stay exact in `i64`.
+/// envelope has `Σ = 2^14`, all taps ≥ 0); the x sums stay exact in `i64`
+/// (every `|kx| ≤ 2^14` and `dc` in `i32`, checked: see [`finish1`]).
 #[derive(Clone, Copy, Debug)]
 pub struct Bank<'k> {
     kernels: &'k [Gabor],
@@ -379,6 +380,7 @@ impl<'k> Bank<'k> {
         for (g, h) in self.kernels.iter().zip(&mut self.halves) {
             let ok = g.taps == taps
                 && g.env == first.env
+                && g.kx.iter().flatten().all(|k| k.abs() <= 1 << KERNEL_FRAC)
                 && fits(|i| re(&g.ky, i), taps)
                 && fits(|i| im(&g.ky, i), taps);
             if !ok {
@@ -393,7 +395,7 @@ impl<'k> Bank<'k> {
                     half(|i| re(&g.ky, i), taps, false)?,
                     half(|i| im(&g.ky, i), taps, true)?,
                 ),
-                dc: g.dc,
+                dc32: [i32::try_from(g.dc[0]).ok()?, i32::try_from(g.dc[1]).ok()?],
             };
         }
         // Units: conjugate pairs and own y passes first, then the carriers
@@ -506,18 +508,18 @@ impl<'k> Bank<'k> {
             let x = XUnit {
                 env: &self.env,
                 a: ha.zip(take(u.a)),
-                b: hb.map(|h| h.dc).zip(take(u.b)),
+                b: hb.map(|h| h.dc32).zip(take(u.b)),
                 e: he.zip(take(u.e)),
             };
             macro_rules! by_radius {
-                ($($r:literal)*) => {
+                ($($r:literal $t:literal)*) => {
                     match r {
-                        $($r => x.run::<$r>(col),)*
+                        $($r => x.run::<$r, $t>(col),)*
                         _ => {}
                     }
                 };
             }
-            by_radius!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15);
+            by_radius!(1 3 2 5 3 7 4 9 5 11 6 13 7 15 8 17 9 19 10 21 11 23 12 25 13 27 14 29 15 31);
         }
     }
 }
@@ -567,29 +569,66 @@ fn y_sym(
     }
 }
 
-/// Calls `px` on the `taps`-wide window of `col` centred on each column
-/// in turn, borders replicated (copied into a local window).
-#[inline(always)]
-fn for_windows(col: &[[i32; 3]], taps: usize, mut px: impl FnMut(&[[i32; 3]])) {
-    let w = col.len();
-    let r = taps / 2;
-    let border = |x: usize, px: &mut dyn FnMut(&[[i32; 3]])| {
-        let mut win = [[0i32; 3]; MAX_TAPS];
-        for (t, v) in win.iter_mut().enumerate().take(taps) {
-            let xi = (x + t).saturating_sub(r).min(w.saturating_sub(1));
-            *v = col.get(xi).copied().unwrap_or([0; 3]);
-        }
-        px(win.get(..taps).unwrap_or(&[]));
-    };
-    if w < taps {
-        (0..w).for_each(|x| border(x, &mut px));
+/// Columns of the x pass per chunk: [`XUnit::run`] works on a local copy of
+/// `CHUNK + 2r` columns of `col` with the borders replicated, so that every
+/// window is a plain slice (no clamping per pixel).
+const CHUNK: usize = 32;
+
+/// `buf[j] = col[clamp(x0 + j − r, 0, w − 1)]` for `j < n + 2r` (the
+/// replicated borders of [`x_pass`]).
+fn pad(col: &[[i32; 3]], x0: usize, n: usize, r: usize, buf: &mut [[i32; 3]]) {
+    let left = r.saturating_sub(x0);
+    let src = col.get(x0.saturating_sub(r)..(x0 + n + r).min(col.len()));
+    let (Some(src), Some(first), Some(last)) = (src, col.first(), col.last()) else {
         return;
+    };
+    let Some((l, rest)) = buf
+        .get_mut(..n + 2 * r)
+        .and_then(|b| b.split_at_mut_checked(left))
+    else {
+        return;
+    };
+    let Some((mid, right)) = rest.split_at_mut_checked(src.len()) else {
+        return;
+    };
+    l.fill(*first);
+    mid.copy_from_slice(src);
+    right.fill(*last);
+}
+
+/// `f(i, m, p)` for the window's pairs: tap `i − R` (`i < R`) at `m` and
+/// its mirror at `p` (constant indices once `R` is known).
+#[inline(always)]
+fn mirror<const R: usize, const T: usize>(
+    win: &[[i32; 3]; T],
+    mut f: impl FnMut(usize, &[i32; 3], &[i32; 3]),
+) {
+    for i in 0..R {
+        if let (Some(m), Some(p)) = (win.get(i), win.get(2 * R - i)) {
+            f(i, m, p);
+        }
     }
-    (0..r).for_each(|x| border(x, &mut px));
-    for win in col.windows(taps) {
-        px(win);
-    }
-    (w - r..w).for_each(|x| border(x, &mut px));
+}
+
+/// `i64` product of two `i32` (one `smull`/`smlal`).
+#[inline(always)]
+fn mul(k: i32, v: i32) -> i64 {
+    i64::from(k) * i64::from(v)
+}
+
+/// One component of [`finish`] with `b` and `dc` in `i32`: the same bits.
+/// `b = bl >> 14` with `|bl| ≤ 2^14·2^30` (Σ env = 2^14, `|E| < 2^30`),
+/// so `|b| ≤ 2^30`; the bank keeps `dc` only if it fits `i32`. `|s| <
+/// 2^50` (every `|kx| ≤ 2^14` (checked), at most 31 taps, `|Y| < 2^30`,
+/// and `s` is a sum or difference of two such correlations) and
+/// `|dc·b| ≤ 2^61` (`>> 14`: `2^47`), so `v` and the rounding are exact in
+/// `i64` as in [`finish`] and the rounded value (`|·| < 2^21`) is exact in
+/// `i32`, where the same clamp to `i16` applies.
+#[inline(always)]
+fn finish1(s: i64, b: i32, dc: i32) -> i16 {
+    let v = s - (mul(dc, b) >> KERNEL_FRAC);
+    let q = round_shift(v, GREY_FRAC + 2 * KERNEL_FRAC - Z_FRAC) as i32;
+    q.clamp(-32768, 32767) as i16
 }
 
 /// The x pass of one [`Unit`] (see [`Bank`]): the envelope's halves, and
@@ -598,89 +637,89 @@ fn for_windows(col: &[[i32; 3]], taps: usize, mut px: impl FnMut(&[[i32; 3]])) {
 struct XUnit<'h, 'o> {
     env: &'h Half,
     a: Option<(&'h Halves, &'o mut [Z])>,
-    b: Option<([i64; 2], &'o mut [Z])>,
+    b: Option<([i32; 2], &'o mut [Z])>,
     e: Option<(&'h Halves, &'o mut [Z])>,
 }
 
-/// `f(i, m, p)` for the window's pairs: tap `i − R` (`i < R`) at `m` and
-/// its mirror at `p` (constant indices once `R` is known).
+/// `out[x] = [Σ k_re·(m + p) + k_re(R)·c, Σ k_im·(m − p)]` on channel
+/// `ch` of every window (centre `c`, pairs `m`, `p`) of `buf`: an even and
+/// an odd correlation sharing the loads, two accumulators.
 #[inline(always)]
-fn mirror<const R: usize>(win: &[[i32; 3]], mut f: impl FnMut(usize, &[i32; 3], &[i32; 3])) {
-    for i in 0..R {
-        if let (Some(m), Some(p)) = (win.get(i), win.get(2 * R - i)) {
-            f(i, m, p);
-        }
+fn sym2<const R: usize, const T: usize>(
+    buf: &[[i32; 3]],
+    ch: usize,
+    k: &[[i32; 2]; MAX_RADIUS + 1],
+    out: &mut [[i64; 2]],
+) {
+    let kt = |i: usize| k.get(i).copied().unwrap_or([0; 2]);
+    let at = |c: &[i32; 3]| c.get(ch).copied().unwrap_or(0);
+    let wins = buf.windows(T).filter_map(|w| w.first_chunk::<T>());
+    for (win, o) in wins.zip(out) {
+        let (mut even, mut odd) = (mul(kt(R)[0], win.get(R).map_or(0, at)), 0);
+        mirror::<R, T>(win, |i, m, p| {
+            let (m, p, k) = (at(m), at(p), kt(i));
+            even += mul(k[0], m + p);
+            odd += mul(k[1], m - p);
+        });
+        *o = [even, odd];
     }
 }
 
-/// Tap `i` of a half, `[re, im]`.
-#[inline(always)]
-fn tap(h: &[[i32; 2]; MAX_RADIUS + 1], i: usize) -> [i64; 2] {
-    h.get(i)
-        .map_or([0; 2], |k| [i64::from(k[0]), i64::from(k[1])])
-}
-
 impl XUnit<'_, '_> {
-    /// Runs over the row with radius `R` (the bank's), the sums in groups
-    /// of at most three 64-bit accumulators (they stay in registers).
-    fn run<const R: usize>(self, col: &[[i32; 3]]) {
+    /// Runs over the row with radius `R` (the bank's, `T = 2R + 1` taps),
+    /// [`CHUNK`] columns at a time, in sweeps over each chunk with at most
+    /// two 64-bit accumulators each (they stay in registers):
+    /// `bl = Σ env·E`, kept as `b = bl >> 14` (`|b| ≤ 2^30`, see
+    /// [`finish1`]); the rider `e`'s `Σ kx·E`; `A = Σ kx_re·Yr`, `D = Σ
+    /// kx_im·Yr`; `C = Σ kx_re·Yi`, `B = Σ kx_im·Yi`; then the rounding.
+    fn run<const R: usize, const T: usize>(self, col: &[[i32; 3]]) {
         let env = self.env;
-        let ec = i64::from(env.get(R).copied().unwrap_or(0));
-        let et = |i: usize| i64::from(env.get(i).copied().unwrap_or(0));
-        let mut a = self.a.map(|(h, o)| (h, o.iter_mut()));
-        let mut b = self.b.map(|(dc, o)| (dc, o.iter_mut()));
-        let mut e = self.e.map(|(h, o)| (h, o.iter_mut()));
-        for_windows(col, 2 * R + 1, |win| {
-            let Some(c) = win.get(..2 * R + 1).and_then(|w| w.get(R)) else {
-                return;
-            };
-            let (ca, cr, ci) = (i64::from(c[0]), i64::from(c[1]), i64::from(c[2]));
-            // bl = Σ env·E, with the rider's [re, im] = Σ kx·E.
-            let mut bl = ec * ca;
-            if let Some((h, o)) = &mut e {
-                let mut re = tap(&h.kx, R)[0] * ca;
-                mirror::<R>(win, |i, m, p| {
-                    let pe = i64::from(m[0] + p[0]);
-                    bl += et(i) * pe;
-                    re += tap(&h.kx, i)[0] * pe;
-                });
-                let mut im = 0;
-                mirror::<R>(win, |i, m, p| {
-                    im += tap(&h.kx, i)[1] * i64::from(m[0] - p[0])
-                });
-                if let Some(o) = o.next() {
-                    *o = finish([re, im], bl >> KERNEL_FRAC, h.dc);
-                }
-            } else {
-                mirror::<R>(win, |i, m, p| bl += et(i) * i64::from(m[0] + p[0]));
+        let ec = env.get(R).copied().unwrap_or(0);
+        let et = |i: usize| env.get(i).copied().unwrap_or(0);
+        let mut a = self.a.map(|(h, o)| (h, o.chunks_mut(CHUNK)));
+        let mut b = self.b.map(|(dc, o)| (dc, o.chunks_mut(CHUNK)));
+        let mut e = self.e.map(|(h, o)| (h, o.chunks_mut(CHUNK)));
+        let w = col.len();
+        let mut x0 = 0;
+        while x0 < w {
+            let n = CHUNK.min(w - x0);
+            let mut buf = [[0i32; 3]; CHUNK + 2 * MAX_RADIUS];
+            pad(col, x0, n, R, &mut buf);
+            x0 += n;
+            let buf = buf.get(..n + 2 * R).unwrap_or(&[]);
+            let mut bs = [0i32; CHUNK];
+            let wins = buf.windows(T).filter_map(|w| w.first_chunk::<T>());
+            for (win, bo) in wins.zip(&mut bs) {
+                let mut bl = mul(ec, win.get(R).map_or(0, |c| c[0]));
+                mirror::<R, T>(win, |i, m, p| bl += mul(et(i), m[0] + p[0]));
+                *bo = (bl >> KERNEL_FRAC) as i32;
             }
-            let Some((h, oa)) = &mut a else {
-                return;
-            };
-            // A = Σ kx_re·Yr, C = Σ kx_re·Yi; B = Σ kx_im·Yi, D = Σ kx_im·Yr.
-            let k = tap(&h.kx, R)[0];
-            let (mut sa, mut sc) = (k * cr, k * ci);
-            mirror::<R>(win, |i, m, p| {
-                let k = tap(&h.kx, i)[0];
-                sa += k * i64::from(m[1] + p[1]);
-                sc += k * i64::from(m[2] + p[2]);
-            });
-            let (mut sb, mut sd) = (0, 0);
-            mirror::<R>(win, |i, m, p| {
-                let k = tap(&h.kx, i)[1];
-                sb += k * i64::from(m[2] - p[2]);
-                sd += k * i64::from(m[1] - p[1]);
-            });
-            let bl = bl >> KERNEL_FRAC;
-            if let Some(o) = oa.next() {
-                *o = finish([sa - sb, sc + sd], bl, h.dc);
-            }
-            if let Some((dc, ob)) = &mut b {
-                if let Some(o) = ob.next() {
-                    *o = finish([sa + sb, sd - sc], bl, *dc);
+            let (mut s, mut t) = ([[0i64; 2]; CHUNK], [[0i64; 2]; CHUNK]);
+            if let Some((h, oe)) = e.as_mut().and_then(|(h, o)| Some((*h, o.next()?))) {
+                sym2::<R, T>(buf, 0, &h.kx, &mut s);
+                for ((o, &[re, im]), &bv) in oe.iter_mut().zip(&s).zip(&bs) {
+                    *o = [finish1(re, bv, h.dc32[0]), finish1(im, bv, h.dc32[1])];
                 }
             }
-        });
+            let Some((h, oa)) = a.as_mut().and_then(|(h, o)| Some((*h, o.next()?))) else {
+                continue;
+            };
+            // z_a = (A − B) + i(C + D), z_b = (A + B) + i(D − C).
+            sym2::<R, T>(buf, 1, &h.kx, &mut s);
+            sym2::<R, T>(buf, 2, &h.kx, &mut t);
+            let sums = s.iter().zip(&t).zip(&bs);
+            for (((&[sa, sd], &[sc, sb]), &bv), o) in sums.clone().zip(oa) {
+                *o = [
+                    finish1(sa - sb, bv, h.dc32[0]),
+                    finish1(sc + sd, bv, h.dc32[1]),
+                ];
+            }
+            if let Some((dc, ob)) = b.as_mut().and_then(|(dc, o)| Some((*dc, o.next()?))) {
+                for (((&[sa, sd], &[sc, sb]), &bv), o) in sums.zip(ob) {
+                    *o = [finish1(sa + sb, bv, dc[0]), finish1(sd - sc, bv, dc[1])];
+                }
+            }
+        }
     }
 }
 
@@ -764,6 +803,92 @@ mod tests {
             fast > 0 && fast < all,
             "fast path for {fast} of {all} settings"
         );
+    }
+
+    /// A random kernel of `taps` the fast path accepts, at the edges of
+    /// its checks: `|kx|` up to 2^14 (often exactly ±2^14), `Σ|ky| ≤ 2^14`
+    /// per component, `dc` anywhere in `i32` (often its ends), the
+    /// envelope `env`; `conj` mirrors `ky_im` (the `b` of a unit), `flat`
+    /// makes `ky` the envelope (a rider).
+    fn extreme(
+        env: &[i32; MAX_TAPS],
+        taps: usize,
+        rng: &mut SplitMix64,
+        conj: Option<&Gabor>,
+        flat: bool,
+    ) -> Gabor {
+        let r = taps / 2;
+        let one = 1i32 << KERNEL_FRAC;
+        let mut g = Gabor {
+            taps,
+            kx: [[0; 2]; MAX_TAPS],
+            ky: [[0; 2]; MAX_TAPS],
+            env: *env,
+            dc: [0; 2],
+        };
+        let big = |rng: &mut SplitMix64| match rng.below(3) {
+            0 => one,
+            1 => -one,
+            _ => rng.below(2 * one as u64 + 1) as i32 - one,
+        };
+        // Halves of ky with Σ|·| ≤ 2^14 over all taps.
+        let mut budget = [one; 2];
+        for i in 0..=r {
+            let kx = [big(rng), if i == r { 0 } else { big(rng) }];
+            let n = if i == r { 1 } else { 2 };
+            let mut ky = [0; 2];
+            for (c, k) in ky.iter_mut().enumerate() {
+                let most = budget[c] / n;
+                if !(c == 1 && i == r) && most > 0 {
+                    *k = rng.below(2 * most as u64 + 1) as i32 - most;
+                    budget[c] -= n * k.abs();
+                }
+            }
+            for (t, sign) in [(i, 1), (taps - 1 - i, -1)] {
+                g.kx[t] = [kx[0], sign * kx[1]];
+                g.ky[t] = [ky[0], sign * ky[1]];
+            }
+        }
+        if let Some(a) = conj {
+            g.kx = a.kx;
+            g.ky = a.ky.map(|k| [k[0], -k[1]]);
+        }
+        if flat {
+            g.ky = env.map(|e| [e, 0]);
+        }
+        for d in &mut g.dc {
+            *d = match rng.below(4) {
+                0 => i64::from(i32::MIN),
+                1 => i64::from(i32::MAX),
+                _ => rng.next_u64() as i32 as i64,
+            };
+        }
+        g
+    }
+
+    #[test]
+    fn the_bank_is_exact_at_the_edges_of_its_checks() {
+        let mut rng = SplitMix64::new(11);
+        for round in 0..200 {
+            let taps = 2 * (1 + round % MAX_RADIUS) + 1;
+            // A symmetric envelope, taps ≥ 0, Σ = 2^14 exactly.
+            let mut env = [0i32; MAX_TAPS];
+            let mut left = 1i32 << KERNEL_FRAC;
+            for i in 0..taps / 2 {
+                let v = rng.below((left / 2) as u64 / 2 + 1) as i32;
+                env[i] = v;
+                env[taps - 1 - i] = v;
+                left -= 2 * v;
+            }
+            env[taps / 2] = left;
+            let a = extreme(&env, taps, &mut rng, None, false);
+            let k = [
+                a,
+                extreme(&env, taps, &mut rng, None, true),
+                extreme(&env, taps, &mut rng, Some(&a), false),
+            ];
+            assert!(check(&k, &mut rng), "fast path, round {round}");
+        }
     }
 
     #[test]
