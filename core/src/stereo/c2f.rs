@@ -546,6 +546,9 @@ struct Pass<'e> {
     step: usize,
     /// Whether the band applies (a windowed level with a band).
     band: Option<usize>,
+    /// [`Pass::shift_range`] of every window `lo` (a `u8`), worked out
+    /// once: no division per pixel.
+    ranges: [[u16; 2]; 256],
 }
 
 /// Level-`k` RGB row `j` of `src` (rounded 2x2 means, `k` times) into
@@ -768,7 +771,7 @@ impl<'e> Pass<'e> {
         let p = &e.params;
         let layout = p.level_params(k).layout();
         let windowed = k < usize::from(p.coarse);
-        Self {
+        let mut pass = Self {
             e,
             k,
             w: level_len(full.0, k),
@@ -778,12 +781,29 @@ impl<'e> Pass<'e> {
             shifts: layout.shifts(0),
             step: usize::from(layout.shift_step.max(1)),
             band: p.band.filter(|_| windowed).map(usize::from),
+            ranges: [[0; 2]; 256],
+        };
+        // Shifts are at most 256 (`max_disp` is a `u8`), so `u16` holds them.
+        let mut ranges = [[0u16; 2]; 256];
+        for (lo, r) in (0u16..).zip(ranges.iter_mut()) {
+            let x = pass.shift_range_of(lo);
+            *r = [x.start, x.end].map(|v| u16::try_from(v).unwrap_or(u16::MAX));
         }
+        pass.ranges = ranges;
+        pass
     }
 
     /// The shift indices whose votes a pixel with window `lo` takes: those
     /// with `|s − centre| <= band` (centre `lo + (n − 1)/2`), or all.
     fn shift_range(&self, lo: u16) -> core::ops::Range<usize> {
+        match self.ranges.get(usize::from(lo)) {
+            Some(&[a, b]) => usize::from(a)..usize::from(b),
+            None => self.shift_range_of(lo),
+        }
+    }
+
+    /// [`Pass::shift_range`] worked out.
+    fn shift_range_of(&self, lo: u16) -> core::ops::Range<usize> {
         let Some(b) = self.band else {
             return 0..self.shifts;
         };
@@ -1030,6 +1050,7 @@ impl<'e> Pass<'e> {
         voters: &mut [u16],
     ) -> usize {
         let (w, n, step) = (self.w, self.n, self.step);
+        let (step_pow2, step_log) = (step.is_power_of_two(), step.trailing_zeros());
         let mut evaluated = 0;
         let carriers = usize::from(self.e.dem.params.carriers);
         let bytes = table.weight_bytes();
@@ -1066,7 +1087,12 @@ impl<'e> Pass<'e> {
                 let range = self.shift_range(lo);
                 // The shifts whose cell lies inside the row: `s <= x` (left),
                 // `x + s < w` (right).
-                let last = if LEFT { px / step } else { (w - 1 - px) / step };
+                let room = if LEFT { px } else { w - 1 - px };
+                let last = if step_pow2 {
+                    room >> step_log
+                } else {
+                    room / step
+                };
                 let count = (last + 1).min(range.end).saturating_sub(range.start);
                 evaluated += count;
                 let groups = bytes
