@@ -419,7 +419,7 @@ fn dem_aloe() -> Section {
          section), run here once with no change. The `--engine core` rows run core's \
          fixed-point coarse-to-fine engine (`protogist::stereo::c2f`, the firmware's stage: \
          grey, one level, no pooling, 5 SGM paths, windows ±2, band 2, P2 4 chosen on Motorcycle), ms its run alone, \
-         single thread; the `--engine reference` rows beside them are the same settings in \
+         the best of 5 runs, single thread; the `--engine reference` rows beside them are the same settings in \
          the f32 reference.\n\n{STEREO_TABLE_HEAD}",
     );
     // (width, D, extra options); every row runs with `--refine 0` unless it
@@ -620,7 +620,7 @@ fn dem_motorcycle() -> Section {
 fn opencv_rows(data: &Path, pair: &str) -> String {
     let mut out = String::from(
         "\nOpenCV under the same protocol (area-averaged images, GT as the mean of its known \
-         pixels), single thread, from `scripts/opencv_baseline.py` with the versions pinned in \
+         pixels), single thread, ms the best of 5 runs, from `scripts/opencv_baseline.py` with the versions pinned in \
          `scripts/requirements-opencv.txt` (a venv in `target/venv-opencv`). SGBM is colour, \
          P1 = 8·3·bs², P2 = 32·3·bs²; BM is grey. Both search numDisparities = D (0..D−1, \
          as in the issue's measurement; ours searches 0..D).\n\n\
