@@ -697,8 +697,9 @@ fn costs_of(
     // reference's saturation never acts): `|raw| <= 2^14·total + 2^27`
     // (`|X| <= A/2` per cell, `|w| <= 2^15`), so `|raw >> sh| < 2^44.01`,
     // `|bias·t| < 2^45`, and with `wf, bf <= 15` (`DemTable::parse`)
-    // `|n(d)| < 2^61`. The powers of two multiply (cheaper than 64-bit
-    // variable shifts on the M4).
+    // `|n(d)| < 2^61`. The window's bias slice is read directly (the
+    // `bias_at` path, 0 beyond the table, only serves a window past it):
+    // a shorter chained iterator cost 240 instructions/px on the M4.
     let (wf, bf) = (u32::from(table.weight_frac), u32::from(table.bias_frac));
     let m = wf.min(bf);
     let (pb, pw) = (i64::from(1u32 << (bf - m)), i64::from(1u32 << (wf - m)));
@@ -1040,7 +1041,6 @@ impl<'e> Pass<'e> {
 
     /// [`Pass::votes`] of one eye (`LEFT`: left-referenced), carrier by
     /// carrier.
-    #[inline(never)]
     fn votes_eye<const LEFT: bool>(
         &self,
         table: &DemTable<'_>,
