@@ -178,6 +178,15 @@ fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
         stereo_run::HEIGHT,
         r.total as f64 / px
     );
+    for (name, params) in &stereo_run::POINTS {
+        let r = stereo_run::run_at(params, &mut bufs, &mut WallTicks(Instant::now()))?;
+        // Host ticks are nanoseconds: only the checksum line is compared.
+        let mut line = String::new();
+        let _ = stereo_run::write_point(&mut line, name, params, &r, |t| t);
+        if let Some(c) = line.lines().next() {
+            let _ = writeln!(out, "{c}");
+        }
+    }
     print!("{out}");
     Ok(())
 }

@@ -239,7 +239,13 @@ fn run_stereo(
         maps: singleton!(: [u8; len::MAPS] = [0; len::MAPS]).ok_or("stereo maps taken")?,
     };
     let r = stereo_run::run(&mut bufs, ticks).map_err(|_| "stereo stage failed")?;
-    stereo_run::write_report(out, &r, to_instructions).map_err(|_| "semihosting write failed")
+    stereo_run::write_report(out, &r, to_instructions).map_err(|_| "semihosting write failed")?;
+    for (name, params) in &stereo_run::POINTS {
+        let r = stereo_run::run_at(params, &mut bufs, ticks).map_err(|_| "stereo point failed")?;
+        stereo_run::write_point(out, name, params, &r, to_instructions)
+            .map_err(|_| "semihosting write failed")?;
+    }
+    Ok(())
 }
 
 /// The classifier: checksums, then instructions per multiply-accumulate of

@@ -34,6 +34,55 @@ pub const HEIGHT: usize = 120;
 /// The parameters: the engine's defaults (32 disparities, 2 coarse levels,
 /// windows of 5, band 2).
 pub const PARAMS: C2fParams = C2fParams::DEFAULT;
+/// Cheaper operating points of the same engine, run after [`PARAMS`] to
+/// measure what the cells cost (docs/STEREO.md, "Operating points"): the
+/// window half width `R` and the band `b` change, nothing else (the same
+/// tables, levels and penalties). Each needs no more scratch than
+/// [`PARAMS`] (`R <= 2`), which `operating_points_fit` checks at compile
+/// time.
+pub const POINTS: [(&str, C2fParams); 3] = [
+    (
+        "r2b1",
+        C2fParams {
+            band: Some(1),
+            ..PARAMS
+        },
+    ),
+    (
+        "r1b2",
+        C2fParams {
+            radius: 1,
+            ..PARAMS
+        },
+    ),
+    (
+        "r1b1",
+        C2fParams {
+            radius: 1,
+            band: Some(1),
+            ..PARAMS
+        },
+    ),
+];
+
+const fn fits(p: &C2fParams) -> bool {
+    c2f::grey_len(WIDTH, p) <= len::GREY
+        && c2f::rgb_len(WIDTH, p) <= len::RGB
+        && c2f::z_len(WIDTH, p) <= len::Z
+        && c2f::score_len(WIDTH, p) <= len::SCORES
+        && c2f::cost_len(WIDTH, p) <= len::COSTS
+        && c2f::sum_len(WIDTH, p) <= len::SUMS
+        && c2f::map_len(WIDTH, HEIGHT, p) <= len::MAPS
+}
+
+const _: () = {
+    let mut i = 0;
+    while i < POINTS.len() {
+        assert!(fits(&POINTS[i].1), "an operating point needs more scratch");
+        i += 1;
+    }
+};
+
 /// The decoder tables of levels 0, 1 and 2.
 pub const TABLES: [&[u8]; 3] = [
     include_bytes!("../data/dem_c2f_l0.bin"),
@@ -141,11 +190,24 @@ pub struct StereoResult {
     pub camera: u64,
 }
 
-/// Runs the stage on the demo pair.
+/// Runs the stage on the demo pair with [`PARAMS`].
 ///
 /// # Errors
 /// [`StereoError`] (a bad table or short buffers).
 pub fn run<T: Ticks>(
+    bufs: &mut C2fBuffers<'_>,
+    ticks: &mut T,
+) -> Result<StereoResult, StereoError> {
+    run_at(&PARAMS, bufs, ticks)
+}
+
+/// Runs the stage on the demo pair with `params` (2 coarse levels: the
+/// three tables of [`TABLES`]).
+///
+/// # Errors
+/// [`StereoError`] (bad parameters, a bad table or short buffers).
+pub fn run_at<T: Ticks>(
+    params: &C2fParams,
     bufs: &mut C2fBuffers<'_>,
     ticks: &mut T,
 ) -> Result<StereoResult, StereoError> {
@@ -161,7 +223,7 @@ pub fn run<T: Ticks>(
         },
     );
     let t0 = ticks.now();
-    let engine = C2f::new(&PARAMS)?;
+    let engine = C2f::new(params)?;
     let tables = [
         DemTable::parse(TABLES[0])?,
         DemTable::parse(TABLES[1])?,
@@ -182,7 +244,7 @@ pub fn run<T: Ticks>(
     probe.close();
     let t2 = probe.ticks.now();
     // The camera alone: the same row renders, into the RGB scratch.
-    let levels = usize::from(PARAMS.coarse) + 1;
+    let levels = usize::from(params.coarse) + 1;
     let row = bufs.rgb.get_mut(..WIDTH).unwrap_or(&mut []);
     for _ in 0..levels {
         for eye in [&left, &right] {
@@ -226,6 +288,61 @@ pub fn write_result(out: &mut impl Write, r: &StereoResult) -> fmt::Result {
     )
 }
 
+/// One operating point's lines: `checksum stereo@NAME WxH 0x........
+/// on=N` (compared host vs QEMU), then [`write_point_line`].
+pub fn write_point(
+    out: &mut impl Write,
+    name: &str,
+    params: &C2fParams,
+    r: &StereoResult,
+    to_instructions: impl Fn(u64) -> u64,
+) -> fmt::Result {
+    writeln!(
+        out,
+        "checksum stereo@{name} {WIDTH}x{HEIGHT} 0x{:08x} on={}",
+        r.checksum, r.report.on
+    )?;
+    write_point_line(out, name, params, r, to_instructions)
+}
+
+/// `point stereo NAME WxH radius=R band=B engine=E cells=C STEP=I ...`:
+/// the window half width and band (`-`: none), then instructions per
+/// pixel with one decimal (the engine is the total minus the camera, as
+/// `ipp stereo-engine`), the cells evaluated and the steps.
+pub fn write_point_line(
+    out: &mut impl Write,
+    name: &str,
+    params: &C2fParams,
+    r: &StereoResult,
+    to_instructions: impl Fn(u64) -> u64,
+) -> fmt::Result {
+    let px = (WIDTH * HEIGHT) as u64;
+    let tenths = |t: u64| (to_instructions(t) * 10 + px / 2) / px;
+    let engine = tenths(r.total.saturating_sub(r.camera));
+    write!(
+        out,
+        "point stereo {name} {WIDTH}x{HEIGHT} radius={} band=",
+        params.radius
+    )?;
+    match params.band {
+        Some(b) => write!(out, "{b}")?,
+        None => write!(out, "-")?,
+    }
+    write!(
+        out,
+        " engine={}.{} cells={}",
+        engine / 10,
+        engine % 10,
+        r.report.cells
+    )?;
+    for (step, &t) in STEP_NAMES.iter().zip(&r.steps) {
+        let v = tenths(t);
+        let step = step.strip_prefix("stereo-").unwrap_or(step);
+        write!(out, " {step}={}.{}", v / 10, v % 10)?;
+    }
+    writeln!(out)
+}
+
 /// The step names of [`StereoResult::steps`], as printed.
 pub const STEP_NAMES: [&str; 5] = [
     "stereo-levels",
@@ -239,7 +356,8 @@ pub const STEP_NAMES: [&str; 5] = [
 pub type ZCell = Z;
 
 /// The result lines, then `ipp` per step and in total (from ticks, through
-/// `to_instructions`) and `scratch stereo WxH BYTES`.
+/// `to_instructions`), `scratch stereo WxH BYTES` and the
+/// [`write_point_line`] of [`PARAMS`], named `default`.
 pub fn write_report(
     out: &mut impl Write,
     r: &StereoResult,
@@ -268,5 +386,6 @@ pub fn write_report(
         HEIGHT,
         to_instructions(r.total.saturating_sub(r.camera)),
     )?;
-    writeln!(out, "scratch stereo {WIDTH}x{HEIGHT} {SCRATCH_BYTES}")
+    writeln!(out, "scratch stereo {WIDTH}x{HEIGHT} {SCRATCH_BYTES}")?;
+    write_point_line(out, "default", &PARAMS, r, to_instructions)
 }

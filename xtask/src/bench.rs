@@ -25,6 +25,7 @@ pub fn run() -> Result<()> {
         machine(),
         qemu_ipp(&qemu.stdout),
         stereo_m4(&qemu.stdout),
+        stereo_points(&qemu.stdout),
         firmware_size(&qemu.stdout)?,
         host_criterion(),
         scratch(&qemu.stdout),
@@ -213,6 +214,175 @@ fn stereo_m4(stdout: &str) -> Section {
         title: "Stereo on the Cortex-M4 (QEMU)",
         body,
     }
+}
+
+/// One `point stereo` line of the firmware: name, window half width,
+/// band, and the `key=value` figures.
+struct Point<'a> {
+    name: &'a str,
+    radius: &'a str,
+    band: &'a str,
+    values: Vec<(&'a str, &'a str)>,
+}
+
+impl Point<'_> {
+    fn get(&self, key: &str) -> &str {
+        self.values
+            .iter()
+            .find(|(k, _)| *k == key)
+            .map_or("?", |(_, v)| v)
+    }
+}
+
+fn points(stdout: &str) -> Vec<Point<'_>> {
+    stdout
+        .lines()
+        .filter_map(|l| {
+            let mut it = l.split_whitespace();
+            if (it.next(), it.next()) != (Some("point"), Some("stereo")) {
+                return None;
+            }
+            let name = it.next()?;
+            let _frame = it.next()?;
+            let values: Vec<(&str, &str)> = it.filter_map(|kv| kv.split_once('=')).collect();
+            let find = |k: &str| values.iter().find(|(key, _)| *key == k).map(|(_, v)| *v);
+            Some(Point {
+                name,
+                radius: find("radius")?,
+                band: find("band")?,
+                values,
+            })
+        })
+        .collect()
+}
+
+/// The engine at cheaper operating points (issue 3 §4): the firmware's
+/// `point stereo` lines beside `protogist stereo --engine core` at the
+/// same window and band on Aloe and Motorcycle, 160 px, D = 32.
+fn stereo_points(stdout: &str) -> Section {
+    let title = "Stereo operating points: instructions against accuracy";
+    let pts = points(stdout);
+    if pts.is_empty() {
+        return Section {
+            title,
+            body: NOT_YET.into(),
+        };
+    }
+    let mut body = String::from(
+        "The same engine and tables with a smaller window (half width R: 2R + 1 candidates \
+         at the finer levels) or band (the cell groups within b px of the window's centre), \
+         everything else as `C2fParams::DEFAULT` (R 2, band 2). Instructions per pixel on the \
+         M4 from the firmware's `point stereo` lines (`firmware-sim/src/stereo_run.rs`, \
+         `POINTS`; same QEMU run as above; the camera is excluded as in the previous \
+         section). Accuracy from `cargo run --release -- stereo --engine core --c2f 2 \
+         --c2f-radius R --c2f-band b --p2 4 --width 160 --max-disp 32 --refine 0 --json` on \
+         Aloe and on the held-out Motorcycle: bad-2 % over estimated pixels / over all GT \
+         pixels. docs/STEREO.md, section Operating points, reads this table.\n\n\
+         | point | R | band | cells / px | votes | SGM | costs + picks | filters | \
+         **engine** | Aloe est / all | Motorcycle est / all |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    let data = data_root();
+    let pairs = [
+        (
+            data.join("aloe/aloeL.jpg"),
+            data.join("aloe/aloeR.jpg"),
+            data.join("aloe/aloeGT.png"),
+        ),
+        (
+            data.join("motorcycle/motorcycle_left.png"),
+            data.join("motorcycle/motorcycle_right.png"),
+            data.join("motorcycle/motorcycle_disp.npz"),
+        ),
+    ];
+    for p in &pts {
+        let cells = p
+            .get("cells")
+            .parse::<f64>()
+            .map_or_else(|_| "?".into(), |c| format!("{:.1}", c / 19_200.0));
+        let mut row = format!(
+            "| {} | {} | {} | {cells} | {} | {} | {} | {} | **{}** |",
+            p.name,
+            p.radius,
+            p.band,
+            p.get("cells-votes"),
+            p.get("sgm"),
+            p.get("costs-picks"),
+            p.get("filters"),
+            p.get("engine"),
+        );
+        for (l, r, gt) in &pairs {
+            row.push_str(&format!(
+                " {} |",
+                point_accuracy([l, r, gt], p.radius, p.band)
+            ));
+        }
+        body.push_str(&row);
+        body.push('\n');
+    }
+    body.push_str(
+        "\nThe steps that do not depend on the cells (filters, and the camera-free levels) \
+         stay; SGM and the costs scale with the window, the votes with the cells.\n",
+    );
+    Section { title, body }
+}
+
+/// `est / all` bad-2 % of `--engine core` at a window and band on `files`
+/// (160 px, D 32), or "not yet measured".
+fn point_accuracy(files: [&Path; 3], radius: &str, band: &str) -> String {
+    let [l, r, gt] = files;
+    if !gt.is_file() {
+        return format!("{NOT_YET} (`cargo xtask fetch-data`)");
+    }
+    let out_dir = root().join("target/bench-points");
+    let (l, r, gt, out) = (
+        l.to_string_lossy(),
+        r.to_string_lossy(),
+        gt.to_string_lossy(),
+        out_dir.to_string_lossy(),
+    );
+    let mut args = vec![
+        "stereo",
+        "--left",
+        &l,
+        "--right",
+        &r,
+        "--gt",
+        &gt,
+        "--width",
+        "160",
+        "--max-disp",
+        "32",
+        "--refine",
+        "0",
+        "--json",
+        "--out",
+        &out,
+        "--engine",
+        "core",
+        "--c2f",
+        "2",
+        "--c2f-radius",
+        radius,
+        "--p2",
+        "4",
+    ];
+    if band != "-" {
+        args.extend_from_slice(&["--c2f-band", band]);
+    }
+    protogist(&args)
+        .ok()
+        .and_then(|j| serde_json::from_str::<serde_json::Value>(&j).ok())
+        .and_then(|v| {
+            let f = v.get("final")?;
+            let g = |k: &str| f.get(k).and_then(serde_json::Value::as_f64);
+            Some(format!(
+                "{:.1} / {:.1}",
+                g("bad2_estimated")?,
+                g("bad2_all")?
+            ))
+        })
+        .unwrap_or_else(|| NOT_YET.into())
 }
 
 fn firmware_size(stdout: &str) -> Result<Section> {
@@ -854,7 +1024,23 @@ fn mlp_host() -> Section {
 
 #[cfg(test)]
 mod stereo_tests {
-    use super::stereo_m4;
+    use super::{points, stereo_m4};
+
+    #[test]
+    fn point_lines_are_read_field_by_field() {
+        let out = "ipp stereo 160x120 1.0\n\
+                   point stereo r1b1 160x120 radius=1 band=1 engine=7355.0 cells=201756 \
+                   levels=3388.6 cells-votes=2478.2\n\
+                   point stereo all 160x120 radius=2 band=- engine=9.5 cells=3\n\
+                   point stereo broken 160x120 engine=1\n";
+        let p = points(out);
+        assert_eq!(p.len(), 2, "the line without radius and band is skipped");
+        assert_eq!((p[0].name, p[0].radius, p[0].band), ("r1b1", "1", "1"));
+        assert_eq!(p[0].get("engine"), "7355.0");
+        assert_eq!(p[0].get("cells-votes"), "2478.2");
+        assert_eq!(p[0].get("sgm"), "?");
+        assert_eq!((p[1].name, p[1].band, p[1].get("cells")), ("all", "-", "3"));
+    }
 
     #[test]
     fn stereo_section_reads_the_firmware_lines() {
