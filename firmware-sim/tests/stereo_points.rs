@@ -1,0 +1,119 @@
+//! The stereo stage's operating points (`stereo_run::POINTS`): each runs at
+//! its own window and band, in the default's buffers, and reports itself.
+
+use firmware_sim::pg::image::Rgb8;
+use firmware_sim::pg::stereo::c2f::C2fBuffers;
+use firmware_sim::stereo_run::{self, len, StereoResult, POINTS};
+use firmware_sim::NoTicks;
+
+struct Storage {
+    grey: Vec<u16>,
+    rgb: Vec<Rgb8>,
+    z: Vec<stereo_run::ZCell>,
+    col: Vec<[i32; 3]>,
+    scores: Vec<i64>,
+    costs: Vec<u16>,
+    sums: Vec<u32>,
+    picks: Vec<i32>,
+    maps: Vec<u8>,
+}
+
+impl Storage {
+    fn new() -> Self {
+        Self {
+            grey: vec![0; len::GREY],
+            rgb: vec![Rgb8::new(0, 0, 0); len::RGB],
+            z: vec![[0; 2]; len::Z],
+            col: vec![[0; 3]; len::COL],
+            scores: vec![0; len::SCORES],
+            costs: vec![0; len::COSTS],
+            sums: vec![0; len::SUMS],
+            picks: vec![0; len::PICKS],
+            maps: vec![0; len::MAPS],
+        }
+    }
+
+    fn bufs(&mut self) -> C2fBuffers<'_> {
+        C2fBuffers {
+            grey: &mut self.grey,
+            rgb: &mut self.rgb,
+            z: &mut self.z,
+            col: &mut self.col,
+            scores: &mut self.scores,
+            costs: &mut self.costs,
+            sums: &mut self.sums,
+            picks: &mut self.picks,
+            maps: &mut self.maps,
+        }
+    }
+}
+
+#[test]
+fn each_point_runs_its_own_window_and_band_in_the_default_buffers() {
+    let mut storage = Storage::new();
+    let default = stereo_run::run(&mut storage.bufs(), &mut NoTicks).expect("default runs");
+    let runs: Vec<(&str, StereoResult)> = POINTS
+        .iter()
+        .map(|(name, p)| {
+            let r = stereo_run::run_at(p, &mut storage.bufs(), &mut NoTicks)
+                .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+            (*name, r)
+        })
+        .collect();
+    // Another window or band is another map, and most of the scene stays
+    // estimated.
+    let pixels = (stereo_run::WIDTH * stereo_run::HEIGHT) as u64;
+    for (name, r) in &runs {
+        assert_ne!(r.checksum, default.checksum, "{name} ran the default");
+        assert!(
+            r.report.on as u64 * 10 > pixels * 8,
+            "{name}: {} on",
+            r.report.on
+        );
+    }
+    // The band sets the cells: band 1 evaluates fewer than band 2 at the
+    // same window.
+    let cells = |n: &str| {
+        runs.iter()
+            .find(|(name, _)| *name == n)
+            .map(|(_, r)| r.report.cells)
+            .expect("point")
+    };
+    assert!(cells("r2b1") < default.report.cells);
+    assert!(cells("r1b1") < cells("r1b2"));
+    // The same point twice gives the same map (the buffers carry nothing
+    // over between runs).
+    let (name, p) = &POINTS[0];
+    let again = stereo_run::run_at(p, &mut storage.bufs(), &mut NoTicks).expect("reruns");
+    assert_eq!(again.checksum, runs[0].1.checksum, "{name}");
+}
+
+#[test]
+fn a_point_line_names_its_window_band_and_figures() {
+    let mut storage = Storage::new();
+    let (name, p) = &POINTS[0];
+    let r = stereo_run::run_at(p, &mut storage.bufs(), &mut NoTicks).expect("runs");
+    let mut out = String::new();
+    stereo_run::write_point(&mut out, name, p, &r, |t| t).expect("writes");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 2, "{out}");
+    assert!(lines[0].starts_with(&format!("checksum stereo@{name} 160x120 0x")));
+    let band = p.band.map_or("-".to_string(), |b| b.to_string());
+    assert!(
+        lines[1].starts_with(&format!(
+            "point stereo {name} 160x120 radius={} band={band} engine=",
+            p.radius
+        )),
+        "{out}"
+    );
+    assert!(lines[1].contains(&format!("cells={}", r.report.cells)));
+    for step in [
+        "levels=",
+        "filters=",
+        "cells-votes=",
+        "sgm=",
+        "costs-picks=",
+    ] {
+        assert!(lines[1].contains(step), "{step} missing: {out}");
+    }
+}
