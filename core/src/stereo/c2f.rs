@@ -591,6 +591,13 @@ struct Decision {
 /// parabola through its neighbours in `U8F8`, and the margin.
 fn decide(sums: &[u32], lo: usize, valid: usize) -> Option<Decision> {
     let s = sums.get(..valid)?;
+    // The engine's windows of 5 and 3, unrolled.
+    if let Ok(s5) = <&[u32; 5]>::try_from(s) {
+        return decide_in(s5, lo);
+    }
+    if let Ok(s3) = <&[u32; 3]>::try_from(s) {
+        return decide_in(s3, lo);
+    }
     let (mut best, mut sb) = (0usize, *s.first()?);
     for (i, &v) in s.iter().enumerate().skip(1) {
         if v < sb {
@@ -602,11 +609,43 @@ fn decide(sums: &[u32], lo: usize, valid: usize) -> Option<Decision> {
     let before = s.get(..best.saturating_sub(1)).unwrap_or(&[]);
     let after = s.get(best + 2..).unwrap_or(&[]);
     let second = before.iter().chain(after).copied().min();
+    let disparity = parabola(s, lo, best, sb);
+    Some(Decision {
+        disparity,
+        margin: second.map(|v| v - sb),
+    })
+}
+
+/// [`decide`] over a whole window of `N` sums (the same integers; the
+/// length known, so the loops unroll).
+#[inline(always)]
+fn decide_in<const N: usize>(s: &[u32; N], lo: usize) -> Option<Decision> {
+    let (mut best, mut sb) = (0usize, *s.first()?);
+    for (i, &v) in s.iter().enumerate().skip(1) {
+        if v < sb {
+            (best, sb) = (i, v);
+        }
+    }
+    let mut second = None::<u32>;
+    for (i, &v) in s.iter().enumerate() {
+        if i + 1 < best || i > best + 1 {
+            second = Some(second.map_or(v, |m| m.min(v)));
+        }
+    }
+    Some(Decision {
+        disparity: parabola(s, lo, best, sb),
+        margin: second.map(|v| v - sb),
+    })
+}
+
+/// `U8F8` disparity of candidate `best` (sum `sb`) of the window `s` from
+/// `lo`, refined by the parabola through its neighbours where both exist.
+#[inline(always)]
+fn parabola(s: &[u32], lo: usize, best: usize, sb: u32) -> i32 {
     let mut disparity = ((lo + best) as i32) << 8;
-    if best > 0 && best + 1 < valid {
+    if let (Some(&m), Some(&p)) = (s.get(best.wrapping_sub(1)), s.get(best + 1)) {
         // Path sums are below 5·65535 < 2^19, so every term fits in i32.
-        let at = |i: usize| s.get(i).map_or(0, |&v| v as i32);
-        let (m, c, p) = (at(best - 1), sb as i32, at(best + 1));
+        let (m, c, p) = (m as i32, sb as i32, p as i32);
         // The reference's parabola on −sum: δ = (m − p) / (2 (m − 2c + p)).
         let curv = m - 2 * c + p;
         if curv > 0 {
@@ -615,10 +654,7 @@ fn decide(sums: &[u32], lo: usize, valid: usize) -> Option<Decision> {
             disparity += delta;
         }
     }
-    Some(Decision {
-        disparity,
-        margin: second.map(|v| v - sb),
-    })
+    disparity
 }
 
 /// The cells of one pixel and carrier: for each (weight group, other
@@ -1192,5 +1228,59 @@ impl<'e> Pass<'e> {
         report.on += 1;
         let q = v.clamp(0, i32::from(u16::MAX - 1)) as u16;
         DisparityCell::from_raw(U8F8::from_bits(q))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::decide;
+    use crate::rng::SplitMix64;
+
+    /// The decision written plainly: the first smallest sum, the smallest
+    /// sum more than 1 px from it, and the parabola through the best and
+    /// its two neighbours, `δ = (m − p) / (2 (m − 2c + p))` in `U8F8`
+    /// rounded half up, within ±0.5 px.
+    fn plain(s: &[u32], lo: usize) -> Option<(i32, Option<u32>)> {
+        let sb = *s.iter().min()?;
+        let best = s.iter().position(|&v| v == sb)?;
+        let second = (0..s.len())
+            .filter(|&i| i + 1 < best || i > best + 1)
+            .map(|i| s[i])
+            .min();
+        let mut d = ((lo + best) as i32) << 8;
+        if best > 0 && best + 1 < s.len() {
+            let (m, c, p) = (
+                i64::from(s[best - 1]),
+                i64::from(sb),
+                i64::from(s[best + 1]),
+            );
+            let curv = m - 2 * c + p;
+            if curv > 0 {
+                // floor(256 (m − p) / (2 curv) + 1/2)
+                let delta = (256 * (m - p) + curv).div_euclid(2 * curv);
+                d += delta.clamp(-128, 128) as i32;
+            }
+        }
+        Some((d, second.map(|v| v - sb)))
+    }
+
+    #[test]
+    fn decisions_equal_the_plain_rule_for_every_window_length() {
+        let mut rng = SplitMix64::new(0xdec1de);
+        for case in 0..20_000 {
+            let n = 1 + (case % 9);
+            // Small ranges make ties and flat neighbourhoods common.
+            let top = [4, 40, 5 * 65_535][case % 3];
+            let mut buf = [0u32; 9];
+            for v in buf.iter_mut().take(n) {
+                *v = rng.below(top + 1) as u32;
+            }
+            let s = &buf[..n];
+            let lo = rng.below(30) as usize;
+            let got = decide(s, lo, n).map(|d| (d.disparity, d.margin));
+            assert_eq!(got, plain(s, lo), "sums {s:?} lo {lo}");
+        }
+        assert!(decide(&[], 0, 0).is_none());
+        assert!(decide(&[1, 2], 0, 3).is_none(), "valid beyond the sums");
     }
 }
