@@ -717,7 +717,7 @@ fn vote(win: &mut [i64], wts: &[u8], [a, xre, xim]: [i32; 3]) {
 /// `raw` (window candidates, overwritten with the scores `n(d)`) and
 /// `total`: `valid` candidates from `lo`, the rest of the window the worst
 /// valid cost.
-fn costs_of(
+fn costs_of<const N: usize>(
     raw: &mut [i64],
     total: i64,
     table: &DemTable<'_>,
@@ -725,6 +725,8 @@ fn costs_of(
     valid: usize,
     out: &mut [u16],
 ) {
+    // `N > 0`: the caller's `valid` is `N`, known here, so the loops unroll.
+    let valid = if N > 0 { N } else { valid };
     let sh = (64 - total.leading_zeros()).saturating_sub(30);
     // Below 2^30 for the callers' `total > 0`, so `i32`.
     let t = i64::from(i32::try_from(total >> sh).unwrap_or(i32::MAX));
@@ -1014,7 +1016,11 @@ impl<'e> Pass<'e> {
                         continue;
                     }
                     let valid = (top - lo + 1).min(n);
-                    costs_of(raw, total, table, lo, valid, dst);
+                    match (valid, n) {
+                        (5, 5) => costs_of::<5>(raw, total, table, lo, valid, dst),
+                        (3, 3) => costs_of::<3>(raw, total, table, lo, valid, dst),
+                        _ => costs_of::<0>(raw, total, table, lo, valid, dst),
+                    }
                 }
             }
             probe.enter(Step::Sgm);
@@ -1233,8 +1239,9 @@ impl<'e> Pass<'e> {
 
 #[cfg(test)]
 mod tests {
-    use super::decide;
+    use super::{costs_of, decide};
     use crate::rng::SplitMix64;
+    use crate::stereo::DemTable;
 
     /// The decision written plainly: the first smallest sum, the smallest
     /// sum more than 1 px from it, and the parabola through the best and
@@ -1282,5 +1289,67 @@ mod tests {
         }
         assert!(decide(&[], 0, 0).is_none());
         assert!(decide(&[1, 2], 0, 3).is_none(), "valid beyond the sums");
+    }
+
+    /// The costs written plainly in `i128`: `n(d) = (raw >> sh)·2^bf −
+    /// bias(d)·(total >> sh)·2^wf`, gaps to the best truncated to 15
+    /// significant bits of the span, `C = round(256·m·g / Σ g)`, the rest
+    /// of the window the worst valid cost.
+    fn plain_costs(raw: &[i64], total: i64, t: &DemTable<'_>, lo: usize, valid: usize) -> [u16; 9] {
+        let sh = (64 - total.leading_zeros()).saturating_sub(30);
+        let (wf, bf) = (u32::from(t.weight_frac), u32::from(t.bias_frac));
+        let n: [i128; 9] = core::array::from_fn(|i| {
+            let r = i128::from(raw.get(i).copied().unwrap_or(0) >> sh);
+            (r << bf) - ((i128::from(t.bias_at(lo + i)) * i128::from(total >> sh)) << wf)
+        });
+        let n = &n[..valid];
+        let (best, worst) = (*n.iter().max().unwrap(), *n.iter().min().unwrap());
+        let bits = 128 - (best - worst).leading_zeros();
+        let sh2 = bits.saturating_sub(15);
+        let gaps: [u32; 9] =
+            core::array::from_fn(|i| n.get(i).map_or(0, |&v| ((best - v) >> sh2) as u32));
+        let total_gap: u32 = gaps.iter().sum();
+        let mut out = [0u16; 9];
+        for (o, &g) in out.iter_mut().zip(&gaps).take(valid) {
+            *o = (g * 256 * valid as u32 + total_gap / 2)
+                .checked_div(total_gap)
+                .map_or(0, |c| c as u16);
+        }
+        let hi = out.iter().take(valid).copied().max().unwrap_or(0);
+        for o in out.iter_mut().skip(valid) {
+            *o = hi;
+        }
+        out
+    }
+
+    #[test]
+    fn costs_equal_the_plain_rule_with_and_without_a_known_length() {
+        // The firmware's level-0 table (32 candidates).
+        let bytes = include_bytes!("../../../firmware-sim/data/dem_c2f_l0.bin");
+        let table = DemTable::parse(bytes).unwrap();
+        let mut rng = SplitMix64::new(0xc057);
+        for case in 0..20_000u64 {
+            let total = 1 + rng.below(1 << (1 + case % 40)) as i64;
+            // |raw| <= 2^14·total + 2^27 (the engine's bound).
+            let bound = (total << 14) + (1 << 27);
+            let mut raw = [0i64; 9];
+            for r in &mut raw {
+                *r = rng.below(2 * bound as u64 + 1) as i64 - bound;
+            }
+            let (n, valid) = [(5, 5), (3, 3), (5, 2), (9, 9), (3, 1)][(case % 5) as usize];
+            let lo = rng.below(30 - n as u64) as usize;
+            let want = plain_costs(&raw, total, &table, lo, valid);
+            let mut out = [0u16; 9];
+            let mut r = raw;
+            match (valid, n) {
+                (5, 5) => costs_of::<5>(&mut r, total, &table, lo, valid, &mut out[..n]),
+                (3, 3) => costs_of::<3>(&mut r, total, &table, lo, valid, &mut out[..n]),
+                _ => costs_of::<0>(&mut r, total, &table, lo, valid, &mut out[..n]),
+            }
+            assert_eq!(out[..n], want[..n], "case {case}: total {total} lo {lo}");
+            let mut general = [0u16; 9];
+            costs_of::<0>(&mut raw, total, &table, lo, valid, &mut general[..n]);
+            assert_eq!(general[..n], want[..n], "case {case}, general path");
+        }
     }
 }
