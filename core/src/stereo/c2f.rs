@@ -1061,6 +1061,7 @@ impl<'e> Pass<'e> {
         let n6 = 6 * table.disparities();
         let (own_z, other_z) = if LEFT { (z_l, z_r) } else { (z_r, z_l) };
         let mut evaluated = 0;
+        scores.fill(0);
         for (px, ((dst, &lo), v)) in scores
             .chunks_exact_mut(n + 1)
             .zip(lo)
@@ -1085,7 +1086,6 @@ impl<'e> Pass<'e> {
             } else {
                 0
             };
-            dst.fill(0);
             evaluated += count * carriers;
             let (win, total) = dst.split_at_mut(n);
             let cells_px = cells_buf.get_mut(..count).unwrap_or(&mut []);
