@@ -1022,7 +1022,8 @@ impl<'e> Pass<'e> {
         let [lo_l, lo_r] = lo;
         let [sc_l, sc_r] = scores;
         let [vo_l, vo_r] = voters;
-        // The windows of the engine's radii as constants (unrolled votes).
+        // Windows of the radii 2 and 1, and the coarsest level of 32
+        // disparities (9 candidates), as constants: unrolled votes.
         match self.n {
             5 => {
                 self.votes_eye::<true, 5>(table, z, lo_l, sc_l, vo_l, cells)
@@ -1031,6 +1032,10 @@ impl<'e> Pass<'e> {
             3 => {
                 self.votes_eye::<true, 3>(table, z, lo_l, sc_l, vo_l, cells)
                     + self.votes_eye::<false, 3>(table, z, lo_r, sc_r, vo_r, cells)
+            }
+            9 => {
+                self.votes_eye::<true, 9>(table, z, lo_l, sc_l, vo_l, cells)
+                    + self.votes_eye::<false, 9>(table, z, lo_r, sc_r, vo_r, cells)
             }
             _ => {
                 self.votes_eye::<true, 0>(table, z, lo_l, sc_l, vo_l, cells)
