@@ -1134,6 +1134,8 @@ impl<'e> Pass<'e> {
                     g += n6;
                 }
             }
+            // The total, `4A` per cell. Like the scores, exact integer sums
+            // (far from overflow), so their order does not matter.
             if let Some(t) = total.first_mut() {
                 *t = 4 * sum;
             }
