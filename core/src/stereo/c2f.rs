@@ -303,7 +303,7 @@ pub struct C2fBuffers<'a> {
     pub rgb: &'a mut [Rgb8],
     /// Response rows ([`z_len`]).
     pub z: &'a mut [Z],
-    /// y-pass row (`w`).
+    /// y-pass row (`w`), then one pixel's cells while voting.
     pub col: &'a mut [[i32; 3]],
     /// Score rows ([`score_len`]).
     pub scores: &'a mut [i64],
@@ -657,30 +657,28 @@ fn parabola(s: &[u32], lo: usize, best: usize, sb: u32) -> i32 {
     disparity
 }
 
-/// The cells of one pixel and carrier: for each (weight group, other
-/// eye's response) of `cells`, the cell of `pair(other) = (left, right)`
-/// votes into `win` (the group's first `n` candidates); returns the sum of
-/// the cells' totals (`4A` each).
+/// The cells of one pixel and carrier into `out` (`[A, Xre, Xim]` in `Q8`
+/// each, as many as `others` and `out` both have): the pixel's response
+/// `own` paired with each of `others` as `pair(own, other) = (left,
+/// right)`. Returns the sum of the cells' `A`.
 #[inline(always)]
-fn cells<'g, 'z>(
-    win: &mut [i64],
-    cells: impl Iterator<Item = (&'g [u8], &'z Z)>,
-    pair: impl Fn(&Z) -> (Z, Z),
-    n: usize,
+fn cells<'z>(
+    out: &mut [[i32; 3]],
+    own: Z,
+    others: impl Iterator<Item = &'z Z>,
+    pair: impl Fn(Z, Z) -> (Z, Z),
 ) -> i64 {
     let mut sum = 0i64;
-    for (group, other) in cells {
-        let (l, r) = pair(other);
+    for (cell, &other) in out.iter_mut().zip(others) {
+        let (l, r) = pair(own, other);
         let (lr, li) = (i32::from(l[0]), i32::from(l[1]));
         let (rr, ri) = (i32::from(r[0]), i32::from(r[1]));
         // Exact in i32: |z| components below 2^14.01, so A < 2^30.1
         // (`filters`), then Q12 → Q8.
         let q8 = |v: i32| (v + 8) >> 4;
         let a = q8(lr * lr + li * li + rr * rr + ri * ri);
-        let xre = q8(lr * rr + li * ri);
-        let xim = q8(li * rr - lr * ri);
-        sum += 4 * i64::from(a);
-        vote(win, group.get(..6 * n).unwrap_or(&[]), [a, xre, xim]);
+        *cell = [a, q8(lr * rr + li * ri), q8(li * rr - lr * ri)];
+        sum += i64::from(a);
     }
     sum
 }
@@ -690,26 +688,13 @@ fn cells<'g, 'z>(
 /// candidate: `wa, wb, wc`, little-endian `i16`).
 #[inline(always)]
 fn vote(win: &mut [i64], wts: &[u8], [a, xre, xim]: [i32; 3]) {
-    let one = |d: &mut i64, c6: &[u8]| {
+    for (d, c6) in win.iter_mut().zip(wts.chunks_exact(6)) {
         if let [a0, a1, b0, b1, c0, c1] = *c6 {
             let w = |lo: u8, hi: u8| i32::from(i16::from_le_bytes([lo, hi]));
             *d += i64::from(a) * i64::from(w(a0, a1))
                 + i64::from(xre) * i64::from(w(b0, b1))
                 + i64::from(xim) * i64::from(w(c0, c1));
         }
-    };
-    // The engine's windows of 5, unrolled.
-    if let (Ok(d5), Ok(w5)) = (
-        <&mut [i64; 5]>::try_from(&mut *win),
-        <&[u8; 30]>::try_from(wts),
-    ) {
-        for (d, c6) in d5.iter_mut().zip(w5.chunks_exact(6)) {
-            one(d, c6);
-        }
-        return;
-    }
-    for (d, c6) in win.iter_mut().zip(wts.chunks_exact(6)) {
-        one(d, c6);
     }
 }
 
@@ -982,6 +967,7 @@ impl<'e> Pass<'e> {
                 [&*lo_l, &*lo_r],
                 [&mut *sl, &mut *sr],
                 [&mut *vo_l, &mut *vo_r],
+                col,
             );
             // Costs, aggregation, decisions.
             probe.enter(Step::Readout);
@@ -1064,8 +1050,8 @@ impl<'e> Pass<'e> {
     /// right), its window's scores and total (`n + 1` per pixel, in
     /// `scores`) from the cells of the shifts [`Pass::shift_range`] of its
     /// window `lo` (the cell of left `x` and right `x − s`), and with a
-    /// band the number of groups voting (`voters`). Returns the number of
-    /// cells evaluated.
+    /// band the number of groups voting (`voters`); `cells` is scratch for
+    /// one pixel's cells (`w` long). Returns the number of cells evaluated.
     fn votes(
         &self,
         table: &DemTable<'_>,
@@ -1073,95 +1059,127 @@ impl<'e> Pass<'e> {
         lo: [&[u16]; 2],
         scores: [&mut [i64]; 2],
         voters: [&mut [u16]; 2],
+        cells: &mut [[i32; 3]],
     ) -> usize {
         let [lo_l, lo_r] = lo;
         let [sc_l, sc_r] = scores;
         let [vo_l, vo_r] = voters;
-        self.votes_eye::<true>(table, z, lo_l, sc_l, vo_l)
-            + self.votes_eye::<false>(table, z, lo_r, sc_r, vo_r)
+        // Windows of the radii 2 and 1, and the coarsest level of 32
+        // disparities (9 candidates), as constants: unrolled votes.
+        match self.n {
+            5 => {
+                self.votes_eye::<true, 5>(table, z, lo_l, sc_l, vo_l, cells)
+                    + self.votes_eye::<false, 5>(table, z, lo_r, sc_r, vo_r, cells)
+            }
+            3 => {
+                self.votes_eye::<true, 3>(table, z, lo_l, sc_l, vo_l, cells)
+                    + self.votes_eye::<false, 3>(table, z, lo_r, sc_r, vo_r, cells)
+            }
+            9 => {
+                self.votes_eye::<true, 9>(table, z, lo_l, sc_l, vo_l, cells)
+                    + self.votes_eye::<false, 9>(table, z, lo_r, sc_r, vo_r, cells)
+            }
+            _ => {
+                self.votes_eye::<true, 0>(table, z, lo_l, sc_l, vo_l, cells)
+                    + self.votes_eye::<false, 0>(table, z, lo_r, sc_r, vo_r, cells)
+            }
+        }
     }
 
-    /// [`Pass::votes`] of one eye (`LEFT`: left-referenced), carrier by
-    /// carrier.
-    fn votes_eye<const LEFT: bool>(
+    /// [`Pass::votes`] of one eye (`LEFT`: left-referenced), pixel by
+    /// pixel, then carrier by carrier: first the cells, then their votes.
+    /// `N` is the window length `self.n` where the caller knows it as a
+    /// constant, 0 otherwise.
+    fn votes_eye<const LEFT: bool, const N: usize>(
         &self,
         table: &DemTable<'_>,
         [z_l, z_r]: [&[Z]; 2],
         lo: &[u16],
         scores: &mut [i64],
         voters: &mut [u16],
+        cells_buf: &mut [[i32; 3]],
     ) -> usize {
-        let (w, n, step) = (self.w, self.n, self.step);
+        let n = if N == 0 { self.n } else { N };
+        let (w, step) = (self.w, self.step);
         let (step_pow2, step_log) = (step.is_power_of_two(), step.trailing_zeros());
-        let mut evaluated = 0;
         let carriers = usize::from(self.e.dem.params.carriers);
         let bytes = table.weight_bytes();
         // Group `c·shifts + ks` starts at `6N·(c·shifts + ks)`.
         let n6 = 6 * table.disparities();
-        // The groups voting: `carriers` per shift whose cell is inside.
-        for (px, (v, &lo)) in voters.iter_mut().zip(lo).enumerate() {
+        let (own_z, other_z) = if LEFT { (z_l, z_r) } else { (z_r, z_l) };
+        let mut evaluated = 0;
+        scores.fill(0);
+        for (px, ((dst, &lo), v)) in scores
+            .chunks_exact_mut(n + 1)
+            .zip(lo)
+            .zip(voters.iter_mut())
+            .enumerate()
+        {
+            let range = self.shift_range(lo);
+            // The shifts whose cell lies inside the row: `s <= x` (left),
+            // `x + s < w` (right).
+            let room = if LEFT { px } else { w - 1 - px };
+            let last = if step_pow2 {
+                room >> step_log
+            } else {
+                room / step
+            };
+            let count = (last + 1).min(range.end).saturating_sub(range.start);
+            // The groups voting: `carriers` per shift whose cell is inside
+            // (every shift of the range left-referenced).
             *v = if self.band.is_some() {
-                let inside = self
-                    .shift_range(lo)
-                    .filter(|&ks| LEFT || px + ks * step < w)
-                    .count();
+                let inside = if LEFT { range.len() } else { count };
                 (inside * carriers) as u16
             } else {
                 0
             };
-        }
-        scores.fill(0);
-        for (c, (pl, pr)) in z_l
-            .chunks_exact(w)
-            .zip(z_r.chunks_exact(w))
-            .take(carriers)
-            .enumerate()
-        {
-            let base = c * self.shifts * n6;
-            let (own_plane, other_plane) = if LEFT { (pl, pr) } else { (pr, pl) };
-            for (px, ((dst, &lo), own)) in scores
-                .chunks_exact_mut(n + 1)
-                .zip(lo)
-                .zip(own_plane)
+            evaluated += count * carriers;
+            let (win, total) = dst.split_at_mut(n);
+            let cells_px = cells_buf.get_mut(..count).unwrap_or(&mut []);
+            // The other eye's pixel of the first shift: `x − s` left, `x +
+            // s` right; `count` keeps the shifts' pixels inside the row, so
+            // `others` has at least `count` and every cell is made.
+            let first = range.start * step;
+            let mut sum = 0i64;
+            for (c, (own_plane, other_plane)) in own_z
+                .chunks_exact(w)
+                .zip(other_z.chunks_exact(w))
+                .take(carriers)
                 .enumerate()
             {
-                let (win, total) = dst.split_at_mut(n);
-                let range = self.shift_range(lo);
-                // The shifts whose cell lies inside the row: `s <= x` (left),
-                // `x + s < w` (right).
-                let room = if LEFT { px } else { w - 1 - px };
-                let last = if step_pow2 {
-                    room >> step_log
-                } else {
-                    room / step
+                let Some(&own) = own_plane.get(px) else {
+                    continue;
                 };
-                let count = (last + 1).min(range.end).saturating_sub(range.start);
-                evaluated += count;
-                let groups = bytes
-                    .get(base + range.start * n6 + 6 * usize::from(lo)..)
-                    .unwrap_or(&[])
-                    .chunks(n6)
-                    .take(count);
-                let first = range.start * step;
-                let sum = if LEFT {
+                sum += if LEFT {
                     let others = other_plane
                         .get(..(px + 1).saturating_sub(first))
                         .unwrap_or(&[])
                         .iter()
                         .rev()
                         .step_by(step);
-                    cells(win, groups.zip(others), |o| (*own, *o), n)
+                    cells(cells_px, own, others, |o, t| (o, t))
                 } else {
                     let others = other_plane
                         .get(px + first..)
                         .unwrap_or(&[])
                         .iter()
                         .step_by(step);
-                    cells(win, groups.zip(others), |o| (*o, *own), n)
+                    cells(cells_px, own, others, |o, t| (t, o))
                 };
-                if let Some(t) = total.first_mut() {
-                    *t += sum;
+                // The shift's groups, `n6` apart from the first one.
+                let mut g = (c * self.shifts + range.start) * n6 + 6 * usize::from(lo);
+                for &cell in cells_px.iter() {
+                    let Some(wts) = bytes.get(g..g + 6 * n) else {
+                        break;
+                    };
+                    vote(win, wts, cell);
+                    g += n6;
                 }
+            }
+            // The total, `4A` per cell. Like the scores, exact integer sums
+            // (far from overflow), so their order does not matter.
+            if let Some(t) = total.first_mut() {
+                *t = 4 * sum;
             }
         }
         evaluated
