@@ -370,9 +370,7 @@ fn point_accuracy(files: [&Path; 3], radius: &str, band: &str) -> String {
     if band != "-" {
         args.extend_from_slice(&["--c2f-band", band]);
     }
-    protogist(&args)
-        .ok()
-        .and_then(|j| serde_json::from_str::<serde_json::Value>(&j).ok())
+    protogist_json(&args)
         .and_then(|v| {
             let f = v.get("final")?;
             let g = |k: &str| f.get(k).and_then(serde_json::Value::as_f64);
@@ -513,6 +511,14 @@ fn scratch(stdout: &str) -> Section {
         title: "Core scratch memory",
         body,
     }
+}
+
+/// `protogist ARGS` parsed as its `--json` report (`None`: the run or the
+/// JSON failed).
+fn protogist_json(args: &[&str]) -> Option<serde_json::Value> {
+    protogist(args)
+        .ok()
+        .and_then(|j| serde_json::from_str(&j).ok())
 }
 
 /// Runs the release host binary with `args`; its stdout.
@@ -729,9 +735,7 @@ fn stereo_row(files: [&Path; 3], w: &str, d: &str, extra: &[&str]) -> String {
     let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
     args.extend_from_slice(refine);
     args.extend_from_slice(extra);
-    protogist(&args)
-        .ok()
-        .and_then(|j| serde_json::from_str::<serde_json::Value>(&j).ok())
+    protogist_json(&args)
         .and_then(|v| {
             let f = v.get("final")?;
             let g = |k: &str| f.get(k).and_then(serde_json::Value::as_f64);
