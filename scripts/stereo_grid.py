@@ -68,16 +68,31 @@ def grid_engine():
             for p2 in ("4", "8", "16") for m in ("0", "0.5", "1")]
 
 
+def grid_speckle():
+    """Fourth grid (third round of the held-out choice): the second round's
+    family at margins 0.5 and 1, with and without the speckle filter."""
+    fam = ("--levels 1 --sgm --colour luv --chroma-weight 2 --paths 8 --pool 0 "
+           "--c2f 2 --c2f-band 2")
+    s = []
+    for m in ("1", "0.5"):
+        s.append(f"{fam} --min-margin {m}")
+        for n in ("10", "25", "50", "100", "200"):
+            for r in ("1", "2"):
+                s.append(f"{fam} --min-margin {m} --speckle {n} --speckle-range {r}")
+    return s
+
+
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--pair", choices=PAIRS, default="motorcycle")
     p.add_argument("--data", required=True, help="data root (holds aloe/ and motorcycle/)")
     p.add_argument("--bin", default="target/release/protogist")
-    p.add_argument("--grid", choices=("main", "p2-width", "engine"), default="main")
+    p.add_argument("--grid", choices=("main", "p2-width", "engine", "speckle"), default="main")
     p.add_argument("--only", action="append", help="run only these option strings")
     a = p.parse_args()
     left, right, gt = (f"{a.data}/{f}" for f in PAIRS[a.pair])
-    grids = {"main": grid, "p2-width": grid_p2_width, "engine": grid_engine}
+    grids = {"main": grid, "p2-width": grid_p2_width, "engine": grid_engine,
+             "speckle": grid_speckle}
     settings = a.only or grids[a.grid]()
     out = tempfile.mkdtemp(prefix="stereo-grid-")
     for opts in settings:

@@ -134,6 +134,15 @@ pub struct ReadoutOptions {
     /// is within this many px of its window's centre (default: every group).
     #[arg(long)]
     pub c2f_band: Option<u8>,
+    /// Speckle filter (both engines, after the read-out; docs/STEREO.md
+    /// "Third round"): pixels in an island of at most this many pixels go
+    /// OFF (default 0: off).
+    #[arg(long)]
+    pub speckle: Option<u32>,
+    /// With `--speckle`: 4-neighbours join an island when their
+    /// disparities differ by at most this, px (default 1).
+    #[arg(long, allow_negative_numbers = true)]
+    pub speckle_range: Option<f32>,
 }
 
 /// `--p1` default (docs/STEREO.md, semi-global aggregation).
@@ -416,6 +425,21 @@ fn run_reference(
     })
 }
 
+/// Sets OFF, in `est`'s map and cells alike, the pixels in islands of at
+/// most `size` px ([`dem::speckle::speckles`]); returns how many.
+fn remove_speckles(est: &mut Estimate, w: usize, h: usize, size: usize, range: f32) -> usize {
+    let removed = dem::speckle::speckles(&est.disparity, w, h, size, range);
+    let mut count = 0;
+    for ((r, d), c) in removed.iter().zip(&mut est.disparity).zip(&mut est.cells) {
+        if *r {
+            *d = None;
+            *c = DisparityCell::OFF;
+            count += 1;
+        }
+    }
+    count
+}
+
 /// `protogist stereo`: loads, downscales, runs the DEM (the f32 reference,
 /// or core's engine with `--engine core`), writes the panels and, with GT,
 /// the error map and metrics.
@@ -447,6 +471,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         ),
     };
     params.check()?;
+    let speckle = preset::speckle(opts)?;
     // Size checks first: training for a hopeless size is wasted time.
     if usize::from(params.max_disp) >= w {
         return Err(StereoError::MaxDispTooLarge {
@@ -463,7 +488,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     if coarsest.0 < min || coarsest.1 < min {
         return Err(StereoError::TooSmall { min, got: coarsest }.into());
     }
-    let est = match &plan {
+    let mut est = match &plan {
         Some(p) => {
             let r = engine::run(p, &pair.left, &pair.right, w, h)?;
             Estimate {
@@ -481,6 +506,10 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             }
         }
         None => run_reference(opts, &params, search, &pair)?,
+    };
+    let off_speckle = match speckle {
+        Some((size, range)) => remove_speckles(&mut est, w, h, size, range),
+        None => 0,
     };
     let (train_ms, run_ms) = (est.train_ms, est.run_ms);
     let (lp, gt_small) = (pair.left, pair.gt);
@@ -538,6 +567,15 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             100.0 * est.off[2] as f64 / n
         ),
     );
+    if let Some((size, range)) = speckle {
+        s.push(
+            "speckle filter",
+            format!(
+                "islands of at most {size} px (joined within {range} px) OFF: {:.1} %",
+                100.0 * off_speckle as f64 / n
+            ),
+        );
+    }
     let max = f32::from(params.max_disp);
     let mut panels = vec![
         Panel::new("left", rgb_from(&lp, w, h)),
@@ -559,6 +597,11 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     });
     if let Some(p) = opts.readout.preset {
         json["preset_options"] = serde_json::json!(p.options());
+    }
+    if let Some((size, range)) = speckle {
+        json["speckle"] = serde_json::json!({
+            "size": size, "range": range, "off_fraction": off_speckle as f64 / n,
+        });
     }
     if let Some(c) = search {
         json["c2f"] = serde_json::json!({

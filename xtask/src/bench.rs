@@ -592,7 +592,9 @@ fn dem_aloe() -> Section {
          fine (5 candidates from the groups near them at the fine levels; the ms still score \
          every candidate): docs/STEREO.md, section Coarse-to-fine with SGM. The \
          `--preset held-out` rows are the setting chosen on the held-out Motorcycle pair (next \
-         section), run here once with no change. The `--engine core` rows run core's \
+         section; coarse to fine, colour, 8 paths, and islands of at most 100 px set OFF by the \
+         speckle filter), run here once with no change; `--speckle 0` is the same without the \
+         filter (the second round's choice). The `--engine core` rows run core's \
          fixed-point coarse-to-fine engine (`protogist::stereo::c2f`, the firmware's stage: \
          grey, one level, no pooling, 5 SGM paths, windows ±2, band 2, P2 4 chosen on Motorcycle), ms its run alone, \
          the best of 5 runs, single thread; the `--engine reference` rows beside them are the same settings in \
@@ -638,6 +640,8 @@ fn dem_aloe() -> Section {
         "2",
     ];
     let held_out: &[&str] = &["--preset", "held-out"];
+    // The preset without its speckle filter: the second round's choice.
+    let held_out_no_speckle: &[&str] = &["--preset", "held-out", "--speckle", "0"];
     // The same coarse-to-fine setting through core's fixed-point engine
     // and through the f32 reference (`--engine core` runs `--levels 1
     // --pool 0 --sgm --paths 5`, grey, by default).
@@ -668,7 +672,7 @@ fn dem_aloe() -> Section {
         "--p2",
         "4",
     ];
-    let rows: [(&str, &str, &[&str]); 22] = [
+    let rows: [(&str, &str, &[&str]); 24] = [
         ("160", "32", &[]),
         ("160", "32", &["--refine", "1"]),
         ("160", "32", &["--complete"]),
@@ -677,6 +681,7 @@ fn dem_aloe() -> Section {
         ("160", "32", &c160),
         ("160", "32", &c320),
         ("160", "32", &C2F),
+        ("160", "32", held_out_no_speckle),
         ("160", "32", held_out),
         ("160", "32", &ENGINE_CORE),
         ("160", "32", &ENGINE_REF),
@@ -688,6 +693,7 @@ fn dem_aloe() -> Section {
         ("320", "64", &c320),
         ("320", "64", &c160),
         ("320", "64", &C2F),
+        ("320", "64", held_out_no_speckle),
         ("320", "64", held_out),
         ("320", "64", &ENGINE_CORE),
         ("320", "64", &ENGINE_REF),
@@ -772,7 +778,8 @@ fn dem_motorcycle() -> Section {
          by `cargo xtask fetch-data`. `cargo run --release -- stereo --left \
          motorcycle_left.png --right motorcycle_right.png --gt motorcycle_disp.npz --width W \
          --max-disp D --refine 0 --json --out DIR OPTIONS`; metrics as in the Aloe section. \
-         `--preset held-out` is the setting chosen on this pair for both sizes \
+         `--preset held-out` is the setting chosen on this pair for both sizes, `--speckle 0` \
+         the same without its speckle filter \
          (`host/src/stereo_cmd/preset.rs`; docs/STEREO.md, section Settings chosen on a \
          held-out pair).\n\n{STEREO_TABLE_HEAD}"
     );
@@ -780,6 +787,7 @@ fn dem_motorcycle() -> Section {
         for extra in [
             &[][..],
             &["--levels", "1", "--sgm"],
+            &["--preset", "held-out", "--speckle", "0"],
             &["--preset", "held-out"],
         ] {
             body.push_str(&stereo_row([&l, &r, &gt], w, d, extra));

@@ -34,10 +34,10 @@ impl Preset {
 }
 
 /// The options of `--preset held-out`, as on the command line: chosen on
-/// Motorcycle in the second round (docs/STEREO.md, "Settings chosen on a
-/// held-out pair"), coarse to fine.
+/// Motorcycle in the third round (docs/STEREO.md, "Settings chosen on a
+/// held-out pair"), coarse to fine with the speckle filter.
 pub const HELD_OUT_OPTIONS: &str = "--levels 1 --sgm --colour luv --chroma-weight 2 --paths 8 \
-     --pool 0 --min-margin 1 --c2f 2 --c2f-band 2";
+     --pool 0 --min-margin 1 --c2f 2 --c2f-band 2 --speckle 100 --speckle-range 1";
 
 /// `--preset held-out`, the same as [`HELD_OUT_OPTIONS`].
 pub const HELD_OUT: Settings = Settings {
@@ -56,6 +56,8 @@ pub const HELD_OUT: Settings = Settings {
     c2f: Some(2),
     c2f_radius: None,
     c2f_band: Some(2),
+    speckle: Some(100),
+    speckle_range: Some(1.0),
 };
 
 /// Read-out settings that may be left unset (`None`: not given).
@@ -91,6 +93,10 @@ pub struct Settings {
     pub c2f_radius: Option<u8>,
     /// Band of the coarse-to-fine decode.
     pub c2f_band: Option<u8>,
+    /// Largest island the speckle filter removes, px (0: off).
+    pub speckle: Option<u32>,
+    /// Join tolerance of the speckle filter, px.
+    pub speckle_range: Option<f32>,
 }
 
 /// A coarse-to-fine search ([`crate::reference::stereo::c2f`]).
@@ -126,6 +132,8 @@ impl Settings {
             c2f: self.c2f.or(fallback.c2f),
             c2f_radius: self.c2f_radius.or(fallback.c2f_radius),
             c2f_band: self.c2f_band.or(fallback.c2f_band),
+            speckle: self.speckle.or(fallback.speckle),
+            speckle_range: self.speckle_range.or(fallback.speckle_range),
         }
     }
 }
@@ -149,6 +157,8 @@ fn explicit(opts: &StereoOptions) -> Settings {
         c2f: r.c2f,
         c2f_radius: r.c2f_radius,
         c2f_band: r.c2f_band,
+        speckle: r.speckle,
+        speckle_range: r.speckle_range,
     }
 }
 
@@ -166,6 +176,34 @@ fn settings(opts: &StereoOptions) -> Settings {
 /// preset's).
 pub fn complete(opts: &StereoOptions) -> bool {
     settings(opts).complete
+}
+
+/// `--speckle-range` default, px.
+pub const SPECKLE_RANGE: f32 = 1.0;
+
+/// The speckle filter in force: the largest island removed, px, and the
+/// join tolerance, px (`None`: off).
+///
+/// # Errors
+/// [`HostError::InvalidArgument`] for `--speckle-range` given while the
+/// filter is off, or a range that is negative or not finite.
+pub fn speckle(opts: &StereoOptions) -> Result<Option<(usize, f32)>> {
+    let s = settings(opts);
+    let range = s.speckle_range.unwrap_or(SPECKLE_RANGE);
+    if !(range.is_finite() && range >= 0.0) {
+        return Err(HostError::InvalidArgument {
+            name: "speckle-range",
+            reason: "must be a finite number of px, at least 0".into(),
+        });
+    }
+    match s.speckle.filter(|&n| n > 0) {
+        Some(n) => Ok(Some((n as usize, range))),
+        None if explicit(opts).speckle_range.is_some() => Err(HostError::InvalidArgument {
+            name: "speckle-range",
+            reason: "needs --speckle (or a preset with it)".into(),
+        }),
+        None => Ok(None),
+    }
 }
 
 /// The coarse-to-fine search in force (`None`: the full search).
@@ -323,6 +361,12 @@ mod tests {
             radius: 2,
             band: Some(2),
         };
+        assert_eq!(speckle(&preset).unwrap(), Some((100, 1.0)));
+        assert_eq!(speckle(&spelled).unwrap(), Some((100, 1.0)));
+        assert_eq!(
+            speckle(&parse("--preset held-out --speckle 0")).unwrap(),
+            None
+        );
         assert_eq!(search(&preset).unwrap(), Some(c2f));
         assert_eq!(search(&spelled).unwrap(), Some(c2f));
         assert_eq!(
@@ -378,5 +422,37 @@ mod tests {
                 band: None
             })
         );
+    }
+
+    #[test]
+    fn speckle_options_are_checked() {
+        assert_eq!(speckle(&parse("")).unwrap(), None);
+        assert_eq!(
+            speckle(&parse("--speckle 20")).unwrap(),
+            Some((20, SPECKLE_RANGE))
+        );
+        assert_eq!(
+            speckle(&parse("--speckle 20 --speckle-range 2.5")).unwrap(),
+            Some((20, 2.5))
+        );
+        for extra in [
+            "--speckle-range 2",
+            "--speckle 0 --speckle-range 2",
+            "--speckle 20 --speckle-range -1",
+            "--speckle 20 --speckle-range NaN",
+            "--speckle 20 --speckle-range inf",
+        ] {
+            let e = speckle(&parse(extra)).unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    HostError::InvalidArgument {
+                        name: "speckle-range",
+                        ..
+                    }
+                ),
+                "{extra}: {e}"
+            );
+        }
     }
 }

@@ -20,6 +20,7 @@ pub mod population;
 pub mod readout;
 pub mod refine;
 pub mod sgm;
+pub mod speckle;
 pub mod table;
 pub mod train;
 
