@@ -36,11 +36,13 @@ pub const HEIGHT: usize = 120;
 pub const PARAMS: C2fParams = C2fParams::DEFAULT;
 /// Cheaper operating points of the same engine, run after [`PARAMS`] to
 /// measure what the cells cost (docs/STEREO.md, "Operating points"): the
-/// window half width `R` and the band `b` change, nothing else (the same
-/// tables, levels and penalties). Each needs no more scratch than
+/// window half width `R` and the band `b` change, and in the points named
+/// `…l` the left-right check's right map comes from the left sums
+/// (`lr_from_left`, no right eye); nothing else (the same tables, levels
+/// and penalties). Each needs no more scratch than
 /// [`PARAMS`] (`R <= 2`), which `operating_points_fit` checks at compile
 /// time.
-pub const POINTS: [(&str, C2fParams); 3] = [
+pub const POINTS: [(&str, C2fParams); 5] = [
     (
         "r2b1",
         C2fParams {
@@ -60,6 +62,21 @@ pub const POINTS: [(&str, C2fParams); 3] = [
         C2fParams {
             radius: 1,
             band: Some(1),
+            ..PARAMS
+        },
+    ),
+    (
+        "r2b2l",
+        C2fParams {
+            lr_from_left: true,
+            ..PARAMS
+        },
+    ),
+    (
+        "r2b1l",
+        C2fParams {
+            band: Some(1),
+            lr_from_left: true,
             ..PARAMS
         },
     ),
@@ -305,8 +322,10 @@ pub fn write_point(
     write_point_line(out, name, params, r, to_instructions)
 }
 
-/// `point stereo NAME WxH radius=R band=B engine=E cells=C STEP=I ...`:
-/// the window half width and band (`-`: none), then instructions per
+/// `point stereo NAME WxH radius=R band=B lr=L engine=E cells=C STEP=I
+/// ...`: the window half width, the band (`-`: none) and the right map of
+/// the left-right check (`read` or `derived` from the left sums), then
+/// instructions per
 /// pixel with one decimal (the engine is the total minus the camera, as
 /// `ipp stereo-engine`), the cells evaluated and the steps.
 pub fn write_point_line(
@@ -328,6 +347,12 @@ pub fn write_point_line(
         Some(b) => write!(out, "{b}")?,
         None => write!(out, "-")?,
     }
+    let lr = if params.lr_from_left {
+        "derived"
+    } else {
+        "read"
+    };
+    write!(out, " lr={lr}")?;
     write!(
         out,
         " engine={}.{} cells={}",

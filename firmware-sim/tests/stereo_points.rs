@@ -81,6 +81,9 @@ fn each_point_runs_its_own_window_and_band_in_the_default_buffers() {
     };
     assert!(cells("r2b1") < default.report.cells);
     assert!(cells("r1b1") < cells("r1b2"));
+    // Without the right eye, fewer cells again.
+    assert!(cells("r2b2l") < default.report.cells);
+    assert!(cells("r2b1l") < cells("r2b1"));
     // The same point twice gives the same map (the buffers carry nothing
     // over between runs).
     let (name, p) = &POINTS[0];
@@ -101,7 +104,7 @@ fn a_point_line_names_its_window_band_and_figures() {
     let band = p.band.map_or("-".to_string(), |b| b.to_string());
     assert!(
         lines[1].starts_with(&format!(
-            "point stereo {name} 160x120 radius={} band={band} engine=",
+            "point stereo {name} 160x120 radius={} band={band} lr=read engine=",
             p.radius
         )),
         "{out}"

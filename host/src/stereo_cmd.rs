@@ -121,6 +121,10 @@ pub struct ReadoutOptions {
     /// Left-right tolerance, px (default: the model's, 1; negative: off).
     #[arg(long, allow_negative_numbers = true)]
     pub lr: Option<f32>,
+    /// Left-right check against a right map derived from the left map's
+    /// SGM sums, as SGBM does (an experiment, f32 reference, needs --sgm).
+    #[arg(long)]
+    pub lr_from_left: bool,
     /// Coarse-to-fine (an experiment, docs/STEREO.md): halve the pair this
     /// many times, search every candidate on the coarsest level and only
     /// `2·d ± --c2f-radius` on each finer one (default 0: off).

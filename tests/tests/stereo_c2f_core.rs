@@ -31,6 +31,7 @@ fn host_params(p: &C2fParams) -> dem::DemParams {
         min_energy: d.min_energy,
         min_margin: d.min_margin,
         lr_tolerance: d.lr_tolerance,
+        lr_from_left: p.lr_from_left,
         aggregation: dem::Aggregation::Sgm {
             p1: p.p1,
             p2: p.p2,
@@ -124,9 +125,14 @@ proptest! {
     /// reference (99 % within 0.25 px, 99 % of OFF decisions), and finds
     /// the disparity.
     #[test]
-    fn random_dot_pairs_agree(seed: u64, d in 0usize..=15, band in prop::option::of(1u8..=3)) {
+    fn random_dot_pairs_agree(
+        seed: u64,
+        d in 0usize..=15,
+        band in prop::option::of(1u8..=3),
+        lr_from_left: bool,
+    ) {
         let (w, h) = (96, 64);
-        let p = C2fParams { band, ..params(15) };
+        let p = C2fParams { band, lr_from_left, ..params(15) };
         let ts = tables(&p);
         let (l, r) = rds_rgb(w, h, d, seed);
         let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
@@ -199,20 +205,59 @@ fn random_dots_bad1_below_5_percent() {
 
 /// Aloe at 160 px with 32 disparities (needs `cargo xtask fetch-data`):
 /// the bounds, 99 % within 0.25 px and 99 % OFF agreement.
+/// With the right map read out and with it derived from the left sums.
 #[test]
 fn aloe_160_d32_agrees() {
     let Some((l, r, w, h)) = aloe_160_rgb() else {
         return;
     };
-    let p = params(31);
-    let ts = tables(&p);
-    let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
-    let float = run_float(&p, &ts, &l, &r, w, h);
-    let (close, agree, both) = stereo_agreement(&core, &float);
-    println!("aloe 160 c2f: {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
+    for lr_from_left in [false, true] {
+        let p = C2fParams {
+            lr_from_left,
+            ..params(31)
+        };
+        let ts = tables(&p);
+        let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
+        let float = run_float(&p, &ts, &l, &r, w, h);
+        let (close, agree, both) = stereo_agreement(&core, &float);
+        println!("aloe 160 c2f (lr from left {lr_from_left}): {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
+        assert!(both > w * h / 2, "{both}");
+        assert!(close >= 99.0, "{close}");
+        assert!(agree >= 99.0, "{agree}");
+    }
+}
+
+/// The right map derived from the left sums: the right eye's cells are
+/// not evaluated (exactly the left eye's half of the count), and the map
+/// differs from the read-out one's only through the left-right check:
+/// every pixel ON in both has the same disparity.
+#[test]
+fn the_derived_right_map_skips_the_right_eye() {
+    let (w, h) = (96, 64);
+    let (l, r) = rds_rgb(w, h, 6, 11);
+    let read = C2fParams {
+        band: None,
+        ..params(15)
+    };
+    let derived = C2fParams {
+        lr_from_left: true,
+        ..read
+    };
+    let ts = tables(&read);
+    let (a, rep_a) = run_core(&read, &ts, &l, &r, w, h).unwrap();
+    let (b, rep_b) = run_core(&derived, &ts, &l, &r, w, h).unwrap();
+    // Without a band left x and right w − 1 − x see the same shifts.
+    assert_eq!(2 * rep_b.cells, rep_a.cells);
+    let mut both = 0;
+    for (x, y) in a.iter().zip(&b) {
+        if let (Some(x), Some(y)) = (x.get(), y.get()) {
+            assert_eq!(x, y);
+            both += 1;
+        }
+    }
     assert!(both > w * h / 2, "{both}");
-    assert!(close >= 99.0, "{close}");
-    assert!(agree >= 99.0, "{agree}");
+    assert_eq!(rep_a.off_texture, rep_b.off_texture);
+    assert_eq!(rep_a.off_ambiguous, rep_b.off_ambiguous);
 }
 
 /// Flat images have no texture: every pixel OFF, no panic.

@@ -222,6 +222,8 @@ struct Point<'a> {
     name: &'a str,
     radius: &'a str,
     band: &'a str,
+    /// The left-right check's right map: `read` or `derived`.
+    lr: &'a str,
     values: Vec<(&'a str, &'a str)>,
 }
 
@@ -250,6 +252,7 @@ fn points(stdout: &str) -> Vec<Point<'_>> {
                 name,
                 radius: find("radius")?,
                 band: find("band")?,
+                lr: find("lr").unwrap_or("read"),
                 values,
             })
         })
@@ -271,16 +274,18 @@ fn stereo_points(stdout: &str) -> Section {
     let mut body = String::from(
         "The same engine and tables with a smaller window (half width R: 2R + 1 candidates \
          at the finer levels) or band (the cell groups within b px of the window's centre), \
-         everything else as `C2fParams::DEFAULT` (R 2, band 2). Instructions per pixel on the \
+         everything else as `C2fParams::DEFAULT` (R 2, band 2); LR `derived`: the left-right \
+         check's right map from the left map's path sums as in OpenCV SGBM (`lr_from_left`: no \
+         right eye; `--lr-from-left`), `read`: the right eye read out. Instructions per pixel on the \
          M4 from the firmware's `point stereo` lines (`firmware-sim/src/stereo_run.rs`, \
          `POINTS`; same QEMU run as above; the camera is excluded as in the previous \
          section). Accuracy from `cargo run --release -- stereo --engine core --c2f 2 \
-         --c2f-radius R --c2f-band b --p2 4 --width 160 --max-disp 32 --refine 0 --json` on \
+         --c2f-radius R --c2f-band b --p2 4 [--lr-from-left] --width 160 --max-disp 32 --refine 0 --json` on \
          Aloe and on the held-out Motorcycle: bad-2 % over estimated pixels / over all GT \
          pixels. docs/STEREO.md, section Operating points, reads this table.\n\n\
-         | point | R | band | cells / px | votes | SGM | costs + picks | filters | \
+         | point | R | band | LR | cells / px | votes | SGM | costs + picks | filters | \
          **engine** | Aloe est / all | Motorcycle est / all |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|\n",
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let data = data_root();
     let pairs = [
@@ -301,10 +306,11 @@ fn stereo_points(stdout: &str) -> Section {
             .parse::<f64>()
             .map_or_else(|_| "?".into(), |c| format!("{:.1}", c / 19_200.0));
         let mut row = format!(
-            "| {} | {} | {} | {cells} | {} | {} | {} | {} | **{}** |",
+            "| {} | {} | {} | {} | {cells} | {} | {} | {} | {} | **{}** |",
             p.name,
             p.radius,
             p.band,
+            p.lr,
             p.get("cells-votes"),
             p.get("sgm"),
             p.get("costs-picks"),
@@ -314,7 +320,7 @@ fn stereo_points(stdout: &str) -> Section {
         for (l, r, gt) in &pairs {
             row.push_str(&format!(
                 " {} |",
-                point_accuracy([l, r, gt], p.radius, p.band)
+                point_accuracy([l, r, gt], p.radius, p.band, p.lr == "derived")
             ));
         }
         body.push_str(&row);
@@ -329,7 +335,7 @@ fn stereo_points(stdout: &str) -> Section {
 
 /// `est / all` bad-2 % of `--engine core` at a window and band on `files`
 /// (160 px, D 32), or "not yet measured".
-fn point_accuracy(files: [&Path; 3], radius: &str, band: &str) -> String {
+fn point_accuracy(files: [&Path; 3], radius: &str, band: &str, lr_from_left: bool) -> String {
     let [l, r, gt] = files;
     if !gt.is_file() {
         return format!("{NOT_YET} (`cargo xtask fetch-data`)");
@@ -369,6 +375,9 @@ fn point_accuracy(files: [&Path; 3], radius: &str, band: &str) -> String {
     ];
     if band != "-" {
         args.extend_from_slice(&["--c2f-band", band]);
+    }
+    if lr_from_left {
+        args.push("--lr-from-left");
     }
     protogist_json(&args)
         .and_then(|v| {
@@ -1041,13 +1050,18 @@ mod stereo_tests {
     #[test]
     fn point_lines_are_read_field_by_field() {
         let out = "ipp stereo 160x120 1.0\n\
-                   point stereo r1b1 160x120 radius=1 band=1 engine=7355.0 cells=201756 \
+                   point stereo r1b1 160x120 radius=1 band=1 lr=derived engine=7355.0 cells=201756 \
                    levels=3388.6 cells-votes=2478.2\n\
                    point stereo all 160x120 radius=2 band=- engine=9.5 cells=3\n\
                    point stereo broken 160x120 engine=1\n";
         let p = points(out);
         assert_eq!(p.len(), 2, "the line without radius and band is skipped");
         assert_eq!((p[0].name, p[0].radius, p[0].band), ("r1b1", "1", "1"));
+        assert_eq!(
+            (p[0].lr, p[1].lr),
+            ("derived", "read"),
+            "read when not named"
+        );
         assert_eq!(p[0].get("engine"), "7355.0");
         assert_eq!(p[0].get("cells-votes"), "2478.2");
         assert_eq!(p[0].get("sgm"), "?");

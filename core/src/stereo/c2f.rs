@@ -112,6 +112,11 @@ pub struct C2fParams {
     pub p1: f32,
     /// SGM penalty for a larger step (`>= p1`), in mean cost gaps.
     pub p2: f32,
+    /// The left-right check against a right map derived from the left
+    /// map's path sums, as OpenCV's SGBM does ([`Pass::right_from_left`]),
+    /// instead of the right-referenced read-out: the right eye's votes,
+    /// costs and aggregation are not run. Default false.
+    pub lr_from_left: bool,
 }
 
 impl C2fParams {
@@ -132,6 +137,7 @@ impl C2fParams {
         band: Some(2),
         p1: 0.25,
         p2: 4.0,
+        lr_from_left: false,
     };
 
     /// `max_disp` of level `k`: `⌈D / 2^k⌉`.
@@ -921,6 +927,8 @@ impl<'e> Pass<'e> {
             level_len(self.full.0, self.k + 1),
             level_len(self.full.1, self.k + 1),
         );
+        let from_left = self.e.params.lr_from_left;
+        let eyes = if from_left { 1 } else { 2 };
         let mut next = 0;
         let mut cells = 0;
         for y in 0..h {
@@ -961,14 +969,9 @@ impl<'e> Pass<'e> {
             }
             // Cells and votes: each pixel of each eye takes the votes of the
             // shifts in its band (the cell of left x and right x − s).
-            cells += self.votes(
-                table,
-                [&*z_l, &*z_r],
-                [&*lo_l, &*lo_r],
-                [&mut *sl, &mut *sr],
-                [&mut *vo_l, &mut *vo_r],
-                col,
-            );
+            let (z2, lo2) = ([&*z_l, &*z_r], [&*lo_l, &*lo_r]);
+            let (sc2, vo2) = ([&mut *sl, &mut *sr], [&mut *vo_l, &mut *vo_r]);
+            cells += self.votes(table, z2, lo2, sc2, vo2, col, !from_left);
             // Costs, aggregation, decisions.
             probe.enter(Step::Readout);
             let need = |total: i64, voters: u16| -> bool {
@@ -982,6 +985,7 @@ impl<'e> Pass<'e> {
             for (eye, (sc, cost)) in [(&mut *sl, &mut *costs_l), (&mut *sr, &mut *costs_r)]
                 .into_iter()
                 .enumerate()
+                .take(eyes)
             {
                 let (lo, vo) = if eye == 0 {
                     (&*lo_l, &*vo_l)
@@ -1011,19 +1015,25 @@ impl<'e> Pass<'e> {
             }
             probe.enter(Step::Sgm);
             sgm_l.push_row(costs_l, lo_l, sum_l).map_err(sgm_err)?;
-            sgm_r.push_row(costs_r, lo_r, sum_r).map_err(sgm_err)?;
+            if !from_left {
+                sgm_r.push_row(costs_r, lo_r, sum_r).map_err(sgm_err)?;
+            }
             probe.enter(Step::Readout);
             // Right-referenced decisions first: the left-right check reads
             // them.
-            for (x, ((pk, raw), (&lo, s))) in rp
-                .iter_mut()
-                .zip(sr.chunks_exact(stride))
-                .zip(lo_r.iter().zip(sum_r.chunks_exact(n)))
-                .enumerate()
-            {
-                *pk = self
-                    .decision(raw, lo, s, w - 1 - x)
-                    .map_or(-1, |d| d.disparity);
+            if from_left {
+                self.right_from_left(sl, lo_l, sum_l, sum_r, rp);
+            } else {
+                for (x, ((pk, raw), (&lo, s))) in rp
+                    .iter_mut()
+                    .zip(sr.chunks_exact(stride))
+                    .zip(lo_r.iter().zip(sum_r.chunks_exact(n)))
+                    .enumerate()
+                {
+                    *pk = self
+                        .decision(raw, lo, s, w - 1 - x)
+                        .map_or(-1, |d| d.disparity);
+                }
             }
             for (x, ((pk, raw), ((&lo, s), &v))) in lp
                 .iter_mut()
@@ -1051,7 +1061,9 @@ impl<'e> Pass<'e> {
     /// `scores`) from the cells of the shifts [`Pass::shift_range`] of its
     /// window `lo` (the cell of left `x` and right `x − s`), and with a
     /// band the number of groups voting (`voters`); `cells` is scratch for
-    /// one pixel's cells (`w` long). Returns the number of cells evaluated.
+    /// one pixel's cells (`w` long); `right`: the right eye's too (else
+    /// only the left's). Returns the number of cells evaluated.
+    #[allow(clippy::too_many_arguments)]
     fn votes(
         &self,
         table: &DemTable<'_>,
@@ -1060,28 +1072,66 @@ impl<'e> Pass<'e> {
         scores: [&mut [i64]; 2],
         voters: [&mut [u16]; 2],
         cells: &mut [[i32; 3]],
+        right: bool,
     ) -> usize {
         let [lo_l, lo_r] = lo;
         let [sc_l, sc_r] = scores;
         let [vo_l, vo_r] = voters;
         // Windows of the radii 2 and 1, and the coarsest level of 32
         // disparities (9 candidates), as constants: unrolled votes.
-        match self.n {
-            5 => {
-                self.votes_eye::<true, 5>(table, z, lo_l, sc_l, vo_l, cells)
-                    + self.votes_eye::<false, 5>(table, z, lo_r, sc_r, vo_r, cells)
+        let left = match self.n {
+            5 => self.votes_eye::<true, 5>(table, z, lo_l, sc_l, vo_l, cells),
+            3 => self.votes_eye::<true, 3>(table, z, lo_l, sc_l, vo_l, cells),
+            9 => self.votes_eye::<true, 9>(table, z, lo_l, sc_l, vo_l, cells),
+            _ => self.votes_eye::<true, 0>(table, z, lo_l, sc_l, vo_l, cells),
+        };
+        if !right {
+            return left;
+        }
+        left + match self.n {
+            5 => self.votes_eye::<false, 5>(table, z, lo_r, sc_r, vo_r, cells),
+            3 => self.votes_eye::<false, 3>(table, z, lo_r, sc_r, vo_r, cells),
+            9 => self.votes_eye::<false, 9>(table, z, lo_r, sc_r, vo_r, cells),
+            _ => self.votes_eye::<false, 0>(table, z, lo_r, sc_r, vo_r, cells),
+        }
+    }
+
+    /// The right map of the left-right check derived from the left one
+    /// (OpenCV SGBM's `disp2`): right pixel `x − d` takes the candidate `d`
+    /// (`U8F8` bits, integer) of least path sum over the left pixels `x`
+    /// with evidence (`total > 0`) and their valid candidates `d <= x`;
+    /// the first such (by `x`, then `d`) wins a tie; `-1` where no left
+    /// pixel maps. `scores`, `lo`, `sums`: the left row's; `best` is
+    /// scratch (`w` long).
+    fn right_from_left(
+        &self,
+        scores: &[i64],
+        lo: &[u16],
+        sums: &[u32],
+        best: &mut [u32],
+        right: &mut [i32],
+    ) {
+        let n = self.n;
+        right.fill(-1);
+        best.fill(u32::MAX);
+        for (x, (raw, (&lo, s))) in scores
+            .chunks_exact(n + 1)
+            .zip(lo.iter().zip(sums.chunks_exact(n)))
+            .enumerate()
+        {
+            let lo = usize::from(lo);
+            if raw.get(n).copied().unwrap_or(0) <= 0 || lo > x {
+                continue;
             }
-            3 => {
-                self.votes_eye::<true, 3>(table, z, lo_l, sc_l, vo_l, cells)
-                    + self.votes_eye::<false, 3>(table, z, lo_r, sc_r, vo_r, cells)
-            }
-            9 => {
-                self.votes_eye::<true, 9>(table, z, lo_l, sc_l, vo_l, cells)
-                    + self.votes_eye::<false, 9>(table, z, lo_r, sc_r, vo_r, cells)
-            }
-            _ => {
-                self.votes_eye::<true, 0>(table, z, lo_l, sc_l, vo_l, cells)
-                    + self.votes_eye::<false, 0>(table, z, lo_r, sc_r, vo_r, cells)
+            let valid = (x - lo + 1).min(n);
+            for (d, &c) in (lo..).zip(s.iter().take(valid)) {
+                let xr = x - d;
+                if let (Some(b), Some(r)) = (best.get_mut(xr), right.get_mut(xr)) {
+                    if c < *b {
+                        *b = c;
+                        *r = (d as i32) << 8;
+                    }
+                }
             }
         }
     }

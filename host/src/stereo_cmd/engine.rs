@@ -185,6 +185,7 @@ pub fn c2f_params(params: &DemParams, search: Search) -> Result<C2fParams> {
         band: search.band.map(|b| byte("c2f-band", b)).transpose()?,
         p1,
         p2,
+        lr_from_left: params.lr_from_left,
     })
 }
 

@@ -262,6 +262,7 @@ pub fn params_for(opts: &StereoOptions, width: usize) -> Result<DemParams> {
     if let Some(t) = s.lr {
         params.lr_tolerance = t;
     }
+    params.lr_from_left = opts.readout.lr_from_left;
     if let Some(c) = s.colour {
         params.colour = c;
     }
@@ -293,6 +294,7 @@ pub fn params_for(opts: &StereoOptions, width: usize) -> Result<DemParams> {
             ("p2", s.p2.is_some()),
             ("paths", s.paths.is_some()),
             ("p2-ref-width", s.p2_ref_width.is_some()),
+            ("lr-from-left", opts.readout.lr_from_left),
         ];
         if let Some((name, _)) = sgm_only.into_iter().find(|&(_, given)| given) {
             return Err(HostError::InvalidArgument {
@@ -388,7 +390,13 @@ mod tests {
 
     #[test]
     fn sgm_options_without_sgm_are_typed_errors() {
-        for extra in ["--p1 1", "--p2 4", "--paths 8", "--p2-ref-width 160"] {
+        for extra in [
+            "--p1 1",
+            "--p2 4",
+            "--paths 8",
+            "--p2-ref-width 160",
+            "--lr-from-left",
+        ] {
             let e = params_for(&parse(extra), 160).unwrap_err();
             assert!(
                 matches!(e, HostError::InvalidArgument { .. }),

@@ -62,6 +62,10 @@ pub struct DemParams {
     /// Left-right check: OFF when `|d_L(x) − d_R(x − d_L)|` exceeds this,
     /// px; negative disables the check. Default 1.
     pub lr_tolerance: f32,
+    /// Left-right check against the right map derived from the left map's
+    /// SGM sums (SGBM's), not the right-referenced read-out (an experiment;
+    /// needs SGM). Default false.
+    pub lr_from_left: bool,
     /// Border refinement: pixels within this many px of a colour edge (and
     /// OFF pixels) take the disparity of the colour-nearest trusted
     /// neighbours (see `refine`); 0 disables it. Default 0.
@@ -104,6 +108,7 @@ impl Default for DemParams {
             min_energy: 0.1,
             min_margin: 0.0,
             lr_tolerance: 1.0,
+            lr_from_left: false,
             refine_radius: 0,
             refine_window: 8,
             refine_k: 5,
@@ -394,6 +399,10 @@ pub fn stereo_planes_in(
         Aggregation::Sgm { paths, .. } => sgm::directions(paths).map_or(1, <[_]>::len) as f32,
         Aggregation::Box => 1.0,
     };
+    // With `lr_from_left`, the right-referenced map of the check comes from
+    // the left map's SGM sums (SGBM's `disp2`): for each right pixel, the
+    // candidate of least sum over the left pixels that map onto it.
+    let derived = std::cell::RefCell::new(None::<Vec<Option<f32>>>);
     let picks = |s: &readout::Scores,
                  top: &dyn Fn(usize) -> usize,
                  win: &[Option<(usize, usize)>],
@@ -423,6 +432,22 @@ pub fn stereo_planes_in(
                     |p: usize| s.total[p] >= params.min_energy * 4.0 * groups_at(eye, p) * count[p];
                 let cost = sgm::costs_in(s, &decoder.bias, evidence, top, window);
                 let sum = sgm::aggregate(&cost, w, h, n, paths, p1, p2);
+                if eye == 0 && params.lr_from_left {
+                    let mut best = vec![None::<(f32, usize)>; w * h];
+                    for p in 0..w * h {
+                        let Some((lo, hi)) = range(p).filter(|_| s.total[p] > 0.0) else {
+                            continue;
+                        };
+                        for d in lo..=hi.min(p % w) {
+                            let (q, c) = (p - d, sum[p * n + d]);
+                            if best[q].is_none_or(|(b, _)| c < b) {
+                                best[q] = Some((c, d));
+                            }
+                        }
+                    }
+                    *derived.borrow_mut() =
+                        Some(best.iter().map(|o| o.map(|(_, d)| d as f32)).collect());
+                }
                 (0..w * h)
                     .map(|p| {
                         let (lo, hi) = range(p).filter(|_| s.total[p] > 0.0)?;
@@ -442,7 +467,9 @@ pub fn stereo_planes_in(
         picks(&sl, &|p| p % w, wl, 0),
         picks(&sr, &|p| w - 1 - p % w, wr, 1),
     );
-    let right_raw: Vec<Option<f32>> = right_picks.iter().map(|k| k.map(|k| k.disparity)).collect();
+    let right_raw: Vec<Option<f32>> = derived
+        .into_inner()
+        .unwrap_or_else(|| right_picks.iter().map(|k| k.map(|k| k.disparity)).collect());
     let mut out = DisparityMapsF {
         width: w,
         height: h,
