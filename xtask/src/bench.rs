@@ -606,8 +606,9 @@ fn dem_aloe() -> Section {
          filter (the second round's choice). The `--engine core` rows run core's \
          fixed-point coarse-to-fine engine (`protogist::stereo::c2f`, the firmware's stage: \
          grey, one level, no pooling, 5 SGM paths, windows ±2, band 2, P2 4 chosen on Motorcycle), ms its run alone, \
-         the best of 5 runs, single thread; the `--engine reference` rows beside them are the same settings in \
-         the f32 reference.\n\n{STEREO_TABLE_HEAD}",
+         the best of 5 runs, single thread (the row with `--c2f-band 1 --lr-from-left` is the engine's \
+         cheapest measured point, r2b1l in the operating points above); the `--engine reference` rows \
+         beside them are the same settings in the f32 reference.\n\n{STEREO_TABLE_HEAD}",
     );
     // (width, D, extra options); every row runs with `--refine 0` unless it
     // names another radius.
@@ -664,6 +665,19 @@ fn dem_aloe() -> Section {
         "--p2",
         "4",
     ];
+    // The cheapest measured point of the same engine: band 1, the right
+    // map derived from the left sums (no right eye).
+    const ENGINE_CORE_FAST: [&str; 9] = [
+        "--engine",
+        "core",
+        "--c2f",
+        "2",
+        "--c2f-band",
+        "1",
+        "--p2",
+        "4",
+        "--lr-from-left",
+    ];
     const ENGINE_REF: [&str; 15] = [
         "--engine",
         "reference",
@@ -681,7 +695,7 @@ fn dem_aloe() -> Section {
         "--p2",
         "4",
     ];
-    let rows: [(&str, &str, &[&str]); 24] = [
+    let rows: [(&str, &str, &[&str]); 26] = [
         ("160", "32", &[]),
         ("160", "32", &["--refine", "1"]),
         ("160", "32", &["--complete"]),
@@ -693,6 +707,7 @@ fn dem_aloe() -> Section {
         ("160", "32", held_out_no_speckle),
         ("160", "32", held_out),
         ("160", "32", &ENGINE_CORE),
+        ("160", "32", &ENGINE_CORE_FAST),
         ("160", "32", &ENGINE_REF),
         ("320", "64", &[]),
         ("320", "64", &["--refine", "1"]),
@@ -705,6 +720,7 @@ fn dem_aloe() -> Section {
         ("320", "64", held_out_no_speckle),
         ("320", "64", held_out),
         ("320", "64", &ENGINE_CORE),
+        ("320", "64", &ENGINE_CORE_FAST),
         ("320", "64", &ENGINE_REF),
     ];
     for (w, d, extra) in rows {
