@@ -82,17 +82,28 @@ def grid_speckle():
     return s
 
 
+def grid_engine_lr():
+    """Fifth grid: the engine's cheapest point (band 1, the right map derived
+    from the left sums) at several ambiguity margins, and the default."""
+    base = "--engine core --c2f 2 --p2 4"
+    s = [f"{base} --c2f-band 2"]
+    for m in ("0", "0.25", "0.5", "0.75", "1"):
+        s.append(f"{base} --c2f-band 1 --lr-from-left --min-margin {m}")
+        s.append(f"{base} --c2f-band 2 --lr-from-left --min-margin {m}")
+    return s
+
+
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--pair", choices=PAIRS, default="motorcycle")
     p.add_argument("--data", required=True, help="data root (holds aloe/ and motorcycle/)")
     p.add_argument("--bin", default="target/release/protogist")
-    p.add_argument("--grid", choices=("main", "p2-width", "engine", "speckle"), default="main")
+    p.add_argument("--grid", choices=("main", "p2-width", "engine", "speckle", "engine-lr"), default="main")
     p.add_argument("--only", action="append", help="run only these option strings")
     a = p.parse_args()
     left, right, gt = (f"{a.data}/{f}" for f in PAIRS[a.pair])
     grids = {"main": grid, "p2-width": grid_p2_width, "engine": grid_engine,
-             "speckle": grid_speckle}
+             "speckle": grid_speckle, "engine-lr": grid_engine_lr}
     settings = a.only or grids[a.grid]()
     out = tempfile.mkdtemp(prefix="stereo-grid-")
     for opts in settings:
