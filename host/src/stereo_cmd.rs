@@ -122,7 +122,8 @@ pub struct ReadoutOptions {
     #[arg(long, allow_negative_numbers = true)]
     pub lr: Option<f32>,
     /// Left-right check against a right map derived from the left map's
-    /// SGM sums, as SGBM does (an experiment, f32 reference, needs --sgm).
+    /// SGM sums, as SGBM does, instead of the right-referenced read-out
+    /// (both engines; needs --sgm; the engine then skips the right eye).
     #[arg(long)]
     pub lr_from_left: bool,
     /// Coarse-to-fine (an experiment, docs/STEREO.md): halve the pair this
