@@ -144,6 +144,21 @@ fn bad_sgm_parameters_are_typed_errors() {
             "{aggregation:?}"
         );
     }
+    // The right map derived from the left path sums needs the sums.
+    let derived = DemParams {
+        lr_from_left: true,
+        ..DemParams::default()
+    };
+    assert!(matches!(derived.check(), Err(StereoError::BadParams(_))));
+    let with_sgm = DemParams {
+        aggregation: Sgm {
+            p1: 0.25,
+            p2: 4.0,
+            paths: 5,
+        },
+        ..derived
+    };
+    assert!(with_sgm.check().is_ok());
 }
 
 /// bad-2 (estimated, all GT) of `protogist stereo` on Aloe at `width` px

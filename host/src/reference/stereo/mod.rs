@@ -169,6 +169,8 @@ impl DemParams {
                 sgm::directions(paths).is_some(),
                 "SGM paths must be 3, 4, 5 or 8",
             )?;
+        } else {
+            bad(!self.lr_from_left, "lr_from_left needs SGM aggregation")?;
         }
         bad(
             self.train_width >= 1 && self.train_height >= 1,
