@@ -38,11 +38,11 @@ pub const PARAMS: C2fParams = C2fParams::DEFAULT;
 /// measure what the cells cost (docs/STEREO.md, "Operating points"): the
 /// window half width `R` and the band `b` change, and in the points named
 /// `…l` the left-right check's right map comes from the left sums
-/// (`lr_from_left`, no right eye); nothing else (the same tables, levels
-/// and penalties). Each needs no more scratch than
+/// (`lr_from_left`, no right eye), and `…3` runs 3 SGM paths instead of 5;
+/// nothing else (the same tables, levels and penalties). Each needs no more scratch than
 /// [`PARAMS`] (`R <= 2`), which `operating_points_fit` checks at compile
 /// time.
-pub const POINTS: [(&str, C2fParams); 5] = [
+pub const POINTS: [(&str, C2fParams); 6] = [
     (
         "r2b1",
         C2fParams {
@@ -77,6 +77,15 @@ pub const POINTS: [(&str, C2fParams); 5] = [
         C2fParams {
             band: Some(1),
             lr_from_left: true,
+            ..PARAMS
+        },
+    ),
+    (
+        "r2b1l3",
+        C2fParams {
+            band: Some(1),
+            lr_from_left: true,
+            paths: 3,
             ..PARAMS
         },
     ),
@@ -322,10 +331,10 @@ pub fn write_point(
     write_point_line(out, name, params, r, to_instructions)
 }
 
-/// `point stereo NAME WxH radius=R band=B lr=L engine=E cells=C STEP=I
-/// ...`: the window half width, the band (`-`: none) and the right map of
-/// the left-right check (`read` or `derived` from the left sums), then
-/// instructions per
+/// `point stereo NAME WxH radius=R band=B lr=L paths=P engine=E cells=C
+/// STEP=I ...`: the window half width, the band (`-`: none), the right map
+/// of the left-right check (`read` or `derived` from the left sums) and the
+/// SGM paths, then instructions per
 /// pixel with one decimal (the engine is the total minus the camera, as
 /// `ipp stereo-engine`), the cells evaluated and the steps.
 pub fn write_point_line(
@@ -352,7 +361,7 @@ pub fn write_point_line(
     } else {
         "read"
     };
-    write!(out, " lr={lr}")?;
+    write!(out, " lr={lr} paths={}", params.paths)?;
     write!(
         out,
         " engine={}.{} cells={}",

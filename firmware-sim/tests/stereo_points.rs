@@ -84,6 +84,15 @@ fn each_point_runs_its_own_window_and_band_in_the_default_buffers() {
     // Without the right eye, fewer cells again.
     assert!(cells("r2b2l") < default.report.cells);
     assert!(cells("r2b1l") < cells("r2b1"));
+    // 3 paths: another map (and through the coarse windows another cell
+    // count, still without the right eye).
+    assert!(cells("r2b1l3") < cells("r2b1"));
+    let sum = |n: &str| {
+        runs.iter()
+            .find(|(name, _)| *name == n)
+            .map(|(_, r)| r.checksum)
+    };
+    assert_ne!(sum("r2b1l3"), sum("r2b1l"));
     // The same point twice gives the same map (the buffers carry nothing
     // over between runs).
     let (name, p) = &POINTS[0];
@@ -104,7 +113,7 @@ fn a_point_line_names_its_window_band_and_figures() {
     let band = p.band.map_or("-".to_string(), |b| b.to_string());
     assert!(
         lines[1].starts_with(&format!(
-            "point stereo {name} 160x120 radius={} band={band} lr=read engine=",
+            "point stereo {name} 160x120 radius={} band={band} lr=read paths=5 engine=",
             p.radius
         )),
         "{out}"

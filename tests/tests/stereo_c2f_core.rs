@@ -35,7 +35,7 @@ fn host_params(p: &C2fParams) -> dem::DemParams {
         aggregation: dem::Aggregation::Sgm {
             p1: p.p1,
             p2: p.p2,
-            paths: 5,
+            paths: p.paths,
         },
         ..dem::DemParams::default()
     }
@@ -130,9 +130,10 @@ proptest! {
         d in 0usize..=15,
         band in prop::option::of(1u8..=3),
         lr_from_left: bool,
+        paths in prop_oneof![Just(3u8), Just(5u8)],
     ) {
         let (w, h) = (96, 64);
-        let p = C2fParams { band, lr_from_left, ..params(15) };
+        let p = C2fParams { band, lr_from_left, paths, ..params(15) };
         let ts = tables(&p);
         let (l, r) = rds_rgb(w, h, d, seed);
         let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
@@ -211,16 +212,17 @@ fn aloe_160_d32_agrees() {
     let Some((l, r, w, h)) = aloe_160_rgb() else {
         return;
     };
-    for lr_from_left in [false, true] {
+    for (lr_from_left, paths) in [(false, 5), (true, 5), (true, 3)] {
         let p = C2fParams {
             lr_from_left,
+            paths,
             ..params(31)
         };
         let ts = tables(&p);
         let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
         let float = run_float(&p, &ts, &l, &r, w, h);
         let (close, agree, both) = stereo_agreement(&core, &float);
-        println!("aloe 160 c2f (lr from left {lr_from_left}): {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
+        println!("aloe 160 c2f (lr from left {lr_from_left}, {paths} paths): {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
         assert!(both > w * h / 2, "{both}");
         assert!(close >= 99.0, "{close}");
         assert!(agree >= 99.0, "{agree}");
@@ -433,6 +435,8 @@ fn bad_input_is_a_typed_error() {
             ..p
         },
         C2fParams { p2: f32::NAN, ..p },
+        C2fParams { paths: 4, ..p },
+        C2fParams { paths: 8, ..p },
     ] {
         assert!(
             matches!(C2f::new(&bad), Err(StereoError::BadParams(_))),

@@ -16,8 +16,23 @@ fn core_sums(
     (width, height, n): (usize, usize, usize),
     (p1, p2): (u16, u16),
 ) -> Vec<u32> {
+    core_sums_paths(costs, lo, (width, height, n), (p1, p2), 5)
+}
+
+/// [`core_sums`] over 5 paths, or 3 ([`Sgm::without_diagonals`]).
+fn core_sums_paths(
+    costs: &[u16],
+    lo: &[u16],
+    (width, height, n): (usize, usize, usize),
+    (p1, p2): (u16, u16),
+    paths: u32,
+) -> Vec<u32> {
     let mut scratch = vec![0u16; scratch_len(width, n)];
     let mut sgm = Sgm::new(width, n, p1, p2, &mut scratch).unwrap();
+    if paths == 3 {
+        sgm = sgm.without_diagonals();
+    }
+    assert_eq!(sgm.paths(), paths);
     let mut out = vec![0u32; costs.len()];
     for ((c, l), o) in costs
         .chunks_exact(width * n)
@@ -39,6 +54,7 @@ fn reference_sums(
     (width, height, n): (usize, usize, usize),
     max: usize,
     (p1, p2): (u16, u16),
+    paths: u8,
 ) -> Vec<f32> {
     let d = max + 1;
     let mut full = vec![EXCLUDED; width * height * d];
@@ -48,14 +64,15 @@ fn reference_sums(
             *v = f32::from(c);
         }
     }
-    aggregate(&full, width, height, d, 5, f32::from(p1), f32::from(p2))
+    aggregate(&full, width, height, d, paths, f32::from(p1), f32::from(p2))
 }
 
 /// A random volume: `(width, height, n, max, lo, costs, p1, p2)`.
 #[allow(clippy::type_complexity)]
 fn volume() -> impl Strategy<Value = (usize, usize, usize, usize, Vec<u16>, Vec<u16>, u16, u16)> {
-    (1usize..=12, 1usize..=8, 1usize..=5, 4usize..=12, 0u16..=8)
+    (1usize..=12, 1usize..=8, 1usize..=9, 4usize..=12, 0u16..=8)
         .prop_flat_map(|(w, h, n, max, p1)| {
+            let max = max.max(n - 1);
             let top = (max + 1 - n) as u16;
             (
                 Just((w, h, n, max)),
@@ -71,13 +88,16 @@ fn volume() -> impl Strategy<Value = (usize, usize, usize, usize, Vec<u16>, Vec<
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
 
+    /// 5 paths, and 3 without the diagonals (`directions(3)`), for
+    /// windows of 1 to 9 (the fixed-size sweeps and the general one).
     #[test]
     fn windowed_sums_equal_the_reference(
-        (w, h, n, max, lo, costs, p1, p2) in volume()
+        (w, h, n, max, lo, costs, p1, p2) in volume(),
+        paths in prop_oneof![Just(3u8), Just(5u8)],
     ) {
         let dims = (w, h, n);
-        let got = core_sums(&costs, &lo, dims, (p1, p2));
-        let want = reference_sums(&costs, &lo, dims, max, (p1, p2));
+        let got = core_sums_paths(&costs, &lo, dims, (p1, p2), u32::from(paths));
+        let want = reference_sums(&costs, &lo, dims, max, (p1, p2), paths);
         let d = max + 1;
         for (p, (g, &l)) in got.chunks_exact(n).zip(&lo).enumerate() {
             let l = usize::from(l);

@@ -224,6 +224,8 @@ struct Point<'a> {
     band: &'a str,
     /// The left-right check's right map: `read` or `derived`.
     lr: &'a str,
+    /// SGM paths.
+    paths: &'a str,
     values: Vec<(&'a str, &'a str)>,
 }
 
@@ -253,6 +255,7 @@ fn points(stdout: &str) -> Vec<Point<'_>> {
                 radius: find("radius")?,
                 band: find("band")?,
                 lr: find("lr").unwrap_or("read"),
+                paths: find("paths").unwrap_or("5"),
                 values,
             })
         })
@@ -276,16 +279,17 @@ fn stereo_points(stdout: &str) -> Section {
          at the finer levels) or band (the cell groups within b px of the window's centre), \
          everything else as `C2fParams::DEFAULT` (R 2, band 2); LR `derived`: the left-right \
          check's right map from the left map's path sums as in OpenCV SGBM (`lr_from_left`: no \
-         right eye; `--lr-from-left`), `read`: the right eye read out. Instructions per pixel on the \
+         right eye; `--lr-from-left`), `read`: the right eye read out; paths: the SGM paths (3: without \
+         the two diagonals, `--paths 3`). Instructions per pixel on the \
          M4 from the firmware's `point stereo` lines (`firmware-sim/src/stereo_run.rs`, \
          `POINTS`; same QEMU run as above; the camera is excluded as in the previous \
          section). Accuracy from `cargo run --release -- stereo --engine core --c2f 2 \
-         --c2f-radius R --c2f-band b --p2 4 [--lr-from-left] --width 160 --max-disp 32 --refine 0 --json` on \
+         --c2f-radius R --c2f-band b --p2 4 [--lr-from-left] [--paths 3] --width 160 --max-disp 32 --refine 0 --json` on \
          Aloe and on the held-out Motorcycle: bad-2 % over estimated pixels / over all GT \
          pixels. docs/STEREO.md, section Operating points, reads this table.\n\n\
-         | point | R | band | LR | cells / px | votes | SGM | costs + picks | filters | \
+         | point | R | band | LR | paths | cells / px | votes | SGM | costs + picks | filters | \
          **engine** | Aloe est / all | Motorcycle est / all |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let data = data_root();
     let pairs = [
@@ -306,11 +310,12 @@ fn stereo_points(stdout: &str) -> Section {
             .parse::<f64>()
             .map_or_else(|_| "?".into(), |c| format!("{:.1}", c / 19_200.0));
         let mut row = format!(
-            "| {} | {} | {} | {} | {cells} | {} | {} | {} | {} | **{}** |",
+            "| {} | {} | {} | {} | {} | {cells} | {} | {} | {} | {} | **{}** |",
             p.name,
             p.radius,
             p.band,
             p.lr,
+            p.paths,
             p.get("cells-votes"),
             p.get("sgm"),
             p.get("costs-picks"),
@@ -318,10 +323,7 @@ fn stereo_points(stdout: &str) -> Section {
             p.get("engine"),
         );
         for (l, r, gt) in &pairs {
-            row.push_str(&format!(
-                " {} |",
-                point_accuracy([l, r, gt], p.radius, p.band, p.lr == "derived")
-            ));
+            row.push_str(&format!(" {} |", point_accuracy([l, r, gt], p)));
         }
         body.push_str(&row);
         body.push('\n');
@@ -335,7 +337,8 @@ fn stereo_points(stdout: &str) -> Section {
 
 /// `est / all` bad-2 % of `--engine core` at a window and band on `files`
 /// (160 px, D 32), or "not yet measured".
-fn point_accuracy(files: [&Path; 3], radius: &str, band: &str, lr_from_left: bool) -> String {
+fn point_accuracy(files: [&Path; 3], p: &Point<'_>) -> String {
+    let (radius, band) = (p.radius, p.band);
     let [l, r, gt] = files;
     if !gt.is_file() {
         return format!("{NOT_YET} (`cargo xtask fetch-data`)");
@@ -376,8 +379,11 @@ fn point_accuracy(files: [&Path; 3], radius: &str, band: &str, lr_from_left: boo
     if band != "-" {
         args.extend_from_slice(&["--c2f-band", band]);
     }
-    if lr_from_left {
+    if p.lr == "derived" {
         args.push("--lr-from-left");
+    }
+    if p.paths != "5" {
+        args.extend_from_slice(&["--paths", p.paths]);
     }
     protogist_json(&args)
         .and_then(|v| {
@@ -1066,7 +1072,7 @@ mod stereo_tests {
     #[test]
     fn point_lines_are_read_field_by_field() {
         let out = "ipp stereo 160x120 1.0\n\
-                   point stereo r1b1 160x120 radius=1 band=1 lr=derived engine=7355.0 cells=201756 \
+                   point stereo r1b1 160x120 radius=1 band=1 lr=derived paths=3 engine=7355.0 cells=201756 \
                    levels=3388.6 cells-votes=2478.2\n\
                    point stereo all 160x120 radius=2 band=- engine=9.5 cells=3\n\
                    point stereo broken 160x120 engine=1\n";
@@ -1078,6 +1084,7 @@ mod stereo_tests {
             ("derived", "read"),
             "read when not named"
         );
+        assert_eq!((p[0].paths, p[1].paths), ("3", "5"), "5 when not named");
         assert_eq!(p[0].get("engine"), "7355.0");
         assert_eq!(p[0].get("cells-votes"), "2478.2");
         assert_eq!(p[0].get("sgm"), "?");

@@ -2,8 +2,10 @@
 //! per pixel, with row-streamed semi-global aggregation, mirroring the f32
 //! reference `protogist_host::reference::stereo::c2f::stereo_c2f` with one
 //! pyramid level per c2f level (`levels = 1`), no pooling (`pool_radius =
-//! 0`) and 5 SGM paths (docs/STEREO.md, "The coarse-to-fine engine in
-//! core").
+//! 0`) and 5 SGM paths, or 3 ([`C2fParams::paths`]) (docs/STEREO.md, "The
+//! coarse-to-fine engine in core"). With [`C2fParams::lr_from_left`] the
+//! left-right check's right map comes from the left path sums and the
+//! right eye is not run.
 //!
 //! ```text
 //! level K (w/2^K) ── full search 0..=⌈D/2^K⌉, every cell group ──► lo maps
@@ -117,6 +119,9 @@ pub struct C2fParams {
     /// instead of the right-referenced read-out: the right eye's votes,
     /// costs and aggregation are not run. Default false.
     pub lr_from_left: bool,
+    /// SGM paths: [`PATHS`] (5: left→right, right→left, top→bottom and the
+    /// two diagonals from above) or 3 (without the diagonals). Default 5.
+    pub paths: u8,
 }
 
 impl C2fParams {
@@ -138,6 +143,7 @@ impl C2fParams {
         p1: 0.25,
         p2: 4.0,
         lr_from_left: false,
+        paths: PATHS as u8,
     };
 
     /// `max_disp` of level `k`: `⌈D / 2^k⌉`.
@@ -372,6 +378,10 @@ impl C2f {
             params.p1 >= 0.0 && params.p2 >= params.p1 && params.p2 <= 128.0,
             "SGM penalties must satisfy 0 <= p1 <= p2 <= 128",
         )?;
+        bad(
+            params.paths == 3 || u32::from(params.paths) == PATHS,
+            "SGM paths must be 3 or 5",
+        )?;
         let dem = Dem::new(&params.dem)?;
         let q8 = |v: f32| libm::roundf(v * 256.0) as u16;
         let (p1_q8, p2_q8) = (q8(params.p1), q8(params.p2));
@@ -384,8 +394,11 @@ impl C2f {
             256 * n_max + usize::from(p2_q8) <= usize::from(u16::MAX),
             "too many candidates per pixel for the SGM costs",
         )?;
-        // margin_sums / (256·5) < min_margin  ⇔  margin_sums·2^16 < q16·1280.
-        let min_margin_sums = dem.min_margin_q16.saturating_mul(256 * i64::from(PATHS));
+        // margin_sums / (256·paths) < min_margin  ⇔  margin_sums·2^16 <
+        // q16·256·paths.
+        let min_margin_sums = dem
+            .min_margin_q16
+            .saturating_mul(256 * i64::from(params.paths));
         Ok(Self {
             params: *params,
             dem,
@@ -893,6 +906,7 @@ impl<'e> Pass<'e> {
         let voters = [take(&mut cs, w, "costs")?, take(&mut cs, w, "costs")?];
         let state = sgm::scratch_len(w, n);
         let sgm_err = |_| StereoError::BadParams("SGM state");
+
         let sgms = [
             Sgm::new(
                 w,
@@ -921,7 +935,11 @@ impl<'e> Pass<'e> {
         let [sum_l, sum_r] = sums;
         let [ring_l, ring_r] = rings;
         let [z_l, z_r] = zs;
-        let [mut sgm_l, mut sgm_r] = sgms;
+        let [mut sgm_l, mut sgm_r] = if u32::from(self.e.params.paths) == PATHS {
+            sgms
+        } else {
+            sgms.map(Sgm::without_diagonals)
+        };
         let groups = (carriers * self.shifts) as u64;
         let (wc, hc) = (
             level_len(self.full.0, self.k + 1),

@@ -12,7 +12,8 @@
 //!
 //! **Paths.** The 5 a row-streaming reader runs in one top-to-bottom pass
 //! (`sgm::directions(5)` of the reference): left→right, right→left,
-//! top→bottom and the two diagonals from above. Along each,
+//! top→bottom and the two diagonals from above ([`Sgm::without_diagonals`]
+//! runs the first 3 only, `directions(3)` of the reference). Along each,
 //! `L(p, d) = C(p, d) + min(L(p−r, d), L(p−r, d ± 1) + P1, min L(p−r) + P2)
 //! − min L(p−r)`; a pixel with no predecessor along a path (image border,
 //! first row) starts with `L = C`.
@@ -118,13 +119,16 @@ fn take<'a>(s: &mut &'a mut [u16], len: usize) -> Option<&'a mut [u16]> {
     Some(head)
 }
 
-/// Row-streamed windowed SGM over 5 paths (module docs).
+/// Row-streamed windowed SGM over 5 paths, or 3 without the diagonals
+/// (module docs).
 #[derive(Debug)]
 pub struct Sgm<'a> {
     width: usize,
     n: usize,
     p1: u16,
     p2: u16,
+    /// Whether the two diagonal paths run (5 paths; else 3).
+    diagonals: bool,
     rows: usize,
     /// Top→bottom `L` of the previous row, `[x][i]`.
     up: &'a mut [u16],
@@ -187,6 +191,7 @@ impl<'a> Sgm<'a> {
             n,
             p1,
             p2,
+            diagonals: true,
             rows: 0,
             up,
             from_left,
@@ -195,6 +200,24 @@ impl<'a> Sgm<'a> {
             h,
             tmp,
         })
+    }
+
+    /// The same aggregation over the 3 paths left→right, right→left and
+    /// top→bottom only (the reference's `directions(3)`): the diagonals'
+    /// state in the scratch goes unused.
+    #[must_use]
+    pub fn without_diagonals(mut self) -> Self {
+        self.diagonals = false;
+        self
+    }
+
+    /// The number of paths summed: 5, or 3 [`Sgm::without_diagonals`].
+    pub const fn paths(&self) -> u32 {
+        if self.diagonals {
+            5
+        } else {
+            3
+        }
     }
 
     /// The largest cost [`Sgm::push_row`] accepts, `65535 − P2`.
@@ -241,6 +264,7 @@ impl<'a> Sgm<'a> {
         }
         let p1 = u32::from(self.p1);
         let first = self.rows == 0;
+        let diagonals = self.diagonals;
         let Self {
             up,
             from_left,
@@ -256,15 +280,19 @@ impl<'a> Sgm<'a> {
             prev_lo,
             pen: (p1, p2),
         };
+        let state: [&mut [u16]; 3] = [up, from_left, from_right];
         macro_rules! fast {
-            ($($k:literal)*) => {
-                match n {
-                    $($k => rows.fast::<$k>(first, [up, from_left, from_right], out),)*
-                    _ => rows.generic(first, [up, from_left, from_right], h, tmp, out),
+            ($($k:literal)*; $($j:literal)*) => {
+                match (n, diagonals) {
+                    $(($k, true) => rows.fast::<$k, true>(first, state, out),)*
+                    $(($j, false) => rows.fast::<$j, false>(first, state, out),)*
+                    _ => rows.generic(first, state, h, tmp, out, diagonals),
                 }
             };
         }
-        fast!(1 2 3 4 5 6 7 8 9);
+        // Without the diagonals, the windows the engine uses (5, 3 and the
+        // coarsest level's 9) get the fixed-size path.
+        fast!(1 2 3 4 5 6 7 8 9; 3 5 9);
 
         for (p, &l) in prev_lo.iter_mut().zip(lo) {
             *p = l;
@@ -288,8 +316,15 @@ impl Rows<'_> {
     /// each pixel's `L − min L`, in `u16` (`L <= 65535`, checked by the
     /// caller). A missing predecessor (first row, image border) is read as
     /// zeros with zero pads, which gives `L = C` (every bracket is 0).
+    /// `DIAG`: the two diagonal paths run too (else their state is left
+    /// alone).
     #[inline(always)]
-    fn fast<const N: usize>(self, first: bool, state: [&mut [u16]; 3], out: &mut [u32]) {
+    fn fast<const N: usize, const DIAG: bool>(
+        self,
+        first: bool,
+        state: [&mut [u16]; 3],
+        out: &mut [u32],
+    ) {
         let Self {
             costs,
             lo,
@@ -333,11 +368,30 @@ impl Rows<'_> {
             hs = settle(path(c, &hs, (l, hlo), hpad, pen), &mut acc);
             (hlo, hpad) = (l, INF);
             *v = settle(path(c, v, (l, vlo), pad, pen), &mut acc);
-            let from = next.as_deref().and_then(arr).zip(right_lo.next());
-            let (p, plo, pd) = from.map_or((&zero, l, 0), |(p, &plo)| (p, plo, pad));
-            *s = settle(path(c, p, (l, plo), pd, pen), &mut acc);
+            if DIAG {
+                let from = next.as_deref().and_then(arr).zip(right_lo.next());
+                let (p, plo, pd) = from.map_or((&zero, l, 0), |(p, &plo)| (p, plo, pad));
+                *s = settle(path(c, p, (l, plo), pd, pen), &mut acc);
+            }
             *o = acc;
             slot = next;
+        }
+        if !DIAG {
+            // Right→left alone: the backward sweep adds one path.
+            let (mut hs, mut hlo, mut hpad) = ([0u16; N], lo.last().copied().unwrap_or(0), 0);
+            for ((c, &l), o) in costs
+                .chunks_exact(N)
+                .zip(lo)
+                .zip(out.chunks_exact_mut(N))
+                .rev()
+            {
+                let (Some(c), Ok(o)) = (arr(c), <&mut [u32; N]>::try_from(o)) else {
+                    return;
+                };
+                hs = settle(path(c, &hs, (l, hlo), hpad, pen), o);
+                (hlo, hpad) = (l, INF);
+            }
+            return;
         }
 
         // Backward sweep: right→left, and the diagonal from the upper left,
@@ -371,7 +425,8 @@ impl Rows<'_> {
         }
     }
 
-    /// The rows of any `n` (plain [`step`]s). State: each pixel's `L`.
+    /// The rows of any `n` (plain [`step`]s), the diagonals only with
+    /// `diagonals`. State: each pixel's `L`.
     fn generic(
         self,
         first: bool,
@@ -379,6 +434,7 @@ impl Rows<'_> {
         h: &mut [u16],
         tmp: &mut [u16],
         out: &mut [u32],
+        diagonals: bool,
     ) {
         let Self {
             costs,
@@ -406,9 +462,11 @@ impl Rows<'_> {
             step_self(c, l, v, above, pen, tmp, o, false);
             // From (x + 1, y − 1).
             let Some(slot) = diag.next() else { break };
-            let right = prev_lo.get(x + 1).copied().filter(|_| !first);
-            let prev = right.zip(diag.peek()).map(|(a, s)| (&**s, a));
-            step(c, l, prev, pen, slot, o, false);
+            if diagonals {
+                let right = prev_lo.get(x + 1).copied().filter(|_| !first);
+                let prev = right.zip(diag.peek()).map(|(a, s)| (&**s, a));
+                step(c, l, prev, pen, slot, o, false);
+            }
         }
 
         // Backward sweep: right→left, and the diagonal from the upper left,
@@ -425,6 +483,9 @@ impl Rows<'_> {
             step_self(c, l, h, before, pen, tmp, o, false);
             before = Some(l);
             let Some(slot) = diag.next() else { break };
+            if !diagonals {
+                continue;
+            }
             let left = x
                 .checked_sub(1)
                 .and_then(|xl| prev_lo.get(xl))

@@ -3,7 +3,7 @@
 //! reference.
 //!
 //! The engine runs one configuration of the reference: `--levels 1 --pool 0
-//! --sgm --paths 5 --c2f K` (K 1..=3), grey, no border refinement, no
+//! --sgm --paths 5 --c2f K` (K 1..=3; or `--paths 3`), grey, no border refinement, no
 //! completion. With `--engine core` those are the defaults (levels 1, pool
 //! 0, SGM with 5 paths on), so `--engine core --c2f 2` alone is valid; any
 //! option that asks for something else is a [`HostError::InvalidArgument`],
@@ -74,7 +74,7 @@ fn invalid(name: &'static str, reason: &str) -> HostError {
 /// [`HostError::InvalidArgument`] for every option the engine does not
 /// run (`--preset`, `--table`, `--complete`, a colour other than grey,
 /// `--chroma-weight`, `--refine` other than 0, `--levels` other than 1,
-/// `--pool` other than 0, `--paths` other than 5, no `--c2f` or one
+/// `--pool` other than 0, `--paths` other than 5 or 3, no `--c2f` or one
 /// outside 1..=3) and for the reference's own option checks;
 /// [`HostError::Engine`] for values the engine rejects (penalties).
 pub fn plan(opts: &StereoOptions, width: usize) -> Result<Plan> {
@@ -120,8 +120,8 @@ pub fn plan(opts: &StereoOptions, width: usize) -> Result<Plan> {
     )?;
     given(
         "paths",
-        r.paths.is_some_and(|v| v != PATHS),
-        "runs the 5 SGM paths of one top-to-bottom pass (--paths 5)",
+        r.paths.is_some_and(|v| v != PATHS && v != 3),
+        "runs the 5 SGM paths of one top-to-bottom pass (--paths 5) or 3 (--paths 3)",
     )?;
     let levels = r.c2f.unwrap_or(0);
     given(
@@ -137,7 +137,7 @@ pub fn plan(opts: &StereoOptions, width: usize) -> Result<Plan> {
     fixed.refine = Some(0);
     fixed.colour = Some(Colour::Grey);
     fixed.readout.sgm = true;
-    fixed.readout.paths = Some(PATHS);
+    fixed.readout.paths = Some(r.paths.unwrap_or(PATHS));
     let params = preset::params_for(&fixed, width)?;
     params.check()?;
     let search = preset::search(&fixed)?.ok_or_else(|| invalid("c2f", "needs --c2f"))?;
@@ -162,8 +162,8 @@ pub fn c2f_params(params: &DemParams, search: Search) -> Result<C2fParams> {
     let Aggregation::Sgm { p1, p2, paths } = params.aggregation else {
         return Err(invalid("sgm", "runs SGM"));
     };
-    if paths != PATHS {
-        return Err(invalid("paths", "runs 5 paths"));
+    if paths != PATHS && paths != 3 {
+        return Err(invalid("paths", "runs 5 or 3 paths"));
     }
     let byte = |name, v: usize| u8::try_from(v).map_err(|_| invalid(name, "takes at most 255"));
     Ok(C2fParams {
@@ -186,6 +186,7 @@ pub fn c2f_params(params: &DemParams, search: Search) -> Result<C2fParams> {
         p1,
         p2,
         lr_from_left: params.lr_from_left,
+        paths,
     })
 }
 
@@ -332,7 +333,7 @@ mod tests {
             ("--c2f 2 --colour rgb", "colour"),
             ("--c2f 2 --chroma-weight 1", "chroma-weight"),
             ("--c2f 2 --paths 8", "paths"),
-            ("--c2f 2 --paths 3", "paths"),
+            ("--c2f 2 --paths 4", "paths"),
             ("--c2f 2 --refine 1", "refine"),
             ("--c2f 2 --complete", "complete"),
             ("--c2f 2 --table t.bin", "table"),
@@ -346,6 +347,11 @@ mod tests {
                 other => panic!("{extra}: {other:?}"),
             }
         }
+        // 3 paths and the derived right map are the engine's options.
+        let p = plan(&parse("--c2f 2 --paths 3 --lr-from-left"), 160).unwrap();
+        assert_eq!((p.engine.paths, p.engine.lr_from_left), (3, true));
+        let p = plan(&parse("--c2f 2"), 160).unwrap();
+        assert_eq!((p.engine.paths, p.engine.lr_from_left), (5, false));
         // Penalties the engine rejects: its own typed error.
         let e = plan(&parse("--c2f 2 --p1 2 --p2 1"), 160).unwrap_err();
         assert!(
