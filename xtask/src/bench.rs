@@ -612,8 +612,8 @@ fn dem_aloe() -> Section {
          filter (the second round's choice). The `--engine core` rows run core's \
          fixed-point coarse-to-fine engine (`protogist::stereo::c2f`, the firmware's stage: \
          grey, one level, no pooling, 5 SGM paths, windows ±2, band 2, P2 4 chosen on Motorcycle), ms its run alone, \
-         the best of 5 runs, single thread (the row with `--c2f-band 1 --lr-from-left` is the engine's \
-         cheapest measured point, r2b1l in the operating points above); the `--engine reference` rows \
+         the best of 5 runs, single thread (the row with `--c2f-band 1 --lr-from-left --paths 3` is the \
+         engine's cheapest measured point, r2b1l3 in the operating points above); the `--engine reference` rows \
          beside them are the same settings in the f32 reference.\n\n{STEREO_TABLE_HEAD}",
     );
     // (width, D, extra options); every row runs with `--refine 0` unless it
@@ -672,8 +672,8 @@ fn dem_aloe() -> Section {
         "4",
     ];
     // The cheapest measured point of the same engine: band 1, the right
-    // map derived from the left sums (no right eye).
-    const ENGINE_CORE_FAST: [&str; 9] = [
+    // map derived from the left sums (no right eye), 3 SGM paths.
+    const ENGINE_CORE_FAST: [&str; 11] = [
         "--engine",
         "core",
         "--c2f",
@@ -683,6 +683,8 @@ fn dem_aloe() -> Section {
         "--p2",
         "4",
         "--lr-from-left",
+        "--paths",
+        "3",
     ];
     const ENGINE_REF: [&str; 15] = [
         "--engine",

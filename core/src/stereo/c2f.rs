@@ -115,7 +115,7 @@ pub struct C2fParams {
     /// SGM penalty for a larger step (`>= p1`), in mean cost gaps.
     pub p2: f32,
     /// The left-right check against a right map derived from the left
-    /// map's path sums, as OpenCV's SGBM does ([`Pass::right_from_left`]),
+    /// map's path sums, as OpenCV's SGBM does (`Pass::right_from_left`),
     /// instead of the right-referenced read-out: the right eye's votes,
     /// costs and aggregation are not run. Default false.
     pub lr_from_left: bool,
