@@ -42,7 +42,7 @@ pub const PARAMS: C2fParams = C2fParams::DEFAULT;
 /// nothing else (the same tables, levels and penalties). Each needs no more scratch than
 /// [`PARAMS`] (`R <= 2`), which `operating_points_fit` checks at compile
 /// time.
-pub const POINTS: [(&str, C2fParams); 6] = [
+pub const POINTS: [(&str, C2fParams); 7] = [
     (
         "r2b1",
         C2fParams {
@@ -83,6 +83,16 @@ pub const POINTS: [(&str, C2fParams); 6] = [
     (
         "r2b1l3",
         C2fParams {
+            band: Some(1),
+            lr_from_left: true,
+            paths: 3,
+            ..PARAMS
+        },
+    ),
+    (
+        "r1b1l3",
+        C2fParams {
+            radius: 1,
             band: Some(1),
             lr_from_left: true,
             paths: 3,

@@ -93,6 +93,8 @@ fn each_point_runs_its_own_window_and_band_in_the_default_buffers() {
             .map(|(_, r)| r.checksum)
     };
     assert_ne!(sum("r2b1l3"), sum("r2b1l"));
+    // A window of 3 without the right eye: fewer cells than with it.
+    assert!(cells("r1b1l3") < cells("r1b1"));
     // The same point twice gives the same map (the buffers carry nothing
     // over between runs).
     let (name, p) = &POINTS[0];
