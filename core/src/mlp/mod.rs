@@ -312,7 +312,7 @@ fn xpair(xs: &[u32]) -> (i32, i32) {
 /// `x1 | x3 << 16` per group of four). Set `acc[r] = Σ_i u[r][i] · x[i]`
 /// with wrapping `i32` arithmetic. Addition modulo 2^32 does not depend on
 /// order, so any kernel that honours this gives the same bits as the
-/// default. Rows that do not fit in `w` are never passed by [`layer`]; the
+/// default. Rows that do not fit in `w` are never passed by `layer`; the
 /// default gives them partial sums rather than panicking.
 pub trait MacKernel {
     /// `acc[r] = Σ_{i < len} u[r · stride + i] · x[i]`, wrapping.

@@ -324,12 +324,12 @@ struct Unit {
 ///
 /// The sums are the same integers as the reference's (exact integer
 /// identities, no intermediate rounding), and the one rounding
-/// ([`finish`]) is applied to them unchanged. Formats: the y sums are
+/// (`finish`) is applied to them unchanged. Formats: the y sums are
 /// exact in `i32` with pre-added pixels (`|g·(v ± v')| ≤ 2^14·131070 <
 /// 2^31` and every partial sum is at most `65535·Σ|g|`); a pre-added pair
 /// of y sums needs `Σ|ky| ≤ 2^14` (checked: `2·65535·2^14 < 2^31`; the
 /// envelope has `Σ = 2^14`, all taps ≥ 0); the x sums stay exact in `i64`
-/// (every `|kx| ≤ 2^14` and `dc` in `i32`, checked: see [`finish1`]).
+/// (every `|kx| ≤ 2^14` and `dc` in `i32`, checked: see `finish1`).
 #[derive(Clone, Copy, Debug)]
 pub struct Bank<'k> {
     kernels: &'k [Gabor],
