@@ -133,7 +133,7 @@ pub mod len {
     pub const GREY: usize = c2f::grey_len(WIDTH, &PARAMS);
     /// RGB rows.
     pub const RGB: usize = c2f::rgb_len(WIDTH, &PARAMS);
-    /// Response rows ([`Z`]).
+    /// Response rows ([`type@Z`]).
     pub const Z: usize = c2f::z_len(WIDTH, &PARAMS);
     /// y-pass row (`[i32; 3]`).
     pub const COL: usize = WIDTH;

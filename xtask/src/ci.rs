@@ -35,6 +35,18 @@ pub fn run_ci() -> Result<CiSummary> {
         },
     )?;
     timed("clippy", t);
+    let (_, t) = step(
+        "doc: cargo doc --workspace --no-deps --lib, warnings denied",
+        || {
+            // Libraries only: the host binary shares core's crate name.
+            util::run(
+                host_cargo()
+                    .args(["doc", "--locked", "--workspace", "--no-deps", "--lib"])
+                    .env("RUSTDOCFLAGS", "-D warnings"),
+            )
+        },
+    )?;
+    timed("doc", t);
     let (_, t) = step("fetch-data: aloe and motorcycle stereo pairs", data::fetch)?;
     timed("fetch-data", t);
     let (totals, t) = step("test: cargo test --workspace", || {
