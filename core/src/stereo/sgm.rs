@@ -377,7 +377,10 @@ impl Rows<'_> {
             slot = next;
         }
         if !DIAG {
-            // Right→left alone: the backward sweep adds one path.
+            // Right→left alone: the backward sweep adds one path. (The
+            // backward sweep below with its diagonal under `if DIAG` gives
+            // the same sums but walks the diagonal's slots for nothing: 30
+            // instructions per pixel more on the M4.)
             let (mut hs, mut hlo, mut hpad) = ([0u16; N], lo.last().copied().unwrap_or(0), 0);
             for ((c, &l), o) in costs
                 .chunks_exact(N)
