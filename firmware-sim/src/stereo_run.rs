@@ -35,13 +35,13 @@ pub const HEIGHT: usize = 120;
 /// windows of 5, band 2).
 pub const PARAMS: C2fParams = C2fParams::DEFAULT;
 /// Cheaper operating points of the same engine, run after [`PARAMS`] to
-/// measure what the cells cost (docs/STEREO.md, "Operating points"): the
-/// window half width `R` and the band `b` change, and in the points named
-/// `…l` the left-right check's right map comes from the left sums
-/// (`lr_from_left`, no right eye), and `…3` runs 3 SGM paths instead of 5;
-/// nothing else (the same tables, levels and penalties). Each needs no more scratch than
-/// [`PARAMS`] (`R <= 2`), which `operating_points_fit` checks at compile
-/// time.
+/// measure what each saving costs (docs/STEREO.md, "Operating points"):
+/// `rRbB` sets the window half width `R` and the band `B`, a trailing `l`
+/// derives the left-right check's right map from the left sums
+/// (`lr_from_left`, no right eye) and a trailing `3` runs 3 SGM paths
+/// instead of 5; nothing else changes (the same tables, levels and
+/// penalties). Each needs no more scratch than [`PARAMS`] (`R <= 2`), which
+/// the `const` assertion below checks at compile time.
 pub const POINTS: [(&str, C2fParams); 7] = [
     (
         "r2b1",

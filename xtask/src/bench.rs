@@ -330,13 +330,15 @@ fn stereo_points(stdout: &str) -> Section {
     }
     body.push_str(
         "\nThe steps that do not depend on the cells (filters, and the camera-free levels) \
-         stay; SGM and the costs scale with the window, the votes with the cells.\n",
+         stay; SGM and the costs scale with the window, the votes with the cells; the derived \
+         check drops the right eye's votes, costs and SGM, and 3 paths two fifths of the SGM.\n",
     );
     Section { title, body }
 }
 
-/// `est / all` bad-2 % of `--engine core` at a window and band on `files`
-/// (160 px, D 32), or "not yet measured".
+/// `est / all` bad-2 % of `--engine core` at point `p`'s window, band,
+/// left-right check and paths on `files` (160 px, D 32), or "not yet
+/// measured".
 fn point_accuracy(files: [&Path; 3], p: &Point<'_>) -> String {
     let (radius, band) = (p.radius, p.band);
     let [l, r, gt] = files;

@@ -906,7 +906,6 @@ impl<'e> Pass<'e> {
         let voters = [take(&mut cs, w, "costs")?, take(&mut cs, w, "costs")?];
         let state = sgm::scratch_len(w, n);
         let sgm_err = |_| StereoError::BadParams("SGM state");
-
         let sgms = [
             Sgm::new(
                 w,

@@ -52,6 +52,7 @@ pub const HELD_OUT: Settings = Settings {
     p2_ref_width: None,
     min_margin: Some(1.0),
     lr: None,
+    lr_from_left: false,
     complete: false,
     c2f: Some(2),
     c2f_radius: None,
@@ -85,6 +86,8 @@ pub struct Settings {
     pub min_margin: Option<f32>,
     /// Left-right tolerance.
     pub lr: Option<f32>,
+    /// Left-right check against the right map derived from the left sums.
+    pub lr_from_left: bool,
     /// Complete the map over the conspicuity regions.
     pub complete: bool,
     /// Coarse-to-fine levels (0: off).
@@ -128,6 +131,7 @@ impl Settings {
             p2_ref_width: self.p2_ref_width.or(fallback.p2_ref_width),
             min_margin: self.min_margin.or(fallback.min_margin),
             lr: self.lr.or(fallback.lr),
+            lr_from_left: self.lr_from_left || fallback.lr_from_left,
             complete: self.complete || fallback.complete,
             c2f: self.c2f.or(fallback.c2f),
             c2f_radius: self.c2f_radius.or(fallback.c2f_radius),
@@ -153,6 +157,7 @@ fn explicit(opts: &StereoOptions) -> Settings {
         p2_ref_width: r.p2_ref_width,
         min_margin: r.min_margin,
         lr: r.lr,
+        lr_from_left: r.lr_from_left,
         complete: opts.complete,
         c2f: r.c2f,
         c2f_radius: r.c2f_radius,
@@ -262,7 +267,7 @@ pub fn params_for(opts: &StereoOptions, width: usize) -> Result<DemParams> {
     if let Some(t) = s.lr {
         params.lr_tolerance = t;
     }
-    params.lr_from_left = opts.readout.lr_from_left;
+    params.lr_from_left = s.lr_from_left;
     if let Some(c) = s.colour {
         params.colour = c;
     }
@@ -294,7 +299,7 @@ pub fn params_for(opts: &StereoOptions, width: usize) -> Result<DemParams> {
             ("p2", s.p2.is_some()),
             ("paths", s.paths.is_some()),
             ("p2-ref-width", s.p2_ref_width.is_some()),
-            ("lr-from-left", opts.readout.lr_from_left),
+            ("lr-from-left", s.lr_from_left),
         ];
         if let Some((name, _)) = sgm_only.into_iter().find(|&(_, given)| given) {
             return Err(HostError::InvalidArgument {

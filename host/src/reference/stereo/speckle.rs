@@ -26,17 +26,14 @@ pub fn speckles(
     if max_size == 0 || n != w * h {
         return removed;
     }
-    // 0: not yet visited; otherwise 1 + the island's index.
-    let mut label = vec![0u32; n];
+    let mut visited = vec![false; n];
     let mut island = Vec::new();
     let mut stack = Vec::new();
-    let mut next = 0u32;
     for seed in 0..n {
-        if label[seed] != 0 || map[seed].is_none() {
+        if visited[seed] || map[seed].is_none() {
             continue;
         }
-        next += 1;
-        label[seed] = next;
+        visited[seed] = true;
         island.clear();
         stack.push(seed);
         while let Some(p) = stack.pop() {
@@ -50,8 +47,8 @@ pub fn speckles(
                 (y + 1 < h).then(|| p + w),
             ];
             for q in neighbours.into_iter().flatten() {
-                if label[q] == 0 && map[q].is_some_and(|e| (e - d).abs() <= max_diff) {
-                    label[q] = next;
+                if !visited[q] && map[q].is_some_and(|e| (e - d).abs() <= max_diff) {
+                    visited[q] = true;
                     stack.push(q);
                 }
             }
