@@ -39,10 +39,12 @@ pub const PARAMS: C2fParams = C2fParams::DEFAULT;
 /// `rRbB` sets the window half width `R` and the band `B`, a trailing `l`
 /// derives the left-right check's right map from the left sums
 /// (`lr_from_left`, no right eye) and a trailing `3` runs 3 SGM paths
-/// instead of 5; nothing else changes (the same tables, levels and
-/// penalties). Each needs no more scratch than [`PARAMS`] (`R <= 2`), which
-/// the `const` assertion below checks at compile time.
-pub const POINTS: [(&str, C2fParams); 7] = [
+/// instead of 5, and a trailing `h` stops at level 1 (`finest: 1`: the map
+/// of the half-size pair spread over 2x2 blocks); nothing else changes (the
+/// same tables, levels and penalties). Each needs no more scratch than
+/// [`PARAMS`] (`R <= 2`), which the `const` assertion below checks at
+/// compile time.
+pub const POINTS: [(&str, C2fParams); 10] = [
     (
         "r2b1",
         C2fParams {
@@ -96,6 +98,31 @@ pub const POINTS: [(&str, C2fParams); 7] = [
             band: Some(1),
             lr_from_left: true,
             paths: 3,
+            ..PARAMS
+        },
+    ),
+    (
+        "r2b2h",
+        C2fParams {
+            finest: 1,
+            ..PARAMS
+        },
+    ),
+    (
+        "r2b2lh",
+        C2fParams {
+            lr_from_left: true,
+            finest: 1,
+            ..PARAMS
+        },
+    ),
+    (
+        "r2b1l3h",
+        C2fParams {
+            band: Some(1),
+            lr_from_left: true,
+            paths: 3,
+            finest: 1,
             ..PARAMS
         },
     ),
@@ -280,7 +307,7 @@ pub fn run_at<T: Ticks>(
     probe.close();
     let t2 = probe.ticks.now();
     // The camera alone: the same row renders, into the RGB scratch.
-    let levels = usize::from(params.coarse) + 1;
+    let levels = usize::from(params.coarse.saturating_sub(params.finest)) + 1;
     let row = bufs.rgb.get_mut(..WIDTH).unwrap_or(&mut []);
     for _ in 0..levels {
         for eye in [&left, &right] {
@@ -341,10 +368,10 @@ pub fn write_point(
     write_point_line(out, name, params, r, to_instructions)
 }
 
-/// `point stereo NAME WxH radius=R band=B lr=L paths=P engine=E cells=C
-/// STEP=I ...`: the window half width, the band (`-`: none), the right map
-/// of the left-right check (`read` or `derived` from the left sums) and the
-/// SGM paths, then instructions per
+/// `point stereo NAME WxH radius=R band=B lr=L paths=P finest=F engine=E
+/// cells=C STEP=I ...`: the window half width, the band (`-`: none), the
+/// right map of the left-right check (`read` or `derived` from the left
+/// sums), the SGM paths and the finest level run, then instructions per
 /// pixel with one decimal (the engine is the total minus the camera, as
 /// `ipp stereo-engine`), the cells evaluated and the steps.
 pub fn write_point_line(
@@ -371,7 +398,11 @@ pub fn write_point_line(
     } else {
         "read"
     };
-    write!(out, " lr={lr} paths={}", params.paths)?;
+    write!(
+        out,
+        " lr={lr} paths={} finest={}",
+        params.paths, params.finest
+    )?;
     write!(
         out,
         " engine={}.{} cells={}",

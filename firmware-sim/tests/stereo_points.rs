@@ -95,6 +95,13 @@ fn each_point_runs_its_own_window_and_band_in_the_default_buffers() {
     assert_ne!(sum("r2b1l3"), sum("r2b1l"));
     // A window of 3 without the right eye: fewer cells than with it.
     assert!(cells("r1b1l3") < cells("r1b1"));
+    // Stopping at level 1 skips level 0's cells (level 0 has about 4 times
+    // the pixels of level 1, so well under half remain) and gives another
+    // map.
+    assert!(cells("r2b1l3h") * 2 < cells("r2b1l3"));
+    assert_ne!(sum("r2b1l3h"), sum("r2b1l3"));
+    assert!(cells("r2b2h") * 2 < default.report.cells);
+    assert!(cells("r2b2lh") < cells("r2b2h"));
     // The same point twice gives the same map (the buffers carry nothing
     // over between runs).
     let (name, p) = &POINTS[0];
@@ -115,7 +122,7 @@ fn a_point_line_names_its_window_band_and_figures() {
     let band = p.band.map_or("-".to_string(), |b| b.to_string());
     assert!(
         lines[1].starts_with(&format!(
-            "point stereo {name} 160x120 radius={} band={band} lr=read paths=5 engine=",
+            "point stereo {name} 160x120 radius={} band={band} lr=read paths=5 finest=0 engine=",
             p.radius
         )),
         "{out}"

@@ -139,6 +139,12 @@ pub struct ReadoutOptions {
     /// is within this many px of its window's centre (default: every group).
     #[arg(long)]
     pub c2f_band: Option<u8>,
+    /// With `--c2f`: stop at this level (1..=--c2f; default 0, the full
+    /// size) and spread its map over the frame, each pixel over its
+    /// 2^k x 2^k block with its disparity times 2^k: about 4^k times fewer
+    /// operations for a coarser map (docs/STEREO.md "Finest level").
+    #[arg(long)]
+    pub c2f_finest: Option<u8>,
     /// Speckle filter (both engines, after the read-out; docs/STEREO.md
     /// "Third round"): pixels in an island of at most this many pixels go
     /// OFF (default 0: off).
@@ -414,7 +420,7 @@ fn run_reference(
         ImageView::packed(&pair.right, w, h)?,
     );
     let maps = if let Some(c) = search {
-        dem::c2f::stereo_c2f(params, &decoders, &lv, &rv, c.radius, c.band)?
+        dem::c2f::stereo_c2f_from(params, &decoders, &lv, &rv, c.radius, c.band, c.finest)?
     } else {
         dem::stereo(params, &decoders[0], &lv, &rv)?
     };

@@ -285,6 +285,7 @@ fn border_refinement_gives_each_side_its_own_disparity() {
         off_texture: 0,
         off_ambiguous: 0,
         off_inconsistent: 0,
+        why_off: vec![None; w * h],
     };
     let params = DemParams {
         refine_radius: 1,

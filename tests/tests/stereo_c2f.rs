@@ -148,6 +148,7 @@ fn windows_come_from_the_parent_pixel() {
         off_texture: 0,
         off_ambiguous: 0,
         off_inconsistent: 0,
+        why_off: vec![],
     };
     let ws = windows_from(&coarse, 5, 2, 2, None, 14);
     // x 0, 1 -> parent 0; x 2, 3 -> parent 1; x 4 -> parent 1 (clamped).
@@ -364,4 +365,45 @@ fn the_command_checks_the_coarsest_level_first() {
     );
     opts.readout.c2f = None;
     assert!(protogist_host::stereo_cmd::run_stereo(&opts).is_ok());
+}
+
+/// `spread`: a level-1 map over a 5x3 frame, each pixel over its 2x2 block
+/// (the last column and row of blocks also over the odd frame's leftover
+/// column and row), disparities doubled, the OFF counts per frame pixel.
+#[test]
+fn spread_fills_each_block_and_counts_frame_pixels() {
+    use protogist::disparity::{Disparity, DisparityCell};
+    use protogist_host::reference::stereo::c2f::spread;
+    use protogist_host::reference::stereo::OffReason;
+    let on = |d: f32| DisparityCell::on(Disparity::from_num(d)).unwrap();
+    let level = DisparityMapsF {
+        width: 2,
+        height: 1,
+        disparity: vec![on(3.25), DisparityCell::OFF],
+        disparity_f32: vec![Some(3.25), None],
+        left_raw: vec![Some(3.25), Some(1.5)],
+        right_raw: vec![None, Some(2.0)],
+        off_texture: 0,
+        off_ambiguous: 0,
+        off_inconsistent: 1,
+        why_off: vec![None, Some(OffReason::Inconsistent)],
+    };
+    let m = spread(&level, 1, (5, 3));
+    assert_eq!((m.width, m.height), (5, 3));
+    for y in 0..3 {
+        for x in 0..5 {
+            let p = y * 5 + x;
+            if x < 2 {
+                assert_eq!(m.disparity[p], on(6.5), "({x}, {y})");
+                assert_eq!(m.disparity_f32[p], Some(6.5));
+                assert_eq!((m.left_raw[p], m.right_raw[p]), (Some(6.5), None));
+                assert_eq!(m.why_off[p], None);
+            } else {
+                assert!(m.disparity[p].is_off(), "({x}, {y})");
+                assert_eq!((m.left_raw[p], m.right_raw[p]), (Some(3.0), Some(4.0)));
+                assert_eq!(m.why_off[p], Some(OffReason::Inconsistent));
+            }
+        }
+    }
+    assert_eq!((m.off_texture, m.off_ambiguous, m.off_inconsistent), (0, 0, 9));
 }

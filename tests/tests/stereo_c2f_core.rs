@@ -8,7 +8,7 @@ use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
 use protogist::stereo::c2f::{self, C2f, C2fParams};
 use protogist::stereo::{self as qs, StereoError, StereoReport};
-use protogist_host::reference::stereo::c2f::{level_params, stereo_c2f};
+use protogist_host::reference::stereo::c2f::{level_params, stereo_c2f_from};
 use protogist_host::reference::stereo::table::DemTable as HostTable;
 use protogist_host::reference::stereo::{self as dem};
 use protogist_host::storage::C2fStorage;
@@ -97,13 +97,14 @@ fn run_float(
         .iter()
         .map(|t| HostTable::parse(t).unwrap().to_decoder())
         .collect();
-    stereo_c2f(
+    stereo_c2f_from(
         &host_params(p),
         &decs,
         &ImageView::packed(l, w, h).unwrap(),
         &ImageView::packed(r, w, h).unwrap(),
         usize::from(p.radius),
         p.band.map(usize::from),
+        usize::from(p.finest),
     )
     .unwrap()
 }
@@ -131,9 +132,10 @@ proptest! {
         band in prop::option::of(1u8..=3),
         lr_from_left: bool,
         paths in prop_oneof![Just(3u8), Just(5u8)],
+        finest in 0u8..=1,
     ) {
         let (w, h) = (96, 64);
-        let p = C2fParams { band, lr_from_left, paths, ..params(15) };
+        let p = C2fParams { band, lr_from_left, paths, finest, ..params(15) };
         let ts = tables(&p);
         let (l, r) = rds_rgb(w, h, d, seed);
         let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
@@ -212,17 +214,19 @@ fn aloe_160_d32_agrees() {
     let Some((l, r, w, h)) = aloe_160_rgb() else {
         return;
     };
-    for (lr_from_left, paths) in [(false, 5), (true, 5), (true, 3)] {
+    for (lr_from_left, paths, finest) in [(false, 5, 0), (true, 5, 0), (true, 3, 0), (true, 3, 1)] {
         let p = C2fParams {
             lr_from_left,
             paths,
+            finest,
+            band: if finest > 0 { Some(1) } else { Some(2) },
             ..params(31)
         };
         let ts = tables(&p);
         let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
         let float = run_float(&p, &ts, &l, &r, w, h);
         let (close, agree, both) = stereo_agreement(&core, &float);
-        println!("aloe 160 c2f (lr from left {lr_from_left}, {paths} paths): {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
+        println!("aloe 160 c2f (lr from left {lr_from_left}, {paths} paths, finest {finest}): {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
         assert!(both > w * h / 2, "{both}");
         assert!(close >= 99.0, "{close}");
         assert!(agree >= 99.0, "{agree}");
@@ -260,6 +264,73 @@ fn the_derived_right_map_skips_the_right_eye() {
     assert!(both > w * h / 2, "{both}");
     assert_eq!(rep_a.off_texture, rep_b.off_texture);
     assert_eq!(rep_a.off_ambiguous, rep_b.off_ambiguous);
+}
+
+/// The 2x2 rounded means of an RGB frame (the engine's level step).
+fn halve(img: &[Rgb8], w: usize, h: usize) -> Vec<Rgb8> {
+    let (wh, hh) = (w / 2, h / 2);
+    let mut out = Vec::with_capacity(wh * hh);
+    for y in 0..hh {
+        for x in 0..wh {
+            let px =
+                [(0, 0), (1, 0), (0, 1), (1, 1)].map(|(dx, dy)| img[(2 * y + dy) * w + 2 * x + dx]);
+            let mean = |c: fn(&Rgb8) -> u8| {
+                ((px.iter().map(|p| u16::from(c(p))).sum::<u16>() + 2) / 4) as u8
+            };
+            out.push(Rgb8::new(mean(|p| p.r), mean(|p| p.g), mean(|p| p.b)));
+        }
+    }
+    out
+}
+
+/// `finest: 1` is the engine on the half-size pair (one coarse level less,
+/// `⌈D/2⌉`), each cell spread over its 2x2 block (the last block column
+/// and row also over an odd frame's leftover column and row) with its
+/// disparity doubled; the counts are per frame pixel.
+#[test]
+fn the_finest_level_is_the_half_size_run_spread() {
+    for (w, h) in [(96, 64), (97, 65)] {
+        let (l, r) = rds_rgb(w, h, 6, 5);
+        let full = C2fParams {
+            finest: 1,
+            lr_from_left: true,
+            ..params(15)
+        };
+        let half = C2fParams {
+            coarse: full.coarse - 1,
+            finest: 0,
+            ..C2fParams {
+                dem: qs::DemParams {
+                    max_disp: full.level_max_disp(1),
+                    ..full.dem
+                },
+                ..full
+            }
+        };
+        let ts = tables(&full);
+        let (a, rep) = run_core(&full, &ts, &l, &r, w, h).unwrap();
+        let (wh, hh) = (w / 2, h / 2);
+        let (lh, rh) = (halve(&l, w, h), halve(&r, w, h));
+        let (b, _) = run_core(&half, &ts[1..], &lh, &rh, wh, hh).unwrap();
+        for y in 0..h {
+            for x in 0..w {
+                let q = (y / 2).min(hh - 1) * wh + (x / 2).min(wh - 1);
+                let want = b[q].get().map(|d| d.to_bits() * 2);
+                assert_eq!(
+                    a[y * w + x].get().map(|d| d.to_bits()),
+                    want,
+                    "({x}, {y}) at {w}x{h}"
+                );
+            }
+        }
+        let on = a.iter().filter(|c| c.get().is_some()).count();
+        assert_eq!(rep.on, on);
+        assert_eq!(
+            rep.on + rep.off_texture + rep.off_ambiguous + rep.off_inconsistent,
+            w * h
+        );
+        assert!(on > w * h / 2, "{on}");
+    }
 }
 
 /// Flat images have no texture: every pixel OFF, no panic.
@@ -437,6 +508,7 @@ fn bad_input_is_a_typed_error() {
         C2fParams { p2: f32::NAN, ..p },
         C2fParams { paths: 4, ..p },
         C2fParams { paths: 8, ..p },
+        C2fParams { finest: 3, ..p },
     ] {
         assert!(
             matches!(C2f::new(&bad), Err(StereoError::BadParams(_))),

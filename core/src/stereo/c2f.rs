@@ -35,6 +35,18 @@
 //! are evaluated only where some pixel takes their vote: the left pixel `x`
 //! or the right pixel `x − s`.
 //!
+//! **Finest level.** With [`C2fParams::finest`] `= F > 0` the run stops at
+//! level `F`: its OFF tests run there (the left-right check on level `F`'s
+//! maps) and each of its cells goes to the sink over its `2^F x 2^F` block
+//! of the frame, its disparity times `2^F` (frame pixel `(x, y)` takes level
+//! pixel `(min(x >> F, w_F − 1), min(y >> F, h_F − 1))`, so an odd frame's
+//! leftover column and row take the last block's), row by row. The levels
+//! below `F` are not run, so the operations fall by about `4^F` for a map
+//! with `2^F` times coarser steps; it is the same as running the engine
+//! on the pair halved `F` times with `F` coarse levels fewer and
+//! `⌈D/2^F⌉`, spread (`tests/tests/stereo_c2f_core.rs`). The report counts
+//! frame pixels.
+//!
 //! **Formats.** Energies as the full read-out (`Q8` grey², rounded once),
 //! votes and totals in `i64` from the `i16` table. The scores
 //! `n(d) = raw(d)·2^bf − bias(d)·T·2^wf` ([`super::readout::pick`]) give
@@ -122,6 +134,13 @@ pub struct C2fParams {
     /// SGM paths: [`PATHS`] (5: left→right, right→left, top→bottom and the
     /// two diagonals from above) or 3 (without the diagonals). Default 5.
     pub paths: u8,
+    /// The finest level run, `F` (0..=`coarse`). Default 0. With `F > 0`
+    /// the levels below it are not run: level `F`'s map is the output,
+    /// each of its cells filling its `2^F x 2^F` block of the frame (the
+    /// last row and column of blocks also the frame's leftover rows and
+    /// columns) with its disparity times `2^F` (module docs, "Finest
+    /// level").
+    pub finest: u8,
 }
 
 impl C2fParams {
@@ -144,6 +163,7 @@ impl C2fParams {
         p2: 4.0,
         lr_from_left: false,
         paths: PATHS as u8,
+        finest: 0,
     };
 
     /// `max_disp` of level `k`: `⌈D / 2^k⌉`.
@@ -382,6 +402,10 @@ impl C2f {
             params.paths == 3 || u32::from(params.paths) == PATHS,
             "SGM paths must be 3 or 5",
         )?;
+        bad(
+            params.finest <= params.coarse,
+            "the finest level must be at most the coarse levels",
+        )?;
         let dem = Dem::new(&params.dem)?;
         let q8 = |v: f32| libm::roundf(v * 256.0) as u16;
         let (p1_q8, p2_q8) = (q8(params.p1), q8(params.p2));
@@ -511,7 +535,8 @@ impl C2f {
         };
         let split = 2 * level_len(w, 1) * level_len(h, 1);
         let (odd, even) = maps.split_at_mut(split.min(maps.len()));
-        for k in (0..levels).rev() {
+        let finest = usize::from(p.finest);
+        for k in (finest..levels).rev() {
             let (mine, parent) = if k % 2 == 1 {
                 (&mut *odd, &*even)
             } else {
@@ -520,7 +545,7 @@ impl C2f {
             let table = tables.get(k).ok_or(StereoError::BadParams("no table"))?;
             let pass = Pass::new(self, k, (w, h));
             let parent = (k + 1 < levels).then_some(parent);
-            let out = if k == 0 {
+            let out = if k == finest {
                 Output::Sink(&mut *sink, &mut report)
             } else {
                 Output::Map(mine)
@@ -547,7 +572,8 @@ struct Work<'b, 'a> {
 enum Output<'o, F> {
     /// A coarse level: the windows of the next finer level.
     Map(&'o mut [u8]),
-    /// Level 0: the OFF tests, then the sink.
+    /// The finest level run: the OFF tests, then the sink (at level 0
+    /// pixel by pixel, else each row's verdicts spread over their blocks).
     Sink(&'o mut F, &'o mut StereoReport),
 }
 
@@ -1062,15 +1088,52 @@ impl<'e> Pass<'e> {
                 *pk = d.map_or(-1, |d| d.disparity);
                 if let Output::Sink(sink, report) = &mut out {
                     let total = raw.get(n).copied().unwrap_or(0);
-                    let cell = self.off_tests(x, d, need(total, v), rp, report);
-                    sink(x, y, cell);
+                    let verdict = self.off_tests(x, d, need(total, v), rp);
+                    if self.k == 0 {
+                        sink(x, y, verdict.count(report));
+                    } else if let Some(c) = col.get_mut(x) {
+                        // The row's votes are done, so `col` is free.
+                        c[0] = verdict.code();
+                    }
                 }
             }
-            if let Output::Map(map) = &mut out {
-                self.windows_below(y, [&*lp, &*rp], map);
+            match &mut out {
+                Output::Map(map) => self.windows_below(y, [&*lp, &*rp], map),
+                Output::Sink(sink, report) if self.k > 0 => {
+                    self.spread(y, col, &mut **sink, report);
+                }
+                Output::Sink(..) => {}
             }
         }
         Ok(cells)
+    }
+
+    /// The output rows of level row `y` at a finest level `k > 0`: frame
+    /// rows `y·2^k ..` (to the frame's last row after the level's last
+    /// row), each frame pixel `x` taking the verdict in `col` of level
+    /// pixel `min(x >> k, w − 1)`, its disparity times `2^k`.
+    fn spread(
+        &self,
+        y: usize,
+        col: &[[i32; 3]],
+        sink: &mut impl FnMut(usize, usize, DisparityCell),
+        report: &mut StereoReport,
+    ) {
+        let (fw, fh) = self.full;
+        let first = y << self.k;
+        let end = if y + 1 >= self.h {
+            fh
+        } else {
+            first + (1 << self.k)
+        };
+        let last = self.w.saturating_sub(1);
+        for fy in first..end {
+            for fx in 0..fw {
+                let code = col.get((fx >> self.k).min(last)).map_or(-1, |c| c[0]);
+                let verdict = Verdict::from_code(code).scaled(self.k);
+                sink(fx, fy, verdict.count(report));
+            }
+        }
     }
 
     /// The cells and votes of one row: for each pixel of each eye (left,
@@ -1285,24 +1348,15 @@ impl<'e> Pass<'e> {
     }
 
     /// The OFF tests of left pixel `x` (texture, ambiguity, left-right
-    /// against the right decisions `right`), counted in `report`.
-    fn off_tests(
-        &self,
-        x: usize,
-        d: Option<Decision>,
-        textured: bool,
-        right: &[i32],
-        report: &mut StereoReport,
-    ) -> DisparityCell {
+    /// against the right decisions `right`).
+    fn off_tests(&self, x: usize, d: Option<Decision>, textured: bool, right: &[i32]) -> Verdict {
         let Some(d) = d.filter(|_| textured) else {
-            report.off_texture += 1;
-            return DisparityCell::OFF;
+            return Verdict::Texture;
         };
         if d.margin
             .is_some_and(|m| (i64::from(m) << 16) < self.e.min_margin_sums)
         {
-            report.off_ambiguous += 1;
-            return DisparityCell::OFF;
+            return Verdict::Ambiguous;
         }
         let v = d.disparity;
         let ok = self.e.dem.lr_tolerance_q8.is_none_or(|tol| {
@@ -1313,12 +1367,79 @@ impl<'e> Pass<'e> {
                 .is_some_and(|b| b >= 0 && (b - v).abs() <= tol)
         });
         if !ok {
-            report.off_inconsistent += 1;
-            return DisparityCell::OFF;
+            return Verdict::Inconsistent;
         }
-        report.on += 1;
-        let q = v.clamp(0, i32::from(u16::MAX - 1)) as u16;
-        DisparityCell::from_raw(U8F8::from_bits(q))
+        Verdict::On(v.clamp(0, i32::from(u16::MAX - 1)) as u16)
+    }
+}
+
+/// The OFF tests' result for one pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Verdict {
+    /// A disparity, `U8F8` bits below `U8F8::MAX`.
+    On(u16),
+    /// OFF: too little evidence.
+    Texture,
+    /// OFF: the margin test.
+    Ambiguous,
+    /// OFF: the left-right check.
+    Inconsistent,
+}
+
+impl Verdict {
+    /// As an `i32` (a disparity's bits, or −1, −2, −3 for the OFFs).
+    fn code(self) -> i32 {
+        match self {
+            Self::On(v) => i32::from(v),
+            Self::Texture => -1,
+            Self::Ambiguous => -2,
+            Self::Inconsistent => -3,
+        }
+    }
+
+    /// The inverse of [`Verdict::code`] (anything else reads as no
+    /// evidence).
+    fn from_code(c: i32) -> Self {
+        match c {
+            -2 => Self::Ambiguous,
+            -3 => Self::Inconsistent,
+            _ => u16::try_from(c).map_or(Self::Texture, Self::On),
+        }
+    }
+
+    /// A level-`k` disparity in frame pixels: times `2^k`, saturating below
+    /// OFF.
+    fn scaled(self, k: usize) -> Self {
+        match self {
+            Self::On(v) => Self::On(
+                u32::from(v)
+                    .checked_shl(k as u32)
+                    .map_or(u16::MAX - 1, |s| s.min(u32::from(u16::MAX - 1)) as u16),
+            ),
+            other => other,
+        }
+    }
+
+    /// Counts the verdict in `report` and makes it a cell.
+    fn count(self, report: &mut StereoReport) -> DisparityCell {
+        match self {
+            Self::On(v) => {
+                report.on += 1;
+                DisparityCell::from_raw(U8F8::from_bits(v))
+            }
+            Self::Texture => {
+                report.off_texture += 1;
+                DisparityCell::OFF
+            }
+            Self::Ambiguous => {
+                report.off_ambiguous += 1;
+                DisparityCell::OFF
+            }
+            Self::Inconsistent => {
+                report.off_inconsistent += 1;
+                DisparityCell::OFF
+            }
+        }
     }
 }
 

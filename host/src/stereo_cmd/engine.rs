@@ -188,6 +188,7 @@ pub fn c2f_params(params: &DemParams, search: Search) -> Result<C2fParams> {
         p2,
         lr_from_left: params.lr_from_left,
         paths,
+        finest: byte("c2f-finest", search.finest)?,
     })
 }
 
@@ -349,6 +350,8 @@ mod tests {
             }
         }
         // 3 paths and the derived right map are the engine's options.
+        let p = plan(&parse("--c2f 2 --c2f-finest 1"), 160).unwrap();
+        assert_eq!(p.engine.finest, 1);
         let p = plan(&parse("--c2f 2 --paths 3 --lr-from-left"), 160).unwrap();
         assert_eq!((p.engine.paths, p.engine.lr_from_left), (3, true));
         let p = plan(&parse("--c2f 2"), 160).unwrap();

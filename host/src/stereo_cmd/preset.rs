@@ -57,6 +57,7 @@ pub const HELD_OUT: Settings = Settings {
     c2f: Some(2),
     c2f_radius: None,
     c2f_band: Some(2),
+    c2f_finest: None,
     speckle: Some(100),
     speckle_range: Some(1.0),
 };
@@ -96,6 +97,8 @@ pub struct Settings {
     pub c2f_radius: Option<u8>,
     /// Band of the coarse-to-fine decode.
     pub c2f_band: Option<u8>,
+    /// `--c2f-finest`.
+    pub c2f_finest: Option<u8>,
     /// Largest island the speckle filter removes, px (0: off).
     pub speckle: Option<u32>,
     /// Join tolerance of the speckle filter, px.
@@ -111,6 +114,8 @@ pub struct Search {
     pub radius: usize,
     /// Band of the fine decode (`None`: every group).
     pub band: Option<usize>,
+    /// The finest level run (0: the full size), at most `levels`.
+    pub finest: usize,
 }
 
 /// `--c2f-radius` default.
@@ -136,6 +141,7 @@ impl Settings {
             c2f: self.c2f.or(fallback.c2f),
             c2f_radius: self.c2f_radius.or(fallback.c2f_radius),
             c2f_band: self.c2f_band.or(fallback.c2f_band),
+            c2f_finest: self.c2f_finest.or(fallback.c2f_finest),
             speckle: self.speckle.or(fallback.speckle),
             speckle_range: self.speckle_range.or(fallback.speckle_range),
         }
@@ -162,6 +168,7 @@ fn explicit(opts: &StereoOptions) -> Settings {
         c2f: r.c2f,
         c2f_radius: r.c2f_radius,
         c2f_band: r.c2f_band,
+        c2f_finest: r.c2f_finest,
         speckle: r.speckle,
         speckle_range: r.speckle_range,
     }
@@ -214,20 +221,27 @@ pub fn speckle(opts: &StereoOptions) -> Result<Option<(usize, f32)>> {
 /// The coarse-to-fine search in force (`None`: the full search).
 ///
 /// # Errors
-/// [`HostError::InvalidArgument`] for `--c2f-radius` or `--c2f-band`
-/// without `--c2f` (or a preset with it).
+/// [`HostError::InvalidArgument`] for `--c2f-radius`, `--c2f-band` or
+/// `--c2f-finest` without `--c2f` (or a preset with it), and for
+/// `--c2f-finest` above `--c2f`.
 pub fn search(opts: &StereoOptions) -> Result<Option<Search>> {
     let s = settings(opts);
     match s.c2f.filter(|&k| k > 0) {
+        Some(k) if s.c2f_finest.is_some_and(|f| f > k) => Err(HostError::InvalidArgument {
+            name: "c2f-finest",
+            reason: format!("must be at most --c2f ({k})"),
+        }),
         Some(k) => Ok(Some(Search {
             levels: usize::from(k),
             radius: usize::from(s.c2f_radius.unwrap_or(C2F_RADIUS)),
             band: s.c2f_band.map(usize::from),
+            finest: usize::from(s.c2f_finest.unwrap_or(0)),
         })),
         None => {
             let c2f_only = [
                 ("c2f-radius", s.c2f_radius.is_some()),
                 ("c2f-band", s.c2f_band.is_some()),
+                ("c2f-finest", s.c2f_finest.is_some()),
             ];
             match c2f_only.into_iter().find(|&(_, given)| given) {
                 Some((name, _)) => Err(HostError::InvalidArgument {
@@ -367,6 +381,7 @@ mod tests {
             levels: 2,
             radius: 2,
             band: Some(2),
+            finest: 0,
         };
         assert_eq!(speckle(&preset).unwrap(), Some((100, 1.0)));
         assert_eq!(speckle(&spelled).unwrap(), Some((100, 1.0)));
@@ -419,7 +434,13 @@ mod tests {
     fn coarse_to_fine_options_without_c2f_are_typed_errors() {
         assert_eq!(search(&parse("")).unwrap(), None);
         assert_eq!(search(&parse("--c2f 0")).unwrap(), None);
-        for extra in ["--c2f-radius 1", "--c2f-band 2", "--c2f 0 --c2f-band 2"] {
+        for extra in [
+            "--c2f-radius 1",
+            "--c2f-band 2",
+            "--c2f 0 --c2f-band 2",
+            "--c2f-finest 1",
+            "--c2f 2 --c2f-finest 3",
+        ] {
             let e = search(&parse(extra)).unwrap_err();
             assert!(
                 matches!(e, HostError::InvalidArgument { .. }),
@@ -432,9 +453,12 @@ mod tests {
             Some(Search {
                 levels: 1,
                 radius: usize::from(C2F_RADIUS),
-                band: None
+                band: None,
+                finest: 0,
             })
         );
+        let s = search(&parse("--c2f 2 --c2f-finest 2")).unwrap();
+        assert_eq!(s.map(|s| s.finest), Some(2));
     }
 
     #[test]

@@ -17,9 +17,10 @@
 //! not speed.
 
 use super::{
-    check, colour, refine, stereo_planes_in, Decoder, DemParams, DisparityMapsF, StereoError,
-    Windows,
+    check, colour, refine, stereo_planes_in, Decoder, DemParams, DisparityMapsF, OffReason,
+    StereoError, Windows,
 };
+use protogist::disparity::{DisparityCell, U8F8};
 use protogist::image::{ImageView, Rgb8};
 
 /// An owned RGB image.
@@ -143,6 +144,32 @@ pub fn stereo_c2f(
     radius: usize,
     band: Option<usize>,
 ) -> Result<DisparityMapsF, StereoError> {
+    stereo_c2f_from(params, decoders, left, right, radius, band, 0)
+}
+
+/// [`stereo_c2f`] run down to level `finest` only (core's
+/// `C2fParams::finest`): the levels below it are not run, and level
+/// `finest`'s maps are spread over the frame by [`spread`] (each cell over
+/// its `2^finest` block, disparities times `2^finest`) before the border
+/// refinement.
+///
+/// # Errors
+/// As [`stereo_c2f`], and [`StereoError::BadParams`] for `finest` above the
+/// coarse levels.
+pub fn stereo_c2f_from(
+    params: &DemParams,
+    decoders: &[Decoder],
+    left: &ImageView<'_, Rgb8>,
+    right: &ImageView<'_, Rgb8>,
+    radius: usize,
+    band: Option<usize>,
+    finest: usize,
+) -> Result<DisparityMapsF, StereoError> {
+    if finest >= decoders.len().max(1) {
+        return Err(StereoError::BadParams(
+            "the finest level must be at most the coarse levels",
+        ));
+    }
     let Some(fine) = decoders.first() else {
         return Err(StereoError::BadParams("no decoder"));
     };
@@ -157,6 +184,9 @@ pub fn stereo_c2f(
     }
     let mut prior: Option<DisparityMapsF> = None;
     for (k, ((l, r), decoder)) in pyramid.iter().zip(decoders).enumerate().rev() {
+        if k < finest {
+            break;
+        }
         let p = level_params(params, k);
         let windows = prior
             .as_ref()
@@ -172,6 +202,52 @@ pub fn stereo_c2f(
         prior = Some(maps);
     }
     let mut maps = prior.ok_or(StereoError::BadParams("no level"))?;
+    if finest > 0 {
+        maps = spread(&maps, finest, left.size());
+    }
     refine::refine_borders(params, left, &mut maps);
     Ok(maps)
+}
+
+/// Level-`k` maps over the `w x h` frame: frame pixel `(x, y)` takes level
+/// pixel `(min(x >> k, wk − 1), min(y >> k, hk − 1))`, its disparities
+/// times `2^k`; the OFF counts are those of the frame's pixels.
+pub fn spread(maps: &DisparityMapsF, k: usize, (w, h): (usize, usize)) -> DisparityMapsF {
+    let (wk, hk) = (maps.width, maps.height);
+    let scale = (1u32 << k) as f32;
+    let src = |x: usize, y: usize| {
+        (y >> k).min(hk.saturating_sub(1)) * wk + (x >> k).min(wk.saturating_sub(1))
+    };
+    let index: Vec<usize> = (0..w * h).map(|p| src(p % w, p / w)).collect();
+    let times = |v: &[Option<f32>]| -> Vec<Option<f32>> {
+        index.iter().map(|&q| v[q].map(|d| d * scale)).collect()
+    };
+    let mut out = DisparityMapsF {
+        width: w,
+        height: h,
+        disparity: index
+            .iter()
+            .map(|&q| match maps.disparity[q].get() {
+                Some(d) => DisparityCell::from_raw(U8F8::from_bits(
+                    (u32::from(d.to_bits()) << k).min(u32::from(u16::MAX - 1)) as u16,
+                )),
+                None => DisparityCell::OFF,
+            })
+            .collect(),
+        disparity_f32: times(&maps.disparity_f32),
+        left_raw: times(&maps.left_raw),
+        right_raw: times(&maps.right_raw),
+        off_texture: 0,
+        off_ambiguous: 0,
+        off_inconsistent: 0,
+        why_off: index.iter().map(|&q| maps.why_off[q]).collect(),
+    };
+    for why in out.why_off.iter().flatten() {
+        match why {
+            OffReason::Texture => out.off_texture += 1,
+            OffReason::Ambiguous => out.off_ambiguous += 1,
+            OffReason::Inconsistent => out.off_inconsistent += 1,
+        }
+    }
+    out
 }

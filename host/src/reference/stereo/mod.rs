@@ -260,6 +260,21 @@ pub struct DisparityMapsF {
     pub off_ambiguous: usize,
     /// Pixels OFF by the left-right check.
     pub off_inconsistent: usize,
+    /// Which of the read-out's OFF tests each pixel failed (`None`: it
+    /// passed them all; like the counts, not changed by later steps such as
+    /// the border refinement or the speckle filter).
+    pub why_off: Vec<Option<OffReason>>,
+}
+
+/// Which of the read-out's OFF tests a pixel failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OffReason {
+    /// Too little evidence (the texture test).
+    Texture,
+    /// The margin test.
+    Ambiguous,
+    /// The left-right check.
+    Inconsistent,
 }
 
 /// Checks the inputs of [`stereo`].
@@ -482,15 +497,18 @@ pub fn stereo_planes_in(
         off_texture: 0,
         off_ambiguous: 0,
         off_inconsistent: 0,
+        why_off: vec![None; w * h],
     };
     for (p, pick) in left_picks.iter().enumerate() {
         let energy = sl.total[p] / (4.0 * groups_at(0, p) * count[p]);
         let Some(pick) = pick.filter(|_| energy >= params.min_energy && energy > 0.0) else {
             out.off_texture += 1;
+            out.why_off[p] = Some(OffReason::Texture);
             continue;
         };
         if pick.margin < params.min_margin {
             out.off_ambiguous += 1;
+            out.why_off[p] = Some(OffReason::Ambiguous);
             continue;
         }
         let d = pick.disparity;
@@ -501,6 +519,7 @@ pub fn stereo_planes_in(
                 .flatten();
             if back.is_none_or(|b| (b - d).abs() > params.lr_tolerance) {
                 out.off_inconsistent += 1;
+                out.why_off[p] = Some(OffReason::Inconsistent);
                 continue;
             }
         }
