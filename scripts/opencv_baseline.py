@@ -4,7 +4,7 @@
 Run by `cargo xtask bench` in a venv with scripts/requirements-opencv.txt.
 Prints one JSON object per line: pair, matcher, block size, width, max
 disparity, bad-1/2/4 over estimated and over all GT pixels, MAE, density, ms
-(the best of 5 runs).
+(the best of 15 runs).
 
 The protocol mirrors `protogist stereo` (host/src/ground_truth.rs):
 - images area-averaged (INTER_AREA) to the working width, aspect kept,
@@ -26,7 +26,7 @@ import numpy as np
 
 
 # Runs timed per measurement; the fastest is reported.
-TIMED_RUNS = 5
+TIMED_RUNS = 15
 
 
 def area(img, w, h):

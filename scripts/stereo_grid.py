@@ -93,17 +93,34 @@ def grid_engine_lr():
     return s
 
 
+def grid_half():
+    """Sixth grid (2026-11-22): the engine stopped at level 1
+    (`--c2f-finest 1`) with the right map derived from the left sums, over
+    the band, the SGM paths, P2 and the margin. The rule, declared before
+    the runs (Motorcycle only): among the settings whose (band, paths)
+    measures at most 1,500 instructions/px on the M4 (the firmware's points
+    r2b1l3h, r2b1lh, r2b2l3h, r2b2lh), take the one of least mean bad-2 over
+    all GT pixels at 160 and 320 px whose bad-2 over estimated pixels is at
+    most 1 point above the first setting's (r2b1l3h, P2 4, margin 0) at
+    each size; within 0.1 point, the one of fewer instructions. Aloe is
+    then run once with it."""
+    base = "--engine core --c2f 2 --c2f-finest 1 --lr-from-left"
+    return [f"{base} --c2f-band {b} --paths {n} --p2 {p2} --min-margin {m}"
+            for b in ("1", "2") for n in ("3", "5") for p2 in ("4", "8", "16")
+            for m in ("0", "0.5")]
+
+
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--pair", choices=PAIRS, default="motorcycle")
     p.add_argument("--data", required=True, help="data root (holds aloe/ and motorcycle/)")
     p.add_argument("--bin", default="target/release/protogist")
-    p.add_argument("--grid", choices=("main", "p2-width", "engine", "speckle", "engine-lr"), default="main")
+    p.add_argument("--grid", choices=("main", "p2-width", "engine", "speckle", "engine-lr", "half"), default="main")
     p.add_argument("--only", action="append", help="run only these option strings")
     a = p.parse_args()
     left, right, gt = (f"{a.data}/{f}" for f in PAIRS[a.pair])
     grids = {"main": grid, "p2-width": grid_p2_width, "engine": grid_engine,
-             "speckle": grid_speckle, "engine-lr": grid_engine_lr}
+             "speckle": grid_speckle, "engine-lr": grid_engine_lr, "half": grid_half}
     settings = a.only or grids[a.grid]()
     out = tempfile.mkdtemp(prefix="stereo-grid-")
     for opts in settings:

@@ -44,7 +44,7 @@ pub const PARAMS: C2fParams = C2fParams::DEFAULT;
 /// same tables, levels and penalties). Each needs no more scratch than
 /// [`PARAMS`] (`R <= 2`), which the `const` assertion below checks at
 /// compile time.
-pub const POINTS: [(&str, C2fParams); 10] = [
+pub const POINTS: [(&str, C2fParams); 12] = [
     (
         "r2b1",
         C2fParams {
@@ -111,6 +111,24 @@ pub const POINTS: [(&str, C2fParams); 10] = [
     (
         "r2b2lh",
         C2fParams {
+            lr_from_left: true,
+            finest: 1,
+            ..PARAMS
+        },
+    ),
+    (
+        "r2b2l3h",
+        C2fParams {
+            lr_from_left: true,
+            paths: 3,
+            finest: 1,
+            ..PARAMS
+        },
+    ),
+    (
+        "r2b1lh",
+        C2fParams {
+            band: Some(1),
             lr_from_left: true,
             finest: 1,
             ..PARAMS

@@ -405,5 +405,8 @@ fn spread_fills_each_block_and_counts_frame_pixels() {
             }
         }
     }
-    assert_eq!((m.off_texture, m.off_ambiguous, m.off_inconsistent), (0, 0, 9));
+    assert_eq!(
+        (m.off_texture, m.off_ambiguous, m.off_inconsistent),
+        (0, 0, 9)
+    );
 }

@@ -646,10 +646,11 @@ fn dem_aloe() -> Section {
          filter (the second round's choice). The `--engine core` rows run core's \
          fixed-point coarse-to-fine engine (`protogist::stereo::c2f`, the firmware's stage: \
          grey, one level, no pooling, 5 SGM paths, windows ±2, band 2, P2 4 chosen on Motorcycle), ms its run alone, \
-         the best of 5 runs, single thread (the row with `--c2f-band 1 --lr-from-left --paths 3` is the \
-         engine's cheapest full-size point, r2b1l3 in the operating points above, and with \
-         `--c2f-finest 1` added it is r2b1l3h, the map of the half-size pair spread over 2x2 \
-         blocks); the `--engine reference` rows \
+         the best of 15 runs, single thread (the row with `--c2f-band 1 --lr-from-left --paths 3` is the \
+         engine's cheapest full-size point, r2b1l3 in the operating points above; the row \
+         with `--c2f-finest 1` is r2b2l3h, the map of the half-size pair spread over 2x2 \
+         blocks, at the setting chosen on Motorcycle among the points within 1,500 \
+         instructions/px, docs/STEREO.md, section Finest level); the `--engine reference` rows \
          beside them are the same settings in the f32 reference.\n\n{STEREO_TABLE_HEAD}",
     );
     // (width, D, extra options); every row runs with `--refine 0` unless it
@@ -722,15 +723,17 @@ fn dem_aloe() -> Section {
         "--paths",
         "3",
     ];
-    // The same at level 1 only (`--c2f-finest 1`: the half-size map spread
-    // over 2x2 blocks), r2b1l3h in the operating points above.
+    // The engine stopped at level 1 (`--c2f-finest 1`: the half-size map
+    // spread over 2x2 blocks) at the setting chosen on Motorcycle among the
+    // points within 1,500 instructions/px (`stereo_grid.py --grid half`):
+    // r2b2l3h in the operating points above.
     const ENGINE_CORE_HALF: [&str; 13] = [
         "--engine",
         "core",
         "--c2f",
         "2",
         "--c2f-band",
-        "1",
+        "2",
         "--p2",
         "4",
         "--lr-from-left",
@@ -834,13 +837,23 @@ fn stereo_row(files: [&Path; 3], w: &str, d: &str, extra: &[&str]) -> String {
             let f = v.get("final")?;
             let g = |k: &str| f.get(k).and_then(serde_json::Value::as_f64);
             Some(format!(
-                "| {w} | {d} | {opts} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {:.0} |\n",
+                "| {w} | {d} | {opts} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {} |\n",
                 g("bad1_estimated")?, g("bad2_estimated")?, g("bad4_estimated")?,
                 g("bad1_all")?, g("bad2_all")?, g("bad4_all")?,
-                g("mae")?, g("density")?, v.get("stereo_ms")?.as_f64()?
+                g("mae")?, g("density")?, ms(v.get("stereo_ms")?.as_f64()?)
             ))
         })
         .unwrap_or_else(|| format!("| {w} | {d} | {opts} | {NOT_YET} | | | | |\n"))
+}
+
+/// Milliseconds as printed: one decimal below 100 ms (the fast engines sit
+/// beside SGBM's few ms), whole ms above.
+fn ms(v: f64) -> String {
+    if v < 100.0 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.0}")
+    }
 }
 
 /// The same table header as the Aloe section's.
@@ -868,7 +881,8 @@ fn dem_motorcycle() -> Section {
          --max-disp D --refine 0 --json --out DIR OPTIONS`; metrics as in the Aloe section. \
          `--preset held-out` is the setting chosen on this pair for both sizes, `--speckle 0` \
          the same without its speckle filter; the `--engine core` rows are core's fixed-point \
-         engine at r2b1l3h (the operating points above), ms its run alone, the best of 5 \
+         engine at r2b2l3h (the operating points above; chosen on this pair, docs/STEREO.md, \
+         section Finest level), ms its run alone, the best of 15 \
          runs, single thread \
          (`host/src/stereo_cmd/preset.rs`; docs/STEREO.md, section Settings chosen on a \
          held-out pair).\n\n{STEREO_TABLE_HEAD}"
@@ -885,7 +899,7 @@ fn dem_motorcycle() -> Section {
                 "--c2f",
                 "2",
                 "--c2f-band",
-                "1",
+                "2",
                 "--p2",
                 "4",
                 "--lr-from-left",
@@ -907,7 +921,7 @@ fn dem_motorcycle() -> Section {
 fn opencv_rows(data: &Path, pair: &str) -> String {
     let mut out = String::from(
         "\nOpenCV under the same protocol (area-averaged images, GT as the mean of its known \
-         pixels), single thread, ms the best of 5 runs, from `scripts/opencv_baseline.py` with the versions pinned in \
+         pixels), single thread, ms the best of 15 runs, from `scripts/opencv_baseline.py` with the versions pinned in \
          `scripts/requirements-opencv.txt` (a venv in `target/venv-opencv`). SGBM is colour, \
          P1 = 8·3·bs², P2 = 32·3·bs²; BM is grey. Both search numDisparities = D (0..D−1, \
          as in the issue's measurement; ours searches 0..D).\n\n\

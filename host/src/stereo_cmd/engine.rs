@@ -208,7 +208,7 @@ pub struct CoreRun {
 /// Runs of [`C2f::run`] timed per pair; `run_ms` is the fastest (single
 /// runs move by up to 2x on a shared machine; the OpenCV baseline script
 /// times SGBM the same way).
-pub const TIMED_RUNS: usize = 5;
+pub const TIMED_RUNS: usize = 15;
 
 /// Trains the per-level tables of `plan` and runs the engine on the packed
 /// `w x h` pair; only [`C2f::run`] is timed in `run_ms`, the best of
