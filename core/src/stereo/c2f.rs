@@ -139,7 +139,7 @@ pub struct C2fParams {
     /// each of its cells filling its `2^F x 2^F` block of the frame (the
     /// last row and column of blocks also the frame's leftover rows and
     /// columns) with its disparity times `2^F` (module docs, "Finest
-    /// level").
+    /// level"). [`C2f::run`] still takes and checks one table per level.
     pub finest: u8,
 }
 

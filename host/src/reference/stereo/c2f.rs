@@ -211,7 +211,9 @@ pub fn stereo_c2f_from(
 
 /// Level-`k` maps over the `w x h` frame: frame pixel `(x, y)` takes level
 /// pixel `(min(x >> k, wk − 1), min(y >> k, hk − 1))`, its disparities
-/// times `2^k`; the OFF counts are those of the frame's pixels.
+/// times `2^k`; the OFF counts are those of the frame's pixels (a level
+/// vector shorter than `wk·hk` reads as OFF, `None`, for its missing
+/// pixels).
 pub fn spread(maps: &DisparityMapsF, k: usize, (w, h): (usize, usize)) -> DisparityMapsF {
     let (wk, hk) = (maps.width, maps.height);
     let scale = (1u32 << k) as f32;
@@ -220,14 +222,17 @@ pub fn spread(maps: &DisparityMapsF, k: usize, (w, h): (usize, usize)) -> Dispar
     };
     let index: Vec<usize> = (0..w * h).map(|p| src(p % w, p / w)).collect();
     let times = |v: &[Option<f32>]| -> Vec<Option<f32>> {
-        index.iter().map(|&q| v[q].map(|d| d * scale)).collect()
+        index
+            .iter()
+            .map(|&q| v.get(q).copied().flatten().map(|d| d * scale))
+            .collect()
     };
     let mut out = DisparityMapsF {
         width: w,
         height: h,
         disparity: index
             .iter()
-            .map(|&q| match maps.disparity[q].get() {
+            .map(|&q| match maps.disparity.get(q).and_then(|c| c.get()) {
                 Some(d) => DisparityCell::from_raw(U8F8::from_bits(
                     (u32::from(d.to_bits()) << k).min(u32::from(u16::MAX - 1)) as u16,
                 )),
@@ -240,7 +245,10 @@ pub fn spread(maps: &DisparityMapsF, k: usize, (w, h): (usize, usize)) -> Dispar
         off_texture: 0,
         off_ambiguous: 0,
         off_inconsistent: 0,
-        why_off: index.iter().map(|&q| maps.why_off[q]).collect(),
+        why_off: index
+            .iter()
+            .map(|&q| maps.why_off.get(q).copied().flatten())
+            .collect(),
     };
     for why in out.why_off.iter().flatten() {
         match why {
