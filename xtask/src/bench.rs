@@ -610,6 +610,26 @@ fn segmentation_iou() -> Section {
     Section { title, body }
 }
 
+/// The engine stopped at level 1 (`--c2f-finest 1`: the half-size map
+/// spread over 2x2 blocks) at the setting chosen on Motorcycle among the
+/// points within 1,500 instructions/px (`stereo_grid.py --grid half`):
+/// r2b2l3h in the operating points above.
+const ENGINE_CORE_HALF: [&str; 13] = [
+    "--engine",
+    "core",
+    "--c2f",
+    "2",
+    "--c2f-band",
+    "2",
+    "--p2",
+    "4",
+    "--lr-from-left",
+    "--paths",
+    "3",
+    "--c2f-finest",
+    "1",
+];
+
 fn dem_aloe() -> Section {
     let title = "Disparity energy model on Middlebury Aloe (f32 reference)";
     let dir = data_root().join("aloe");
@@ -722,25 +742,6 @@ fn dem_aloe() -> Section {
         "--lr-from-left",
         "--paths",
         "3",
-    ];
-    // The engine stopped at level 1 (`--c2f-finest 1`: the half-size map
-    // spread over 2x2 blocks) at the setting chosen on Motorcycle among the
-    // points within 1,500 instructions/px (`stereo_grid.py --grid half`):
-    // r2b2l3h in the operating points above.
-    const ENGINE_CORE_HALF: [&str; 13] = [
-        "--engine",
-        "core",
-        "--c2f",
-        "2",
-        "--c2f-band",
-        "2",
-        "--p2",
-        "4",
-        "--lr-from-left",
-        "--paths",
-        "3",
-        "--c2f-finest",
-        "1",
     ];
     const ENGINE_REF: [&str; 15] = [
         "--engine",
@@ -893,21 +894,7 @@ fn dem_motorcycle() -> Section {
             &["--levels", "1", "--sgm"],
             &["--preset", "held-out", "--speckle", "0"],
             &["--preset", "held-out"],
-            &[
-                "--engine",
-                "core",
-                "--c2f",
-                "2",
-                "--c2f-band",
-                "2",
-                "--p2",
-                "4",
-                "--lr-from-left",
-                "--paths",
-                "3",
-                "--c2f-finest",
-                "1",
-            ],
+            &ENGINE_CORE_HALF,
         ] {
             body.push_str(&stereo_row([&l, &r, &gt], w, d, extra));
         }

@@ -1110,8 +1110,9 @@ impl<'e> Pass<'e> {
 
     /// The output rows of level row `y` at a finest level `k > 0`: frame
     /// rows `y·2^k ..` (to the frame's last row after the level's last
-    /// row), each frame pixel `x` taking the verdict in `col` of level
-    /// pixel `min(x >> k, w − 1)`, its disparity times `2^k`.
+    /// row), each level pixel's verdict in `col` (its disparity times
+    /// `2^k`) over frame columns `x·2^k ..` (to the frame's last column
+    /// after the level's last pixel).
     fn spread(
         &self,
         y: usize,
@@ -1126,12 +1127,17 @@ impl<'e> Pass<'e> {
         } else {
             first + (1 << self.k)
         };
-        let last = self.w.saturating_sub(1);
         for fy in first..end {
-            for fx in 0..fw {
-                let code = col.get((fx >> self.k).min(last)).map_or(-1, |c| c[0]);
-                let verdict = Verdict::from_code(code).scaled(self.k);
-                sink(fx, fy, verdict.count(report));
+            for (x, c) in col.iter().take(self.w).enumerate() {
+                let verdict = Verdict::from_code(c[0]).scaled(self.k);
+                let cols = if x + 1 == self.w {
+                    (x << self.k)..fw
+                } else {
+                    (x << self.k)..(x + 1) << self.k
+                };
+                for fx in cols {
+                    sink(fx, fy, verdict.count(report));
+                }
             }
         }
     }
