@@ -7,9 +7,9 @@
 //! refinement, no completion. With `--engine core` those are the defaults (levels 1, pool
 //! 0, SGM with 5 paths on), so `--engine core --c2f 2` alone is valid; any
 //! option that asks for something else is a [`HostError::InvalidArgument`],
-//! checked before any training. `--c2f-radius`, `--c2f-band`, `--p1`,
-//! `--p2`, `--p2-ref-width`, `--min-margin`, `--lr`, `--lr-from-left` and
-//! `--paths` map to
+//! checked before any training. `--c2f-radius`, `--c2f-band`,
+//! `--c2f-finest`, `--p1`, `--p2`, `--p2-ref-width`, `--min-margin`,
+//! `--lr`, `--lr-from-left` and `--paths` map to
 //! [`C2fParams`] ([`c2f_params`]). The per-level tables are trained as the
 //! reference path's ([`super::table_for`]), so both engines decode with the
 //! same integer weights.
