@@ -18,6 +18,8 @@
 
 pub use fixed::types::{I10F6, U10F6, U8F8};
 
+use core::num::NonZeroU32;
+
 /// `x / 2^n` rounded to nearest, ties toward +∞. `n` must be in `1..=62`.
 #[inline(always)]
 pub const fn round_shift(x: i64, n: u32) -> i64 {
@@ -123,20 +125,28 @@ pub fn isqrt_round(x: u32) -> u32 {
     let t = if k >= 0 { x >> (2 * k) } else { x << (-2 * k) };
     let seed = u32::from(*SQRT_SEED.get(t as usize & 0xff).unwrap_or(&255));
     // seed / 16 * 2^k, rounded up to at least 1.
-    let mut y = if k >= 4 {
+    let y = if k >= 4 {
         seed << (k - 4)
     } else {
         (seed >> (4 - k)).max(1)
     };
-    // One step from anywhere lands at or above the root (AM-GM).
-    y = (y + x / y).div_ceil(2);
+    // One step from anywhere lands at or above the root (AM-GM). `y` is at
+    // least 1 here and stays so (`next` is 0 only if `y` were): held as
+    // `NonZeroU32`, so that the divisions have no panic path.
+    let Some(y) = NonZeroU32::new(y) else {
+        return 0;
+    };
+    let first = (y.get() + x / y).div_ceil(2);
+    let Some(mut y) = NonZeroU32::new(first) else {
+        return 0;
+    };
     loop {
-        let next = (y + x / y) / 2;
-        if next >= y {
-            break;
+        match NonZeroU32::new((y.get() + x / y) / 2) {
+            Some(next) if next < y => y = next,
+            _ => break,
         }
-        y = next;
     }
+    let y = y.get();
     // y = floor(sqrt(x)); round up when x >= (y + 1/2)^2 = y^2 + y + 1/4.
     if x - y * y > y {
         y + 1

@@ -140,6 +140,35 @@ impl Rgb8 {
     }
 }
 
+/// The rows of an [`ImageViewMut`], split off one stride at a time: no
+/// division (unlike `chunks_mut`, which divides by the stride to size
+/// itself), so no panic path.
+struct RowsMut<'a, P> {
+    rest: &'a mut [P],
+    width: usize,
+    stride: usize,
+    left: usize,
+}
+
+impl<'a, P> Iterator for RowsMut<'a, P> {
+    type Item = &'a mut [P];
+
+    fn next(&mut self) -> Option<&'a mut [P]> {
+        self.left = self.left.checked_sub(1)?;
+        let rest = core::mem::take(&mut self.rest);
+        // The last row may be shorter than the stride, not than the width.
+        let (row, tail) = rest.split_at_mut(self.stride.min(rest.len()));
+        self.rest = tail;
+        Some(row.get_mut(..self.width).unwrap_or(&mut []))
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.left, Some(self.left))
+    }
+}
+
+impl<P> ExactSizeIterator for RowsMut<'_, P> {}
+
 /// A read-only image over a borrowed slice.
 #[derive(Clone, Copy, Debug)]
 pub struct ImageView<'a, P> {
@@ -238,13 +267,14 @@ impl<'a, P> ImageView<'a, P> {
 
     /// All rows, top to bottom, each exactly `width` pixels long.
     pub fn rows(&self) -> impl ExactSizeIterator<Item = &'a [P]> + DoubleEndedIterator + 'a {
-        let width = self.width;
-        // `chunks` yields the last (short) row too; the constructor
-        // guarantees it holds at least `width` elements.
-        self.data
-            .chunks(self.stride)
-            .take(self.height)
-            .map(move |r| r.get(..width).unwrap_or(&[]))
+        let (data, width, stride) = (self.data, self.width, self.stride);
+        // By row index, not `chunks(stride)`: `chunks` divides by the
+        // stride to size itself, a division the compiler cannot prove
+        // non-zero, so a panic path. The constructor guarantees every row.
+        (0..self.height).map(move |y| {
+            let start = y * stride;
+            data.get(start..start + width).unwrap_or(&[])
+        })
     }
 
     /// A sub-image of `w` x `h` pixels at `(x, y)`, or `None` if it does not fit.
@@ -363,11 +393,12 @@ impl<'a, P> ImageViewMut<'a, P> {
 
     /// All rows, mutably, top to bottom.
     pub fn rows_mut(&mut self) -> impl ExactSizeIterator<Item = &mut [P]> + '_ {
-        let width = self.width;
-        self.data
-            .chunks_mut(self.stride)
-            .take(self.height)
-            .map(move |r| r.get_mut(..width).unwrap_or(&mut []))
+        RowsMut {
+            rest: &mut *self.data,
+            width: self.width,
+            stride: self.stride,
+            left: self.height,
+        }
     }
 
     /// Row `y` mutably together with row `y + 1` read-only, for in-place
@@ -376,7 +407,7 @@ impl<'a, P> ImageViewMut<'a, P> {
         if y + 1 >= self.height {
             return None;
         }
-        let (head, tail) = self.data.split_at_mut((y + 1) * self.stride);
+        let (head, tail) = self.data.split_at_mut_checked((y + 1) * self.stride)?;
         let row = head.get_mut(y * self.stride..y * self.stride + self.width)?;
         let next = tail.get(..self.width)?;
         Some((row, next))
@@ -492,6 +523,31 @@ mod tests {
         assert!(img.sub_view(2, 0, 2, 1).is_none());
         assert!(img.sub_view(0, 0, 0, 1).is_none());
         assert!(img.sub_view(3, 0, 1, 1).is_none());
+    }
+
+    #[test]
+    fn rows_are_exact_with_a_short_last_row_and_in_sub_views() {
+        // 3x3, stride 4, in the shortest buffer: the last row has no padding.
+        let mut buf: [u8; 11] = core::array::from_fn(|i| i as u8);
+        let img = ImageView::new(&buf, 3, 3, 4).unwrap();
+        assert_eq!(img.rows().len(), 3);
+        assert_eq!(img.rows().next_back(), Some(&[8u8, 9, 10][..]));
+        let mut m = ImageViewMut::new(&mut buf, 3, 3, 4).unwrap();
+        assert_eq!(m.rows_mut().len(), 3);
+        for (y, row) in m.rows_mut().enumerate() {
+            assert_eq!(row.len(), 3);
+            row.fill(100 + y as u8);
+        }
+        // A sub-view's slice runs to the end of the buffer: still 2 rows.
+        let mut sub = m.sub_view_mut(1, 1, 2, 2).unwrap();
+        let mut rows = sub.rows_mut();
+        assert_eq!(rows.len(), 2);
+        rows.next().unwrap().fill(1);
+        assert_eq!(rows.len(), 1);
+        rows.next().unwrap().fill(2);
+        assert!(rows.next().is_none());
+        drop(rows);
+        assert_eq!(buf, [100, 100, 100, 3, 101, 1, 1, 7, 102, 2, 2]);
     }
 
     #[test]

@@ -72,6 +72,7 @@ use crate::fixed::{div_round_i64, isqrt_floor_u128, isqrt_round_u64};
 use crate::image::{ImageError, ImageView};
 use crate::segment::BitView;
 use core::fmt;
+use core::num::NonZeroU64;
 
 pub use fixed::types::I4F12;
 
@@ -184,11 +185,12 @@ fn centroid_of_rows(rows: impl Iterator<Item = (u64, u64)>) -> Result<Centroid, 
         sx += rsx;
         sy += rn * y as u64;
     }
-    if n == 0 {
+    // At most 2^26 pixels, so `2n` is 0 only for an empty mask.
+    let Some(two_n) = NonZeroU64::new(2 * n) else {
         return Err(ShapeError::EmptyMask);
-    }
-    // At most 2^26 pixels and coordinates below 2^13: 2^48 after the shift.
-    let q8 = |s: u64| ((2 * (s << FRAC_BITS) + n) / (2 * n)) as i32;
+    };
+    // Coordinates below 2^13: 2^48 after the shift.
+    let q8 = |s: u64| ((2 * (s << FRAC_BITS) + n) / two_n) as i32;
     Ok(Centroid {
         x_q8: q8(sx),
         y_q8: q8(sy),

@@ -6,6 +6,7 @@
 //! and prints instructions per pixel for each step.
 
 use core::fmt::Write;
+use core::num::NonZeroU64;
 use core::panic::PanicInfo;
 use core::sync::atomic::{AtomicU32, Ordering};
 
@@ -132,7 +133,8 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
 
     let t0 = ticks.now();
     cortex_m::asm::delay(CAL_DELAY);
-    let cal_ticks = (ticks.now() - t0).max(1);
+    // Non-zero by type: the conversions below divide by it.
+    let cal_ticks = NonZeroU64::new(ticks.now() - t0).unwrap_or(NonZeroU64::MIN);
     let per_tick_x100 = CAL_INSTRUCTIONS * 100 / cal_ticks;
     writeln!(
         out,
@@ -301,6 +303,9 @@ fn main() -> ! {
     }
 }
 
+/// Required by `no_std`, and never linked in: `cargo xtask firmware` fails
+/// if the ELF contains it or any of `core`'s panic functions (no panic is
+/// reachable; firmware-sim/README.md, "No panic path").
 #[panic_handler]
 fn panic(info: &PanicInfo) -> ! {
     if let Ok(mut err) = hio::hstderr() {

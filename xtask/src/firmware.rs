@@ -116,10 +116,95 @@ pub fn run_qemu(elf: &std::path::Path) -> Result<QemuRun> {
     })
 }
 
-/// Builds firmware-sim for thumbv7em and runs it under QEMU.
+/// Builds firmware-sim for thumbv7em, checks that no panic path is linked
+/// in ([`check_no_panic`]) and runs it under QEMU.
 pub fn build_and_run() -> Result<QemuRun> {
     build_thumb("firmware-sim")?;
+    println!("{}", check_no_panic(&elf())?);
     run_qemu(&elf())
+}
+
+/// Symbols whose presence in the linked ELF means a panic is reachable:
+/// the panic entry points of `core` and the `#[panic_handler]`.
+const PANIC_MARKERS: [&str; 2] = ["core::panicking::", "rust_begin_unwind"];
+
+/// The symbols of `nm -C` output that are panic entry points.
+pub fn panic_symbols(nm: &str) -> Vec<&str> {
+    nm.lines()
+        .filter_map(|l| l.splitn(3, ' ').nth(2))
+        .filter(|name| PANIC_MARKERS.iter().any(|m| name.contains(m)))
+        .collect()
+}
+
+/// The functions of `objdump -d -C` output that branch to a panic entry
+/// point (`core::` itself excluded), each once, in address order.
+pub fn panic_callers(objdump: &str) -> Vec<String> {
+    let mut current: Option<&str> = None;
+    let mut callers: Vec<String> = Vec::new();
+    for line in objdump.lines() {
+        // A function starts with `0001165e <name>:`.
+        if let Some(name) = line
+            .strip_suffix(">:")
+            .and_then(|l| l.split_once(" <"))
+            .map(|(_, name)| name)
+        {
+            current = Some(name);
+            continue;
+        }
+        let Some(target) = line.rsplit_once('<').map(|(_, t)| t) else {
+            continue;
+        };
+        let branches = line
+            .split('\t')
+            .nth(2)
+            .is_some_and(|op| op.starts_with('b'));
+        // `name>` or `name+0x4c>`: a branch inside the function is not a call.
+        let callee = target.trim_end_matches('>');
+        let callee = callee.split_once('+').map_or(callee, |(name, _)| name);
+        if branches && PANIC_MARKERS.iter().any(|m| callee.contains(m)) {
+            let caller = current.filter(|f| !f.starts_with("core::") && *f != callee);
+            if let Some(f) = caller {
+                if callers.last().map(String::as_str) != Some(f) {
+                    callers.push(f.to_string());
+                }
+            }
+        }
+    }
+    callers
+}
+
+/// Fails if the firmware ELF links any panic entry point: the link-time
+/// proof that no panic is reachable (the optimiser removed every path, so
+/// `--gc-sections` dropped `core`'s panic functions and the handler).
+/// On failure, lists the functions that still branch to one.
+pub fn check_no_panic(elf: &std::path::Path) -> Result<String> {
+    let nm = output(Command::new("arm-none-eabi-nm").arg("-C").arg(elf))?;
+    let found = panic_symbols(&nm);
+    if found.is_empty() {
+        return Ok(format!(
+            "no panic path: {} links none of {PANIC_MARKERS:?}",
+            elf.display()
+        ));
+    }
+    let dis = output(
+        Command::new("arm-none-eabi-objdump")
+            .args(["-d", "-C"])
+            .arg(elf),
+    )?;
+    let callers = panic_callers(&dis);
+    let mut msg = format!(
+        "the firmware can panic: it links {} panic symbol(s):\n",
+        found.len()
+    );
+    for s in &found {
+        msg.push_str(&format!("  {s}\n"));
+    }
+    msg.push_str("called from:\n");
+    for c in &callers {
+        msg.push_str(&format!("  {c}\n"));
+    }
+    msg.push_str("(`arm-none-eabi-addr2line -i -e ELF ADDR` on a call site gives its source line)");
+    Err(msg)
 }
 
 /// Output of the host build of firmware-sim.
@@ -226,4 +311,60 @@ pub fn size_report() -> Result<String> {
         return Err(format!("firmware exceeds the memory.x budget:\n{report}"));
     }
     Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const NM: &str = "\
+0000f60e t __rustc::rust_begin_unwind
+000115cc t core::panicking::panic_fmt
+00012362 t core::panicking::panic_const::panic_const_div_by_zero
+00022e40 t <protogist::stereo::c2f::Pass>::votes
+";
+
+    const DIS: &str = "\
+00022e40 <<protogist::stereo::c2f::Pass>::votes>:
+   22e40:\tb5f0      \tpush\t{r4, r5, r6, r7, lr}
+   22fa4:\tf002 8263 \tbeq.w\t2546e <<protogist::stereo::c2f::Pass>::votes+0x262e>
+   25476:\tf7ed f8a9 \tbl\t12362 <core::panicking::panic_const::panic_const_div_by_zero>
+   25480:\tf7ed f8a9 \tbl\t115cc <core::panicking::panic_fmt>
+
+0002547a <<protogist::stereo::c2f::Pass>::decision>:
+   2547a:\tb5f0      \tpush\t{r4, r5, r6, r7, lr}
+   2547c:\tf7ed f8a9 \tbl\t2547a <<protogist::stereo::c2f::Pass>::decision>
+
+000115cc <core::panicking::panic_fmt>:
+   115d0:\tf7ed f8a9 \tbl\tf60e <__rustc::rust_begin_unwind>
+   115d4:\t6818      \tldr\tr0, [r3, #0]\t@ <core::panicking::panic_fmt>
+
+0000f60e <__rustc::rust_begin_unwind>:
+   f630:\tf7ed f8a9 \tb.n\tf65a <__rustc::rust_begin_unwind+0x4c>
+";
+
+    #[test]
+    fn panic_symbols_finds_the_entry_points_only() {
+        assert_eq!(
+            panic_symbols(NM),
+            [
+                "__rustc::rust_begin_unwind",
+                "core::panicking::panic_fmt",
+                "core::panicking::panic_const::panic_const_div_by_zero"
+            ]
+        );
+        let clean: String = NM.lines().skip(3).map(|l| format!("{l}\n")).collect();
+        assert!(panic_symbols(&clean).is_empty());
+    }
+
+    #[test]
+    fn panic_callers_names_each_branching_function_once() {
+        // Not `decision` (it branches to itself), not core's own panic_fmt,
+        // not the handler's branches inside itself, and a load that merely
+        // names a panic symbol is not a branch.
+        assert_eq!(
+            panic_callers(DIS),
+            ["<protogist::stereo::c2f::Pass>::votes"]
+        );
+    }
 }

@@ -28,8 +28,9 @@ impl<'r> Ring<'r> {
         let rows = rows
             .get_mut(..needed)
             .ok_or(ConspicuityError::ScratchTooSmall { needed, got })?;
-        let (prev, rest) = rows.split_at_mut(pw);
-        let (cur, next) = rest.split_at_mut(pw);
+        let too_small = ConspicuityError::ScratchTooSmall { needed, got };
+        let (prev, rest) = rows.split_at_mut_checked(pw).ok_or(too_small)?;
+        let (cur, next) = rest.split_at_mut_checked(pw).ok_or(too_small)?;
         Ok(Self { prev, cur, next })
     }
 

@@ -427,10 +427,10 @@ fn layer<K: MacKernel, T>(
     let full = n - n % 4;
     let xs = x.get(..full / 2).unwrap_or(&[]);
     let mut acc = [0i32; ROWS_PER_CALL];
-    for (rows, outs) in w
-        .chunks(ROWS_PER_CALL * n)
-        .zip(out.chunks_mut(ROWS_PER_CALL))
-    {
+    // n >= 1, so the block is never 0; `max` lets the compiler see it too
+    // and drop `chunks`' panic path.
+    let block = ROWS_PER_CALL.saturating_mul(n).max(1);
+    for (rows, outs) in w.chunks(block).zip(out.chunks_mut(ROWS_PER_CALL)) {
         let acc = acc.get_mut(..outs.len()).unwrap_or(&mut []);
         K::dot_rows(rows, n, full, xs, acc);
         for (((o, &a), row), p) in outs
@@ -581,9 +581,11 @@ pub fn top_k(model: &Model<'_>, outputs: &[u16], ranked: &mut [Ranked]) -> Resul
         }
         let end = filled.min(ranked.len().saturating_sub(1));
         if let Some(tail) = ranked.get_mut(pos..=end) {
-            tail.rotate_right(1);
-            if let Some(first) = tail.first_mut() {
-                *first = entry;
+            // Shift the tail one place right, dropping its last entry, with
+            // `entry` first.
+            let mut carry = entry;
+            for slot in tail.iter_mut() {
+                core::mem::swap(slot, &mut carry);
             }
         }
         filled = (filled + 1).min(ranked.len());

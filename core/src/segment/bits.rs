@@ -329,7 +329,10 @@ pub(super) fn morph_n(
         core::mem::swap(&mut a, &mut b);
     }
     if n % 2 == 1 {
-        map.copy_from_slice(scratch);
+        // Equal lengths (checked by the caller); a zip has no panic path.
+        for (m, &s) in map.iter_mut().zip(scratch.iter()) {
+            *m = s;
+        }
     }
 }
 

@@ -9,6 +9,7 @@ use crate::conspicuity::EdgeCell;
 use crate::disparity::DisparityCell;
 use crate::fixed::isqrt_round_u64;
 use crate::image::{ImageView, ImageViewMut};
+use core::num::{NonZeroU128, NonZeroU64};
 
 /// Fraction bits of [`SelectedStats`] and [`DisparityRange`] values.
 pub const STAT_FRAC_BITS: u32 = 12;
@@ -153,14 +154,13 @@ pub fn selected_stats(
         n += u64::from(rn);
         sum += u64::from(rsum);
     }
-    if n == 0 {
-        return None;
-    }
-    let mean = ((sum << (EXTRA + 1)) + n) / (2 * n);
+    // At most 2^26 pixels, so `2n` and `2n²` are 0 only when `n` is.
+    let two_n = NonZeroU64::new(2 * n)?;
+    let mean = ((sum << (EXTRA + 1)) + n) / two_n;
     // var (bits²) = (n·Σb² − (Σb)²) / n²; in output units × 2^(2·EXTRA).
     let num = u128::from(n) * u128::from(sum2) - u128::from(sum) * u128::from(sum);
     let n2 = u128::from(n) * u128::from(n);
-    let var = ((num << (2 * EXTRA + 1)) + n2) / (2 * n2);
+    let var = ((num << (2 * EXTRA + 1)) + n2) / NonZeroU128::new(2 * n2)?;
     let sigma = isqrt_round_u64(u64::try_from(var).unwrap_or(u64::MAX));
     Some(SelectedStats {
         count: u32::try_from(n).unwrap_or(u32::MAX),

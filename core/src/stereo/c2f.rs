@@ -879,7 +879,8 @@ impl<'e> Pass<'e> {
         let centre2 = 2 * usize::from(lo) + self.n - 1;
         // 2s in [centre2 − 2b, centre2 + 2b], s = ks·step.
         let (lo2, hi2) = (centre2.saturating_sub(2 * b), centre2 + 2 * b);
-        let step2 = 2 * self.step;
+        // Never 0 (`step >= 1`); `max` shows the compiler (no panic path).
+        let step2 = (2 * self.step).max(1);
         let first = lo2.div_ceil(step2);
         let last = (hi2 / step2 + 1).min(self.shifts);
         first.min(last)..last
@@ -895,7 +896,9 @@ impl<'e> Pass<'e> {
         mut out: Output<'_, F>,
         probe: &mut impl Probe,
     ) -> Result<usize, StereoError> {
-        let (w, h, n) = (self.w, self.h, self.n);
+        // `n` is at least 1 (every level has a candidate); `max` shows the
+        // compiler, so that the chunk loops below have no panic path.
+        let (w, h, n) = (self.w, self.h, self.n.max(1));
         let dem = &self.e.dem;
         let carriers = usize::from(dem.params.carriers);
         let taps = 2 * usize::from(dem.params.radius) + 1;
@@ -917,7 +920,7 @@ impl<'e> Pass<'e> {
         ];
         let mut col = &mut **bufs.col;
         let col = take(&mut col, w, "col")?;
-        let stride = n + 1;
+        let stride = n.saturating_add(1);
         let mut sc = &mut **bufs.scores;
         let (sl, sr) = (
             take(&mut sc, w * stride, "scores")?,
@@ -1035,10 +1038,9 @@ impl<'e> Pass<'e> {
                 } else {
                     (&*lo_r, &*vo_r)
                 };
-                for (x, ((raw, dst), (&lo, &v))) in sc
+                for (x, (raw, ((&lo, &v), dst))) in sc
                     .chunks_exact_mut(stride)
-                    .zip(cost.chunks_exact_mut(n))
-                    .zip(lo.iter().zip(vo))
+                    .zip(lo.iter().zip(vo).zip(cost.chunks_exact_mut(n)))
                     .enumerate()
                 {
                     let top = if eye == 0 { x } else { w - 1 - x };
@@ -1197,11 +1199,12 @@ impl<'e> Pass<'e> {
         best: &mut [u32],
         right: &mut [i32],
     ) {
-        let n = self.n;
+        // At least 1; `max` shows the compiler (no panic path in `chunks`).
+        let n = self.n.max(1);
         right.fill(-1);
         best.fill(u32::MAX);
         for (x, (raw, (&lo, s))) in scores
-            .chunks_exact(n + 1)
+            .chunks_exact(n.saturating_add(1))
             .zip(lo.iter().zip(sums.chunks_exact(n)))
             .enumerate()
         {
@@ -1235,8 +1238,10 @@ impl<'e> Pass<'e> {
         voters: &mut [u16],
         cells_buf: &mut [[i32; 3]],
     ) -> usize {
-        let n = if N == 0 { self.n } else { N };
-        let (w, step) = (self.w, self.step);
+        // None of `n`, `w`, `step` is 0 (`Pass::new`); `max` shows the
+        // compiler, so that the divisions and chunk loops have no panic path.
+        let n = if N == 0 { self.n.max(1) } else { N };
+        let (w, step) = (self.w.max(1), self.step.max(1));
         let (step_pow2, step_log) = (step.is_power_of_two(), step.trailing_zeros());
         let carriers = usize::from(self.e.dem.params.carriers);
         let bytes = table.weight_bytes();
@@ -1246,7 +1251,7 @@ impl<'e> Pass<'e> {
         let mut evaluated = 0;
         scores.fill(0);
         for (px, ((dst, &lo), v)) in scores
-            .chunks_exact_mut(n + 1)
+            .chunks_exact_mut(n.saturating_add(1))
             .zip(lo)
             .zip(voters.iter_mut())
             .enumerate()

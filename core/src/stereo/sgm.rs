@@ -445,7 +445,9 @@ impl Rows<'_> {
             prev_lo,
             pen,
         } = self;
-        let n = h.len();
+        // At least 1 (`Sgm::new`); `max` shows the compiler, so that the
+        // chunk loops have no panic path.
+        let n = h.len().max(1);
         // Forward sweep: left→right, top→bottom, and the diagonal from the
         // upper right, which reads slot x + 1 before it is overwritten.
         let mut diag = from_right.chunks_exact_mut(n).peekable();

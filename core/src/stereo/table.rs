@@ -59,11 +59,17 @@ impl DemLayout {
     /// Position shifts at `level`: `0, step, 2·step, ...` level px, enough
     /// to cover `0..=max_disp` full-resolution px.
     pub const fn shifts(&self, level: usize) -> usize {
-        let step = (if self.shift_step == 0 {
+        // A step that shifts out of range (never for a valid layout) is
+        // taken as the widest, so that no division is by 0.
+        let base = if self.shift_step == 0 {
             1
         } else {
             self.shift_step as usize
-        }) << level;
+        };
+        let step = match base.checked_shl(level as u32) {
+            Some(s) if s > 0 && s >> level == base => s,
+            _ => usize::MAX,
+        };
         (self.max_disp as usize + 1).div_ceil(step)
     }
 
@@ -220,7 +226,12 @@ impl<'a> DemTable<'a> {
             return Err(TableError::TrailingBytes { expected, got });
         }
         let body_len = expected - 4;
-        let (body, sum) = bytes.split_at(body_len);
+        let Some((body, sum)) = bytes.split_at_checked(body_len) else {
+            return Err(TableError::Truncated {
+                needed: expected,
+                got,
+            });
+        };
         let stored = match *sum {
             [a, b, c, d] => u32::from_le_bytes([a, b, c, d]),
             _ => 0,
@@ -359,6 +370,27 @@ mod tests {
         let h = f.finish();
         b[end..].copy_from_slice(&h.to_le_bytes());
         b
+    }
+
+    #[test]
+    fn any_layout_bytes_give_counts_without_a_panic() {
+        // A corrupt header can hold any bytes: 255 levels shift the step
+        // past the word, which is taken as the widest step (one shift).
+        let l = DemLayout {
+            max_disp: 255,
+            levels: 255,
+            carriers: 255,
+            shift_step: 255,
+            radius: 255,
+            wavelength_q8: u16::MAX,
+            sigma_q12: u16::MAX,
+        };
+        assert_eq!(l.shifts(0), 2);
+        assert_eq!(l.shifts(200), 1);
+        // 255 at levels 0 and 1 (2 and 1 shifts), then 1 shift per level.
+        assert_eq!(l.groups(), 255 * (2 + 1 + 253));
+        let z = DemLayout { shift_step: 0, ..l };
+        assert_eq!(z.shifts(0), 256);
     }
 
     #[test]
