@@ -10,6 +10,7 @@ pub mod app;
 pub mod camera;
 pub mod mlp_run;
 pub mod objects;
+pub mod probe;
 pub mod stereo_run;
 
 pub use protogist as pg;

@@ -2,9 +2,9 @@
 //! shape vector, after the conspicuity stage of the same frame.
 //!
 //! They run at 160x120 on the conspicuity map of the app's last frame.
-//! Until the fixed-point disparity energy model is in core, disparity comes
-//! from the simulated camera's ground truth (a stand-in for a depth source),
-//! so these runs measure segmentation and shape, not stereo.
+//! Disparity comes from the simulated camera's ground truth (a stand-in for
+//! a depth source), so these runs measure segmentation and shape alone; the
+//! stereo stage is run and measured on its own (`stereo_run`).
 
 use crate::pg::checksum::Fnv1a;
 use crate::pg::conspicuity::EdgeCell;

@@ -13,10 +13,16 @@ const QEMU_TIMEOUT: Duration = Duration::from_secs(300);
 const COMPARED_PREFIXES: [&str; 2] = ["checksum ", "edges "];
 
 pub fn elf() -> PathBuf {
+    thumb_bin("firmware-sim")
+}
+
+/// The ELF of one firmware-sim binary of the thumbv7em build.
+fn thumb_bin(name: &str) -> PathBuf {
     root()
         .join("target/thumb")
         .join(THUMB)
-        .join("firmware/firmware-sim")
+        .join("firmware")
+        .join(name)
 }
 
 /// `cargo build --profile firmware` for thumbv7em: rustup's prebuilt target if it
@@ -116,11 +122,15 @@ pub fn run_qemu(elf: &std::path::Path) -> Result<QemuRun> {
     })
 }
 
-/// Builds firmware-sim for thumbv7em, checks that no panic path is linked
-/// in ([`check_no_panic`]) and runs it under QEMU.
+/// Builds firmware-sim for thumbv7em, checks that neither the firmware
+/// nor the panic probe (every core stage on opaque inputs,
+/// `firmware-sim/src/probe.rs`) links a panic path ([`check_no_panic`]),
+/// and runs the firmware under QEMU.
 pub fn build_and_run() -> Result<QemuRun> {
     build_thumb("firmware-sim")?;
-    println!("{}", check_no_panic(&elf())?);
+    for bin in [elf(), thumb_bin("panic-probe")] {
+        println!("{}", check_no_panic(&bin)?);
+    }
     run_qemu(&elf())
 }
 

@@ -394,7 +394,10 @@ impl<'a> Model<'a> {
 
     /// Template `v_c` (u16 per output), as its little-endian bytes.
     pub(crate) fn template(&self, c: usize) -> Option<&'a [u8]> {
-        self.templates.chunks_exact(2 * self.classes).nth(c)
+        // `classes >= 1` (`parse`); `max` shows the compiler (no panic path).
+        self.templates
+            .chunks_exact((2 * self.classes).max(1))
+            .nth(c)
     }
 }
 

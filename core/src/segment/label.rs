@@ -159,7 +159,10 @@ impl<'a> Labeller<'a> {
         set16(parent, 0, 0);
         let mut next: usize = 1;
         for (y, s) in src.rows().enumerate() {
-            let (done, rest) = self.labels.split_at_mut(y * w);
+            // Rows `0..y` are done; the buffer holds every row (`new`).
+            let Some((done, rest)) = self.labels.split_at_mut_checked(y * w) else {
+                break;
+            };
             let prev: &[u16] = match y.checked_sub(1) {
                 Some(py) => done.get(py * w..).unwrap_or(&[]),
                 None => &[],

@@ -253,7 +253,9 @@ pub fn segment_timed(
     report.thresholds = Some(t);
     report.foreground = passes::foreground(params, disparity, &t, g, bufs.d_fg);
     probe(Step::Foreground);
-    for (index, mask) in masks.chunks_exact_mut(w * h).take(k).enumerate() {
+    // `w·h >= 1` (`check_size`); `max` shows the compiler, so that the
+    // chunk loops have no panic path.
+    for (index, mask) in masks.chunks_exact_mut((w * h).max(1)).take(k).enumerate() {
         let counts = passes::slice_counts(conspicuity, disparity, g, bufs.d_fg);
         let Some(slice) = select_slice(&counts, params.exponent) else {
             break;
@@ -286,7 +288,7 @@ pub fn segment_timed(
         comps.select(g, bufs.region, bufs.table, bufs.scratch, |r, _| {
             Some(r) == best
         });
-        bufs.region.copy_from_slice(bufs.scratch);
+        copy_map(bufs.region, bufs.scratch);
         for ((o, &a), &b) in bufs
             .c_obj
             .iter_mut()
@@ -298,7 +300,7 @@ pub fn segment_timed(
         probe(Step::Refine);
         bits::nms(g, conspicuity, bufs.c_obj, bufs.nms);
         probe(Step::Nms);
-        bufs.closed.copy_from_slice(bufs.nms);
+        copy_map(bufs.closed, bufs.nms);
         bits::close(
             g,
             params.disk,
@@ -328,7 +330,7 @@ pub fn segment_timed(
         let bbox = bits::bbox(g, bufs.mask);
         if let Some((_, y0, _, y1)) = bbox {
             let rows = mask
-                .chunks_exact_mut(w)
+                .chunks_exact_mut(w.max(1))
                 .zip(bufs.mask.chunks_exact(g.stride.max(1)));
             for (out, words) in rows.take(y1 + 1).skip(y0) {
                 for (o, b) in out.chunks_mut(32).zip(words) {
@@ -370,4 +372,13 @@ pub fn segment_timed(
         probe(Step::Mask);
     }
     Ok(report)
+}
+
+/// Copies one bit map into another of the same length (the buffers are
+/// split from one slice at construction). `get` shows the compiler that the
+/// lengths match, so `copy_from_slice` has no panic path.
+fn copy_map(dst: &mut [u32], src: &[u32]) {
+    if let Some(src) = src.get(..dst.len()) {
+        dst.copy_from_slice(src);
+    }
 }

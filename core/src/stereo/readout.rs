@@ -19,6 +19,14 @@ use super::{
 };
 use crate::disparity::DisparityCell;
 use crate::fixed::{round_shift, U8F8};
+use core::num::NonZeroUsize;
+
+/// `n`, which is never 0 here (ring and slot counts are `2k + 1` or a
+/// filter's rows), as a [`NonZeroUsize`]: the `%` by it then has no panic
+/// path.
+fn nonzero(n: usize) -> NonZeroUsize {
+    NonZeroUsize::new(n).unwrap_or(NonZeroUsize::MIN)
+}
 
 /// One pixel's decision before the OFF tests.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -150,7 +158,7 @@ fn grey_of<'g>(
     level: usize,
     j: usize,
     w: usize,
-    ring_rows: usize,
+    ring_rows: NonZeroUsize,
 ) -> &'g [u16] {
     let (buf, lw, row) = if level == 0 {
         (ring, w, j % ring_rows)
@@ -169,7 +177,7 @@ struct Engine<'d, 'a> {
     h: usize,
     levels: usize,
     carriers: usize,
-    ring_rows: usize,
+    ring_rows: NonZeroUsize,
     pool: usize,
     eyes: [Eye<'a>; 2],
     col: &'a mut [[i32; 3]],
@@ -229,6 +237,7 @@ pub(super) fn run<S: GreyRows>(
     let n = table.disparities();
     let max_shift = dem.layout.max_shift();
     let (l_slots, r_slots) = (2 * pool + 1, 2 * pool + max_shift + 1);
+    let ring_rows_nz = nonzero(ring_rows);
     // Split the scratch.
     let (mut grey, mut z) = (&mut *bufs.grey, &mut *bufs.z);
     let mut eyes: [Eye<'_>; 2] = Default::default();
@@ -260,7 +269,7 @@ pub(super) fn run<S: GreyRows>(
         h,
         levels,
         carriers,
-        ring_rows,
+        ring_rows: ring_rows_nz,
         pool,
         eyes,
         col,
@@ -300,7 +309,9 @@ impl Engine<'_, '_> {
     /// through the level-0 ring, which is then reset).
     fn planes<S: GreyRows>(&mut self, rgb: [&S; 2]) {
         let (w, h) = (self.w, self.h);
-        for l in 1..self.levels {
+        // `levels <= MAX_LEVELS` (`DemParams::check`); `min` shows the
+        // compiler, so that splitting the planes at `l` has no panic path.
+        for l in 1..self.levels.min(MAX_LEVELS) {
             let (lw, lh) = (level_size(w, l), level_size(h, l));
             let (sw, sh) = (level_size(w, l - 1), level_size(h, l - 1));
             for j in 0..lh {
@@ -347,7 +358,7 @@ impl Engine<'_, '_> {
         probe: &mut impl Probe,
     ) {
         let (lw, lh) = (level_size(self.w, level), level_size(self.h, level));
-        let zrows = super::z_ring_rows(self.pool, level);
+        let zrows = nonzero(super::z_ring_rows(self.pool, level));
         let Some(next) = self.next_z.get(level).copied() else {
             return;
         };
@@ -406,7 +417,7 @@ impl Engine<'_, '_> {
         }
         let n = table.disparities();
         let max_shift = self.dem.layout.max_shift();
-        let (l_slots, r_slots) = (2 * pool + 1, 2 * pool + max_shift + 1);
+        let (l_slots, r_slots) = (nonzero(2 * pool + 1), nonzero(2 * pool + max_shift + 1));
         let rows_n = (hi_y - lo_y + 1) as u64;
         let cells = 4 * self.dem.layout.groups() as u64;
         let end = w + pool + max_shift;
@@ -458,7 +469,8 @@ impl Engine<'_, '_> {
             x0 = x1;
         }
         // The OFF tests and the output row.
-        let (lp, rp) = self.picks.split_at(w);
+        // The picks hold both eyes' rows (`pick_len`).
+        let (lp, rp) = self.picks.split_at_checked(w).unwrap_or((&[], &[]));
         for (x, &code) in lp.iter().enumerate() {
             let mut o = DisparityCell::OFF;
             match code {
@@ -500,7 +512,7 @@ impl Engine<'_, '_> {
         let [left, right] = &self.eyes;
         for (l, rw) in weights.iter().enumerate().take(self.levels) {
             let lw = level_size(self.w, l);
-            let zrows = super::z_ring_rows(self.pool, l);
+            let zrows = nonzero(super::z_ring_rows(self.pool, l));
             let mask = (1usize << l) - 1;
             let (i0, fx) = (x >> l, (x & mask) as i64);
             let i1 = (i0 + 1).min(lw - 1);
@@ -571,8 +583,8 @@ impl Engine<'_, '_> {
         k: usize,
         n: usize,
         cand: core::ops::RangeInclusive<usize>,
-        l_slots: usize,
-        r_slots: usize,
+        l_slots: NonZeroUsize,
+        r_slots: NonZeroUsize,
     ) {
         let (lo, count) = (*cand.start(), cand.end().saturating_sub(*cand.start()) + 1);
         let stride = n + 1;
@@ -649,7 +661,7 @@ impl Engine<'_, '_> {
         &mut self,
         table: &DemTable<'_>,
         c: usize,
-        slots: usize,
+        slots: NonZeroUsize,
         right: bool,
     ) -> Option<(Pick, i64)> {
         let n = table.disparities();
