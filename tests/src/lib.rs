@@ -135,6 +135,7 @@ pub fn stereo_options(
         complete: false,
         readout: protogist_host::stereo_cmd::ReadoutOptions::default(),
         json: true,
+        time_at_least: 0,
         out: out.to_path_buf(),
     }
 }

@@ -285,6 +285,7 @@ fn the_stereo_command_scores_the_completed_map_and_the_model() {
         complete: true,
         readout: ReadoutOptions::default(),
         json: true,
+        time_at_least: 0,
         out: dir.path().join("out"),
     })
     .unwrap();

@@ -211,6 +211,7 @@ fn the_command_rejects_bad_files_with_one_line_errors() {
         complete: false,
         readout: ReadoutOptions::default(),
         json: false,
+        time_at_least: 0,
         out: d.join("out"),
     };
     let err = |o: StereoOptions| run_stereo(&o).unwrap_err();

@@ -24,7 +24,7 @@ use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
 use protogist::stereo::c2f::{C2f, C2fParams};
 use protogist::stereo::{self as qs, StereoReport};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// Which implementation `protogist stereo` runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -201,7 +201,8 @@ pub struct CoreRun {
     pub report: StereoReport,
     /// Time to train (or load) the tables, ms.
     pub train_ms: f64,
-    /// Time of [`C2f::run`] alone, ms: the best of [`TIMED_RUNS`].
+    /// Time of [`C2f::run`] alone, ms: the best of at least [`TIMED_RUNS`]
+    /// runs (more if `min_ms` asks for them).
     pub run_ms: f64,
 }
 
@@ -211,12 +212,20 @@ pub struct CoreRun {
 pub const TIMED_RUNS: usize = 15;
 
 /// Trains the per-level tables of `plan` and runs the engine on the packed
-/// `w x h` pair; only [`C2f::run`] is timed in `run_ms`, the best of
-/// [`TIMED_RUNS`] (single thread).
+/// `w x h` pair; only [`C2f::run`] is timed in `run_ms`, the best of the
+/// runs (single thread): [`TIMED_RUNS`] of them, and more until `min_ms`
+/// ms have passed.
 ///
 /// # Errors
 /// [`HostError::Engine`] for what the engine rejects (sizes, tables).
-pub fn run(plan: &Plan, left: &[Rgb8], right: &[Rgb8], w: usize, h: usize) -> Result<CoreRun> {
+pub fn run(
+    plan: &Plan,
+    left: &[Rgb8],
+    right: &[Rgb8],
+    w: usize,
+    h: usize,
+    min_ms: u32,
+) -> Result<CoreRun> {
     let t_train = Instant::now();
     let bytes = (0..=plan.search.levels)
         .map(|k| Ok(table_for(&level_params(&plan.params, k), None)?.to_bytes()))
@@ -236,7 +245,10 @@ pub fn run(plan: &Plan, left: &[Rgb8], right: &[Rgb8], w: usize, h: usize) -> Re
     // The engine is deterministic: every run writes the same cells.
     let mut run_ms = f64::INFINITY;
     let mut report = StereoReport::default();
-    for _ in 0..TIMED_RUNS {
+    let (start, min) = (Instant::now(), Duration::from_millis(u64::from(min_ms)));
+    let mut runs = 0;
+    while runs < TIMED_RUNS || start.elapsed() < min {
+        runs += 1;
         let t_run = Instant::now();
         report = engine.run(
             &tables,
