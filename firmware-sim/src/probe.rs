@@ -56,9 +56,14 @@ pub struct ProbeBuffers<'a> {
     pub ranked: &'a mut [Ranked],
 }
 
-/// A `w x h` view of `d`, the stride opaque.
-fn view(d: &[Rgb8], w: usize, h: usize) -> Result<ImageView<'_, Rgb8>, ImageError> {
+/// A `w x h` view of `d`, the slice and the stride opaque.
+fn view<P>(d: &[P], w: usize, h: usize) -> Result<ImageView<'_, P>, ImageError> {
     ImageView::new(black_box(d), w, h, black_box(w))
+}
+
+/// [`view`], mutably.
+fn view_mut<P>(d: &mut [P], w: usize, h: usize) -> Result<ImageViewMut<'_, P>, ImageError> {
+    ImageViewMut::new(d, w, h, black_box(w))
 }
 
 /// One bit per stage result, so that none is optimised away.
@@ -68,8 +73,9 @@ fn seen<T, E>(r: &Result<T, E>, bit: u32) -> u32 {
 
 /// Runs every stage on `w x h` frames, the decoder tables `tables` (one
 /// per level of the coarse-to-fine engine; the first also for the full
-/// search) and the model blob `model`, each stage on its own buffers, with everything
-/// opaque to the optimiser. Returns one bit per stage that succeeded.
+/// search) and the model blob `model`, each stage on its own buffers, with
+/// everything opaque to the optimiser. Returns one bit per stage that
+/// succeeded.
 #[allow(clippy::too_many_lines)]
 pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model: &[u8]) -> u32 {
     let (w, h) = (black_box(w), black_box(h));
@@ -113,7 +119,7 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
     if let (Ok(t), Ok(l), Ok(r)) = (&parsed[0], view(left, w, h), view(right, w, h)) {
         if let (Ok(dem), Ok(mut out)) = (
             Dem::new(&black_box(C2fParams::DEFAULT.level_params(0))),
-            ImageViewMut::new(&mut *disparity, w, h, black_box(w)),
+            view_mut(&mut *disparity, w, h),
         ) {
             let s = stereo(&dem, t, &l, &r, &mut stereo_bufs, &mut out);
             bits |= seen(&s, 2);
@@ -133,13 +139,12 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
     }
 
     // Border completion, on its own inputs.
-    let edges_v = ImageView::new(black_box(&*edges), w, h, black_box(w));
-    let luv_v = ImageView::new(black_box(&*luv), w, h, black_box(w));
+    let edges_v = view(edges, w, h);
     if let (Ok(e), Ok(c), Ok(mut d), Ok(mut m), Ok(mut lab)) = (
         &edges_v,
-        &luv_v,
-        ImageViewMut::new(&mut *disparity, w, h, black_box(w)),
-        ImageViewMut::new(&mut *edge_map, w, h, black_box(w)),
+        view(luv, w, h),
+        view_mut(&mut *disparity, w, h),
+        view_mut(edge_map, w, h),
         Labeller::new(w, h, &mut *labels, &mut *parent, &mut *area),
     ) {
         let mut t = RegionTables {
@@ -149,26 +154,25 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
             hi: &mut *hi,
         };
         let params = black_box(CompleteParams::default());
-        let r = complete(&params, e, c, &mut d, &mut m, &mut lab, &mut t);
+        let r = complete(&params, e, &c, &mut d, &mut m, &mut lab, &mut t);
         bits |= seen(&r, 4);
     }
 
     // Figure-ground segmentation.
-    let disp_v = ImageView::new(black_box(&*disparity), w, h, black_box(w));
     if let (Ok(d), Ok(e), Ok(mut bufs)) = (
-        &disp_v,
+        view(disparity, w, h),
         &edges_v,
         SegmentBuffers::new(w, h, maps, seg_table),
     ) {
         let params = black_box(SegmentParams::default());
-        let r = segment(&params, d, e, &mut bufs, masks);
+        let r = segment(&params, &d, e, &mut bufs, masks);
         bits |= seen(&r, 5);
     }
 
     // The shape vector of a mask.
     let mut profile = RadialProfile::new();
     let mut vector: ShapeVector = [crate::pg::shape::ShapeElem::ZERO; SHAPE_LEN];
-    if let Ok(m) = ImageView::new(black_box(&*mask), w, h, black_box(w)) {
+    if let Ok(m) = view(mask, w, h) {
         let r = shape_vector(&m, &mut profile, &mut vector);
         bits |= seen(&r, 6);
     }

@@ -161,17 +161,18 @@ pub fn panic_callers(objdump: &str) -> Vec<String> {
             current = Some(name);
             continue;
         }
-        let Some(target) = line.rsplit_once('<').map(|(_, t)| t) else {
+        // `   addr:\tbytes\top\toperand`: a branch's operand is
+        // `addr <name>` or `addr <name+0x4c>` (a branch inside `name`).
+        let mut fields = line.split('\t').skip(2);
+        let (Some(op), Some(operand)) = (fields.next(), fields.next()) else {
             continue;
         };
-        let branches = line
-            .split('\t')
-            .nth(2)
-            .is_some_and(|op| op.starts_with('b'));
-        // `name>` or `name+0x4c>`: a branch inside the function is not a call.
-        let callee = target.trim_end_matches('>');
-        let callee = callee.split_once('+').map_or(callee, |(name, _)| name);
-        if branches && PANIC_MARKERS.iter().any(|m| callee.contains(m)) {
+        let Some(target) = operand.split_once(" <").map(|(_, t)| t) else {
+            continue;
+        };
+        let callee = target.strip_suffix('>').unwrap_or(target);
+        let callee = callee.split_once("+0x").map_or(callee, |(name, _)| name);
+        if op.starts_with('b') && PANIC_MARKERS.iter().any(|m| callee.contains(m)) {
             let caller = current.filter(|f| !f.starts_with("core::") && *f != callee);
             if let Some(f) = caller {
                 if callers.last().map(String::as_str) != Some(f) {
@@ -203,7 +204,8 @@ pub fn check_no_panic(elf: &std::path::Path) -> Result<String> {
     )?;
     let callers = panic_callers(&dis);
     let mut msg = format!(
-        "the firmware can panic: it links {} panic symbol(s):\n",
+        "{} can panic: it links {} panic symbol(s):\n",
+        elf.display(),
         found.len()
     );
     for s in &found {
@@ -341,6 +343,9 @@ mod tests {
    25476:\tf7ed f8a9 \tbl\t12362 <core::panicking::panic_const::panic_const_div_by_zero>
    25480:\tf7ed f8a9 \tbl\t115cc <core::panicking::panic_fmt>
 
+00030000 <firmware_sim::mcu::run<cortex_m_semihosting::hio::HostStream>>:
+   30004:\tf7ed f8a9 \tbl\t11700 <core::panicking::assert_failed<usize, usize>>
+
 0002547a <<protogist::stereo::c2f::Pass>::decision>:
    2547a:\tb5f0      \tpush\t{r4, r5, r6, r7, lr}
    2547c:\tf7ed f8a9 \tbl\t2547a <<protogist::stereo::c2f::Pass>::decision>
@@ -369,12 +374,16 @@ mod tests {
 
     #[test]
     fn panic_callers_names_each_branching_function_once() {
-        // Not `decision` (it branches to itself), not core's own panic_fmt,
-        // not the handler's branches inside itself, and a load that merely
-        // names a panic symbol is not a branch.
+        // `run` calls a generic panic function. Not `decision` (it branches
+        // to itself), not core's own panic_fmt, not the handler's branches
+        // inside itself, and a load that merely names a panic symbol is not
+        // a branch.
         assert_eq!(
             panic_callers(DIS),
-            ["<protogist::stereo::c2f::Pass>::votes"]
+            [
+                "<protogist::stereo::c2f::Pass>::votes",
+                "firmware_sim::mcu::run<cortex_m_semihosting::hio::HostStream>"
+            ]
         );
     }
 }

@@ -329,10 +329,16 @@ pub(super) fn morph_n(
         core::mem::swap(&mut a, &mut b);
     }
     if n % 2 == 1 {
-        // Equal lengths (checked by the caller); a zip has no panic path.
-        for (m, &s) in map.iter_mut().zip(scratch.iter()) {
-            *m = s;
-        }
+        copy_map(map, scratch);
+    }
+}
+
+/// Copies one bit map into another of the same length (the buffers are
+/// split from one slice at construction). `get` shows the compiler that the
+/// lengths match, so `copy_from_slice` has no panic path.
+pub(super) fn copy_map(dst: &mut [u32], src: &[u32]) {
+    if let Some(src) = src.get(..dst.len()) {
+        dst.copy_from_slice(src);
     }
 }
 

@@ -288,7 +288,7 @@ pub fn segment_timed(
         comps.select(g, bufs.region, bufs.table, bufs.scratch, |r, _| {
             Some(r) == best
         });
-        copy_map(bufs.region, bufs.scratch);
+        bits::copy_map(bufs.region, bufs.scratch);
         for ((o, &a), &b) in bufs
             .c_obj
             .iter_mut()
@@ -300,7 +300,7 @@ pub fn segment_timed(
         probe(Step::Refine);
         bits::nms(g, conspicuity, bufs.c_obj, bufs.nms);
         probe(Step::Nms);
-        copy_map(bufs.closed, bufs.nms);
+        bits::copy_map(bufs.closed, bufs.nms);
         bits::close(
             g,
             params.disk,
@@ -372,13 +372,4 @@ pub fn segment_timed(
         probe(Step::Mask);
     }
     Ok(report)
-}
-
-/// Copies one bit map into another of the same length (the buffers are
-/// split from one slice at construction). `get` shows the compiler that the
-/// lengths match, so `copy_from_slice` has no panic path.
-fn copy_map(dst: &mut [u32], src: &[u32]) {
-    if let Some(src) = src.get(..dst.len()) {
-        dst.copy_from_slice(src);
-    }
 }

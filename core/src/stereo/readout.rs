@@ -237,7 +237,6 @@ pub(super) fn run<S: GreyRows>(
     let n = table.disparities();
     let max_shift = dem.layout.max_shift();
     let (l_slots, r_slots) = (2 * pool + 1, 2 * pool + max_shift + 1);
-    let ring_rows_nz = nonzero(ring_rows);
     // Split the scratch.
     let (mut grey, mut z) = (&mut *bufs.grey, &mut *bufs.z);
     let mut eyes: [Eye<'_>; 2] = Default::default();
@@ -269,7 +268,7 @@ pub(super) fn run<S: GreyRows>(
         h,
         levels,
         carriers,
-        ring_rows: ring_rows_nz,
+        ring_rows: nonzero(ring_rows),
         pool,
         eyes,
         col,

@@ -4,15 +4,15 @@
 //!
 //! The engine runs one configuration of the reference: `--levels 1 --pool 0
 //! --sgm --paths 5 --c2f K` (K 1..=3; or `--paths 3`), grey, no border
-//! refinement, no completion. With `--engine core` those are the defaults (levels 1, pool
-//! 0, SGM with 5 paths on), so `--engine core --c2f 2` alone is valid; any
-//! option that asks for something else is a [`HostError::InvalidArgument`],
-//! checked before any training. `--c2f-radius`, `--c2f-band`,
-//! `--c2f-finest`, `--p1`, `--p2`, `--p2-ref-width`, `--min-margin`,
-//! `--lr`, `--lr-from-left` and `--paths` map to
-//! [`C2fParams`] ([`c2f_params`]). The per-level tables are trained as the
-//! reference path's ([`super::table_for`]), so both engines decode with the
-//! same integer weights.
+//! refinement, no completion. With `--engine core` those are the defaults
+//! (levels 1, pool 0, SGM with 5 paths on), so `--engine core --c2f 2`
+//! alone is valid; any option that asks for something else is a
+//! [`HostError::InvalidArgument`], checked before any training.
+//! `--c2f-radius`, `--c2f-band`, `--c2f-finest`, `--p1`, `--p2`,
+//! `--p2-ref-width`, `--min-margin`, `--lr`, `--lr-from-left` and `--paths`
+//! map to [`C2fParams`] ([`c2f_params`]). The per-level tables are trained
+//! as the reference path's ([`super::table_for`]), so both engines decode
+//! with the same integer weights.
 
 use super::preset::{self, Search};
 use super::{table_for, StereoOptions};
