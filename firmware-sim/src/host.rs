@@ -165,6 +165,13 @@ fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
         sums: &mut sums,
         picks: &mut picks,
         maps: &mut maps,
+        phase: firmware_sim::pg::stereo::phase::PhaseBuffers {
+            grey: &mut vec![0u16; len::P_GREY],
+            rgb: &mut vec![Rgb8::new(0, 0, 0); len::P_RGB],
+            v: &mut vec![0i32; len::P_V],
+            z: &mut vec![[0i16; 2]; len::P_Z],
+            row: &mut vec![firmware_sim::pg::disparity::DisparityCell::OFF; len::P_ROW],
+        },
     };
     let r = stereo_run::run(&mut bufs, &mut WallTicks(Instant::now()))?;
     let mut out = String::new();

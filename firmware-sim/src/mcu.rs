@@ -225,8 +225,10 @@ fn run_stereo(
     ticks: &mut SysTicks,
     to_instructions: &impl Fn(u64) -> u64,
 ) -> Result<(), &'static str> {
+    use firmware_sim::pg::disparity::DisparityCell;
     use firmware_sim::pg::image::Rgb8;
     use firmware_sim::pg::stereo::c2f::C2fBuffers;
+    use firmware_sim::pg::stereo::phase::PhaseBuffers;
     use firmware_sim::stereo_run::{self, len, ZCell};
     const BLACK: Rgb8 = Rgb8::new(0, 0, 0);
     let mut bufs = C2fBuffers {
@@ -239,6 +241,14 @@ fn run_stereo(
         sums: singleton!(: [u32; len::SUMS] = [0; len::SUMS]).ok_or("stereo sums taken")?,
         picks: singleton!(: [i32; len::PICKS] = [0; len::PICKS]).ok_or("stereo picks taken")?,
         maps: singleton!(: [u8; len::MAPS] = [0; len::MAPS]).ok_or("stereo maps taken")?,
+        phase: PhaseBuffers {
+            grey: singleton!(: [u16; len::P_GREY] = [0; len::P_GREY]).ok_or("phase grey taken")?,
+            rgb: singleton!(: [Rgb8; len::P_RGB] = [BLACK; len::P_RGB]).ok_or("phase rgb taken")?,
+            v: singleton!(: [i32; len::P_V] = [0; len::P_V]).ok_or("phase v taken")?,
+            z: singleton!(: [ZCell; len::P_Z] = [[0; 2]; len::P_Z]).ok_or("phase z taken")?,
+            row: singleton!(: [DisparityCell; len::P_ROW] = [DisparityCell::OFF; len::P_ROW])
+                .ok_or("phase row taken")?,
+        },
     };
     let r = stereo_run::run(&mut bufs, ticks).map_err(|_| "stereo stage failed")?;
     stereo_run::write_report(out, &r, to_instructions).map_err(|_| "semihosting write failed")?;

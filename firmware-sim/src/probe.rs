@@ -20,6 +20,14 @@ use crate::pg::mlp::{self, blob::Model, Ranked, Scratch};
 use crate::pg::segment::{segment, Labeller, SegmentBuffers, SegmentParams};
 use crate::pg::shape::{shape_vector, RadialProfile, ShapeVector, SHAPE_LEN};
 use crate::pg::stereo::c2f::{C2f, C2fBuffers, C2fParams};
+use crate::pg::stereo::phase::PhaseParams;
+
+/// The coarse-to-fine engine's parameters in the probe: the defaults with
+/// the phase refinement, so that its path runs too.
+pub const C2F: C2fParams = C2fParams {
+    phase: Some(PhaseParams::DEFAULT),
+    ..C2fParams::DEFAULT
+};
 use crate::pg::stereo::table::DemTable;
 use crate::pg::stereo::{stereo, Dem, StereoBuffers};
 
@@ -124,9 +132,7 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
             let s = stereo(&dem, t, &l, &r, &mut stereo_bufs, &mut out);
             bits |= seen(&s, 2);
         }
-        if let ([Ok(t0), Ok(t1), Ok(t2)], Ok(engine)) =
-            (&parsed, C2f::new(&black_box(C2fParams::DEFAULT)))
-        {
+        if let ([Ok(t0), Ok(t1), Ok(t2)], Ok(engine)) = (&parsed, C2f::new(&black_box(C2F))) {
             let levels = [*t0, *t1, *t2];
             let mut sink = |x: usize, y: usize, d: DisparityCell| {
                 if let Some(c) = disparity.get_mut(y * w + x) {

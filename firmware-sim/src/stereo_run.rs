@@ -23,6 +23,7 @@ use crate::pg::disparity::DisparityCell;
 use crate::pg::image::Rgb8;
 use crate::pg::stereo::c2f::{self, C2f, C2fBuffers, C2fParams, RgbRows};
 use crate::pg::stereo::filters::Z;
+use crate::pg::stereo::phase::{self, PhaseParams};
 use crate::pg::stereo::{DemTable, Probe, Step, StereoError, StereoReport};
 use crate::pg::synth::SceneSpec;
 use crate::Ticks;
@@ -40,11 +41,13 @@ pub const PARAMS: C2fParams = C2fParams::DEFAULT;
 /// derives the left-right check's right map from the left sums
 /// (`lr_from_left`, no right eye) and a trailing `3` runs 3 SGM paths
 /// instead of 5, and a trailing `h` stops at level 1 (`finest: 1`: the map
-/// of the half-size pair spread over 2x2 blocks); nothing else changes (the
-/// same tables, levels and penalties). Each needs no more scratch than
-/// [`PARAMS`] (`R <= 2`), which the `const` assertion below checks at
-/// compile time.
-pub const POINTS: [(&str, C2fParams); 12] = [
+/// of the half-size pair spread over 2x2 blocks), and a trailing `p` then
+/// refines that map to the frame's resolution by phase
+/// ([`PhaseParams::DEFAULT`], docs/STEREO.md "Phase refinement"); nothing
+/// else changes (the same tables, levels and penalties). Each needs no
+/// more scratch than [`PARAMS`] (`R <= 2`) and the phase buffers of
+/// [`len`], which the `const` assertion below checks at compile time.
+pub const POINTS: [(&str, C2fParams); 14] = [
     (
         "r2b1",
         C2fParams {
@@ -144,6 +147,27 @@ pub const POINTS: [(&str, C2fParams); 12] = [
             ..PARAMS
         },
     ),
+    (
+        "r2b2l3p",
+        C2fParams {
+            lr_from_left: true,
+            paths: 3,
+            finest: 1,
+            phase: Some(PhaseParams::DEFAULT),
+            ..PARAMS
+        },
+    ),
+    (
+        "r2b1l3p",
+        C2fParams {
+            band: Some(1),
+            lr_from_left: true,
+            paths: 3,
+            finest: 1,
+            phase: Some(PhaseParams::DEFAULT),
+            ..PARAMS
+        },
+    ),
 ];
 
 const fn fits(p: &C2fParams) -> bool {
@@ -154,6 +178,14 @@ const fn fits(p: &C2fParams) -> bool {
         && c2f::cost_len(WIDTH, p) <= len::COSTS
         && c2f::sum_len(WIDTH, p) <= len::SUMS
         && c2f::map_len(WIDTH, HEIGHT, p) <= len::MAPS
+        && match &p.phase {
+            Some(ph) => {
+                phase::grey_len(WIDTH, ph) <= len::P_GREY
+                    && phase::v_len(WIDTH, ph) <= len::P_V
+                    && phase::z_len(WIDTH, ph, p.dem.max_disp) <= len::P_Z
+            }
+            None => true,
+        }
 }
 
 const _: () = {
@@ -192,10 +224,24 @@ pub mod len {
     pub const PICKS: usize = c2f::pick_len(WIDTH);
     /// Window maps (`u8`).
     pub const MAPS: usize = c2f::map_len(WIDTH, HEIGHT, &PARAMS);
+    /// Phase refinement grey rings (`u16`), for [`PhaseParams::DEFAULT`].
+    pub const P_GREY: usize = phase::grey_len(WIDTH, &PhaseParams::DEFAULT);
+    /// Phase refinement RGB row.
+    pub const P_RGB: usize = WIDTH;
+    /// Phase refinement y-pass row (`i32`).
+    pub const P_V: usize = phase::v_len(WIDTH, &PhaseParams::DEFAULT);
+    /// Phase refinement response rows (`[i16; 2]`).
+    pub const P_Z: usize = phase::z_len(WIDTH, &PhaseParams::DEFAULT, PARAMS.dem.max_disp);
+    /// Phase refinement map row.
+    pub const P_ROW: usize = WIDTH;
 }
 
 /// Scratch bytes of the run.
 pub const SCRATCH_BYTES: usize = c2f::scratch_bytes(WIDTH, HEIGHT, &PARAMS);
+/// Scratch bytes of the phase refinement's buffers ([`len`]`::P_*`), which
+/// the points with `phase` use besides [`SCRATCH_BYTES`].
+pub const PHASE_SCRATCH_BYTES: usize =
+    phase::scratch_bytes(WIDTH, &PhaseParams::DEFAULT, PARAMS.dem.max_disp);
 
 /// One eye of the demo scene, rendered row by row.
 struct SceneEye<'s> {
@@ -266,8 +312,10 @@ pub struct StereoResult {
     /// Ticks of the whole stage.
     pub total: u64,
     /// Ticks the simulated camera takes to render the rows the engine asks
-    /// for (each frame pixel once per level and eye), measured alone: part
-    /// of the `levels` step, the camera's cost rather than the engine's.
+    /// for (each frame pixel once per level and eye, and once more per eye
+    /// for the phase refinement), measured alone: part of the `levels`
+    /// step (and of the output step for the phase refinement's rows), the
+    /// camera's cost rather than the engine's.
     pub camera: u64,
 }
 
@@ -325,7 +373,10 @@ pub fn run_at<T: Ticks>(
     probe.close();
     let t2 = probe.ticks.now();
     // The camera alone: the same row renders, into the RGB scratch.
-    let levels = usize::from(params.coarse.saturating_sub(params.finest)) + 1;
+    // One pass per level run, and one more for the phase refinement.
+    let levels = usize::from(params.coarse.saturating_sub(params.finest))
+        + 1
+        + usize::from(params.phase.is_some());
     let row = bufs.rgb.get_mut(..WIDTH).unwrap_or(&mut []);
     for _ in 0..levels {
         for eye in [&left, &right] {
@@ -386,10 +437,12 @@ pub fn write_point(
     write_point_line(out, name, params, r, to_instructions)
 }
 
-/// `point stereo NAME WxH radius=R band=B lr=L paths=P finest=F engine=E
-/// cells=C STEP=I ...`: the window half width, the band (`-`: none), the
-/// right map of the left-right check (`read` or `derived` from the left
-/// sums), the SGM paths and the finest level run, then instructions per
+/// `point stereo NAME WxH radius=R band=B lr=L paths=P finest=F phase=Q
+/// engine=E cells=C STEP=I ...`: the window half width, the band (`-`:
+/// none), the right map of the left-right check (`read` or `derived` from
+/// the left sums), the SGM paths, the finest level run and the phase
+/// refinement (1: on; its cost is the difference to the same point without
+/// it, since it runs inside the output step), then instructions per
 /// pixel with one decimal (the engine is the total minus the camera, as
 /// `ipp stereo-engine`), the cells evaluated and the steps.
 pub fn write_point_line(
@@ -418,8 +471,10 @@ pub fn write_point_line(
     };
     write!(
         out,
-        " lr={lr} paths={} finest={}",
-        params.paths, params.finest
+        " lr={lr} paths={} finest={} phase={}",
+        params.paths,
+        params.finest,
+        u8::from(params.phase.is_some())
     )?;
     write!(
         out,

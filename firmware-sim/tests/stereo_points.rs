@@ -1,10 +1,22 @@
 //! The stereo stage's operating points (`stereo_run::POINTS`): each runs at
 //! its own window and band, in the default's buffers, and reports itself.
 
+use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::pg::stereo::c2f::C2fBuffers;
+use firmware_sim::pg::stereo::phase::PhaseBuffers;
 use firmware_sim::stereo_run::{self, len, StereoResult, POINTS};
 use firmware_sim::NoTicks;
+
+/// The phase refinement's buffers: grey rings, RGB row, y pass, responses,
+/// map row.
+type PhaseStorage = (
+    Vec<u16>,
+    Vec<Rgb8>,
+    Vec<i32>,
+    Vec<[i16; 2]>,
+    Vec<DisparityCell>,
+);
 
 struct Storage {
     grey: Vec<u16>,
@@ -16,6 +28,7 @@ struct Storage {
     sums: Vec<u32>,
     picks: Vec<i32>,
     maps: Vec<u8>,
+    phase: PhaseStorage,
 }
 
 impl Storage {
@@ -30,6 +43,13 @@ impl Storage {
             sums: vec![0; len::SUMS],
             picks: vec![0; len::PICKS],
             maps: vec![0; len::MAPS],
+            phase: (
+                vec![0; len::P_GREY],
+                vec![Rgb8::new(0, 0, 0); len::P_RGB],
+                vec![0; len::P_V],
+                vec![[0; 2]; len::P_Z],
+                vec![DisparityCell::OFF; len::P_ROW],
+            ),
         }
     }
 
@@ -44,6 +64,13 @@ impl Storage {
             sums: &mut self.sums,
             picks: &mut self.picks,
             maps: &mut self.maps,
+            phase: PhaseBuffers {
+                grey: &mut self.phase.0,
+                rgb: &mut self.phase.1,
+                v: &mut self.phase.2,
+                z: &mut self.phase.3,
+                row: &mut self.phase.4,
+            },
         }
     }
 }
@@ -102,6 +129,18 @@ fn each_point_runs_its_own_window_and_band_in_the_default_buffers() {
     assert_ne!(sum("r2b1l3h"), sum("r2b1l3"));
     assert!(cells("r2b2h") * 2 < default.report.cells);
     assert!(cells("r2b2lh") < cells("r2b2h"));
+    // The phase refinement evaluates no cells and turns no pixel ON or
+    // OFF, but changes the map.
+    let on = |n: &str| {
+        runs.iter()
+            .find(|(name, _)| *name == n)
+            .map(|(_, r)| r.report.on)
+    };
+    for (p, h) in [("r2b1l3p", "r2b1l3h"), ("r2b2l3p", "r2b2l3h")] {
+        assert_eq!(cells(p), cells(h));
+        assert_eq!(on(p), on(h));
+        assert_ne!(sum(p), sum(h));
+    }
     // The same point twice gives the same map (the buffers carry nothing
     // over between runs).
     let (name, p) = &POINTS[0];
@@ -122,7 +161,7 @@ fn a_point_line_names_its_window_band_and_figures() {
     let band = p.band.map_or("-".to_string(), |b| b.to_string());
     assert!(
         lines[1].starts_with(&format!(
-            "point stereo {name} 160x120 radius={} band={band} lr=read paths=5 finest=0 engine=",
+            "point stereo {name} 160x120 radius={} band={band} lr=read paths=5 finest=0 phase=0 engine=",
             p.radius
         )),
         "{out}"

@@ -151,6 +151,13 @@ pub struct ReadoutOptions {
     /// operations for a coarser map (docs/STEREO.md "Finest level").
     #[arg(long)]
     pub c2f_finest: Option<u8>,
+    /// With `--c2f`: refine the map with the phase of the frame's own 0°
+    /// Gabor responses (λ 4, σ/λ 0.4, radius 3, 3 px pooling): each pixel
+    /// keeps the position shift round(d) and takes the remainder from the
+    /// phase difference between the eyes; with `--c2f-finest 1`, a map of
+    /// the frame's resolution (docs/STEREO.md "Phase refinement").
+    #[arg(long)]
+    pub c2f_phase: bool,
     /// Speckle filter (both engines, after the read-out; docs/STEREO.md
     /// "Third round"): pixels in an island of at most this many pixels go
     /// OFF (default 0: off).
@@ -405,6 +412,18 @@ fn cells_f32(cells: &[DisparityCell]) -> Vec<Option<f32>> {
         .collect()
 }
 
+/// The reference's phase refinement with core's default parameters (what
+/// `--c2f-phase` sets in core's engine).
+fn reference_phase() -> dem::phase::PhaseParams {
+    let p = protogist::stereo::phase::PhaseParams::DEFAULT;
+    dem::phase::PhaseParams {
+        wavelength: p.wavelength,
+        sigma_per_wavelength: p.sigma_per_wavelength,
+        radius: p.radius,
+        pool: p.pool,
+    }
+}
+
 /// The f32 reference on the packed `w x h` pair: `params`, coarse to fine
 /// with `search`.
 fn run_reference(
@@ -425,7 +444,25 @@ fn run_reference(
         ImageView::packed(&pair.left, w, h)?,
         ImageView::packed(&pair.right, w, h)?,
     );
-    let maps = if let Some(c) = search {
+    let maps = if let Some(c) = search.filter(|c| c.phase) {
+        // Spread, then the phase refinement, then the border refinement.
+        let inner = DemParams {
+            refine_radius: 0,
+            ..*params
+        };
+        let mut maps =
+            dem::c2f::stereo_c2f_from(&inner, &decoders, &lv, &rv, c.radius, c.band, c.finest)?;
+        dem::phase::refine(
+            &reference_phase(),
+            params.max_disp,
+            &lv,
+            &rv,
+            &mut maps.disparity,
+        )?;
+        maps.disparity_f32 = cells_f32(&maps.disparity);
+        dem::refine::refine_borders(params, &lv, &mut maps);
+        maps
+    } else if let Some(c) = search {
         dem::c2f::stereo_c2f_from(params, &decoders, &lv, &rv, c.radius, c.band, c.finest)?
     } else {
         dem::stereo(params, &decoders[0], &lv, &rv)?

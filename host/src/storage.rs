@@ -110,6 +110,61 @@ pub struct C2fStorage {
     pub picks: Vec<i32>,
     /// Window maps.
     pub maps: Vec<u8>,
+    /// The phase refinement's.
+    pub phase: PhaseStorage,
+}
+
+/// Owned storage for [`protogist::stereo::phase::PhaseBuffers`] at one
+/// width (empty without parameters).
+pub struct PhaseStorage {
+    /// Grey rings.
+    pub grey: Vec<u16>,
+    /// One RGB row.
+    pub rgb: Vec<protogist::image::Rgb8>,
+    /// y-pass row.
+    pub v: Vec<i32>,
+    /// Response rows.
+    pub z: Vec<[i16; 2]>,
+    /// One map row.
+    pub row: Vec<protogist::disparity::DisparityCell>,
+}
+
+impl PhaseStorage {
+    /// Storage for width `width`, sized by the refinement's `const fn`s.
+    pub fn new(
+        width: usize,
+        p: Option<&protogist::stereo::phase::PhaseParams>,
+        max_disp: u8,
+    ) -> Self {
+        use protogist::stereo::phase as ph;
+        let Some(p) = p else {
+            return Self {
+                grey: Vec::new(),
+                rgb: Vec::new(),
+                v: Vec::new(),
+                z: Vec::new(),
+                row: Vec::new(),
+            };
+        };
+        Self {
+            grey: vec![0; ph::grey_len(width, p)],
+            rgb: vec![protogist::image::Rgb8::new(0, 0, 0); width],
+            v: vec![0; ph::v_len(width, p)],
+            z: vec![[0; 2]; ph::z_len(width, p, max_disp)],
+            row: vec![protogist::disparity::DisparityCell::OFF; width],
+        }
+    }
+
+    /// The refinement's view of the storage.
+    pub fn buffers(&mut self) -> protogist::stereo::phase::PhaseBuffers<'_> {
+        protogist::stereo::phase::PhaseBuffers {
+            grey: &mut self.grey,
+            rgb: &mut self.rgb,
+            v: &mut self.v,
+            z: &mut self.z,
+            row: &mut self.row,
+        }
+    }
 }
 
 impl C2fStorage {
@@ -127,6 +182,7 @@ impl C2fStorage {
             sums: vec![0; c::sum_len(width, p)],
             picks: vec![0; c::pick_len(width)],
             maps: vec![0; c::map_len(width, height, p)],
+            phase: PhaseStorage::new(width, p.phase.as_ref(), p.dem.max_disp),
         }
     }
 
@@ -142,6 +198,7 @@ impl C2fStorage {
             sums: &mut self.sums,
             picks: &mut self.picks,
             maps: &mut self.maps,
+            phase: self.phase.buffers(),
         }
     }
 }

@@ -250,6 +250,8 @@ struct Point<'a> {
     paths: &'a str,
     /// The finest level run (0: the full size).
     finest: &'a str,
+    /// The phase refinement (`1`: on).
+    phase: &'a str,
     values: Vec<(&'a str, &'a str)>,
 }
 
@@ -281,6 +283,7 @@ fn points(stdout: &str) -> Vec<Point<'_>> {
                 lr: find("lr").unwrap_or("read"),
                 paths: find("paths").unwrap_or("5"),
                 finest: find("finest").unwrap_or("0"),
+                phase: find("phase").unwrap_or("0"),
                 values,
             })
         })
@@ -307,16 +310,18 @@ fn stereo_points(stdout: &str) -> Section {
          right eye; `--lr-from-left`), `read`: the right eye read out; paths: the SGM paths (3: without \
          the two diagonals, `--paths 3`); finest: the finest level run (1: the map of the \
          half-size pair, each cell over its 2x2 block with its disparity doubled, \
-         `--c2f-finest 1`; docs/STEREO.md, section Finest level). Instructions per pixel on the \
+         `--c2f-finest 1`; docs/STEREO.md, section Finest level); phase: the map refined to \
+         the frame's resolution by the phase of full-size Gabor responses (`--c2f-phase`, its \
+         cost inside costs + picks; docs/STEREO.md, section Phase refinement). Instructions per pixel on the \
          M4 from the firmware's `point stereo` lines (`firmware-sim/src/stereo_run.rs`, \
          `POINTS`; same QEMU run as above; the camera is excluded as in the previous \
          section). Accuracy from `cargo run --release -- stereo --engine core --c2f 2 \
-         --c2f-radius R --c2f-band b --p2 4 [--lr-from-left] [--paths 3] [--c2f-finest 1] --width 160 --max-disp 32 --refine 0 --json` on \
+         --c2f-radius R --c2f-band b --p2 4 [--lr-from-left] [--paths 3] [--c2f-finest 1] [--c2f-phase] --width 160 --max-disp 32 --refine 0 --json` on \
          Aloe and on the held-out Motorcycle: bad-2 % over estimated pixels / over all GT \
          pixels. docs/STEREO.md, section Operating points, reads this table.\n\n\
-         | point | R | band | LR | paths | finest | cells / px | votes | SGM | costs + picks | \
-         filters | **engine** | Aloe est / all | Motorcycle est / all |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+         | point | R | band | LR | paths | finest | phase | cells / px | votes | SGM | \
+         costs + picks | filters | **engine** | Aloe est / all | Motorcycle est / all |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let data = data_root();
     let pairs = [
@@ -337,13 +342,14 @@ fn stereo_points(stdout: &str) -> Section {
             .parse::<f64>()
             .map_or_else(|_| "?".into(), |c| format!("{:.1}", c / 19_200.0));
         let mut row = format!(
-            "| {} | {} | {} | {} | {} | {} | {cells} | {} | {} | {} | {} | **{}** |",
+            "| {} | {} | {} | {} | {} | {} | {} | {cells} | {} | {} | {} | {} | **{}** |",
             p.name,
             p.radius,
             p.band,
             p.lr,
             p.paths,
             p.finest,
+            p.phase,
             p.get("cells-votes"),
             p.get("sgm"),
             p.get("costs-picks"),
@@ -415,6 +421,9 @@ fn point_accuracy(files: [&Path; 3], p: &Point<'_>) -> String {
     }
     if p.paths != "5" {
         args.extend_from_slice(&["--paths", p.paths]);
+    }
+    if p.phase == "1" {
+        args.push("--c2f-phase");
     }
     if p.finest != "0" {
         args.extend_from_slice(&["--c2f-finest", p.finest]);

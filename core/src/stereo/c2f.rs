@@ -72,6 +72,7 @@
 //! and 99 % of the OFF decisions to agree.
 
 use super::filters::{grey_row, Bank, MAX_TAPS, Z};
+use super::phase::{self, Phase, PhaseBuffers, PhaseParams, Refiner};
 use super::readout::take;
 use super::sgm::{self, Sgm};
 use super::{Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport};
@@ -141,6 +142,10 @@ pub struct C2fParams {
     /// columns) with its disparity times `2^F` (module docs, "Finest
     /// level"). [`C2f::run`] still takes and checks one table per level.
     pub finest: u8,
+    /// Refine the output map with the phase of the frame's own 0° Gabor
+    /// responses ([`super::phase`]): with `finest` 1, a map of the frame's
+    /// resolution from the half-size level. Default `None`.
+    pub phase: Option<PhaseParams>,
 }
 
 impl C2fParams {
@@ -164,6 +169,7 @@ impl C2fParams {
         lr_from_left: false,
         paths: PATHS as u8,
         finest: 0,
+        phase: None,
     };
 
     /// `max_disp` of level `k`: `⌈D / 2^k⌉`.
@@ -314,9 +320,14 @@ pub const fn map_len(w: usize, h: usize, p: &C2fParams) -> usize {
 }
 
 /// Scratch bytes of the engine at `w` x `h`, beyond the two input frames
-/// and the output.
+/// and the output (the phase refinement's included).
 pub const fn scratch_bytes(w: usize, h: usize, p: &C2fParams) -> usize {
-    2 * grey_len(w, p)
+    let phase = match &p.phase {
+        Some(ph) => phase::scratch_bytes(w, ph, p.dem.max_disp),
+        None => 0,
+    };
+    phase
+        + 2 * grey_len(w, p)
         + 3 * rgb_len(w, p)
         + 4 * z_len(w, p)
         + 12 * w
@@ -347,6 +358,9 @@ pub struct C2fBuffers<'a> {
     pub picks: &'a mut [i32],
     /// Window maps ([`map_len`]).
     pub maps: &'a mut [u8],
+    /// The phase refinement's ([`super::phase`]; empty slices without
+    /// [`C2fParams::phase`]).
+    pub phase: PhaseBuffers<'a>,
 }
 
 /// The set-up engine: checked parameters, kernels, thresholds.
@@ -364,6 +378,8 @@ pub struct C2f {
     /// Ambiguity threshold on the path-sum margin: OFF when
     /// `margin·2^16 < min_margin_sums`.
     pub min_margin_sums: i64,
+    /// The phase refinement, set up.
+    pub phase: Option<Phase>,
 }
 
 impl C2f {
@@ -423,12 +439,17 @@ impl C2f {
         let min_margin_sums = dem
             .min_margin_q16
             .saturating_mul(256 * i64::from(params.paths));
+        let phase = match &params.phase {
+            Some(ph) => Some(Phase::new(ph, params.dem.max_disp)?),
+            None => None,
+        };
         Ok(Self {
             params: *params,
             dem,
             p1_q8,
             p2_q8,
             min_margin_sums,
+            phase,
         })
     }
 
@@ -477,12 +498,58 @@ impl C2f {
 
     /// Runs the engine on a pair: every output cell goes to `sink(x, y,
     /// cell)` row by row (left-referenced, `U8F8` px or OFF); `tables[k]` is
-    /// level `k`'s decoder.
+    /// level `k`'s decoder. With [`C2fParams::phase`] each output row is
+    /// refined ([`Refiner::push`]) before it goes to `sink`.
     ///
     /// # Errors
     /// As [`C2f::check`], and [`StereoError::Buffer`] for short buffers,
     /// before any cell is produced.
     pub fn run<S: RgbRows>(
+        &self,
+        tables: &[DemTable<'_>],
+        left: &S,
+        right: &S,
+        bufs: &mut C2fBuffers<'_>,
+        sink: &mut impl FnMut(usize, usize, DisparityCell),
+        probe: &mut impl Probe,
+    ) -> Result<StereoReport, StereoError> {
+        let Some(phase) = &self.phase else {
+            return self.run_levels(tables, left, right, bufs, sink, probe);
+        };
+        self.check(tables, left.size(), right.size())?;
+        let C2fBuffers { phase: pb, .. } = bufs;
+        let pb = PhaseBuffers {
+            grey: &mut *pb.grey,
+            rgb: &mut *pb.rgb,
+            v: &mut *pb.v,
+            z: &mut *pb.z,
+            row: &mut *pb.row,
+        };
+        let mut refiner = Refiner::new(phase, left, right, pb)?;
+        let mut rest = C2fBuffers {
+            grey: &mut *bufs.grey,
+            rgb: &mut *bufs.rgb,
+            z: &mut *bufs.z,
+            col: &mut *bufs.col,
+            scores: &mut *bufs.scores,
+            costs: &mut *bufs.costs,
+            sums: &mut *bufs.sums,
+            picks: &mut *bufs.picks,
+            maps: &mut *bufs.maps,
+            phase: PhaseBuffers {
+                grey: &mut [],
+                rgb: &mut [],
+                v: &mut [],
+                z: &mut [],
+                row: &mut [],
+            },
+        };
+        let mut refined = |x, y, c| refiner.push(x, y, c, sink);
+        self.run_levels(tables, left, right, &mut rest, &mut refined, probe)
+    }
+
+    /// [`C2f::run`] without the phase refinement.
+    fn run_levels<S: RgbRows>(
         &self,
         tables: &[DemTable<'_>],
         left: &S,
@@ -522,6 +589,7 @@ impl C2f {
             sums,
             picks,
             maps,
+            ..
         } = bufs;
         let mut work = Work {
             grey,

@@ -27,6 +27,7 @@
 
 pub mod c2f;
 pub mod filters;
+pub mod phase;
 pub mod readout;
 pub mod sgm;
 pub mod table;

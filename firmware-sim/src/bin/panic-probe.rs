@@ -19,7 +19,7 @@ const N: usize = W * H;
 const LUV: usize = conspicuity::luv_len(W, H);
 const ROWS: usize = conspicuity::row_scratch_len(W);
 const DEM: stereo::DemParams = stereo::c2f::C2fParams::DEFAULT.level_params(0);
-const C2F: stereo::c2f::C2fParams = stereo::c2f::C2fParams::DEFAULT;
+const C2F: stereo::c2f::C2fParams = firmware_sim::probe::C2F;
 const LABELS: usize = segment::label_capacity(W, H);
 const REGIONS: usize = complete::region_table_len(W, H);
 /// The shipped model's shape: 720 inputs, 128 hidden, 19 classes.
@@ -44,6 +44,12 @@ mod len {
     pub const C_SUMS: usize = c::sum_len(W, &C2F);
     pub const C_PICKS: usize = c::pick_len(W);
     pub const C_MAPS: usize = c::map_len(W, H, &C2F);
+    const PHASE: stereo::phase::PhaseParams = stereo::phase::PhaseParams::DEFAULT;
+    pub const P_GREY: usize = stereo::phase::grey_len(W, &PHASE);
+    pub const P_RGB: usize = W;
+    pub const P_V: usize = stereo::phase::v_len(W, &PHASE);
+    pub const P_Z: usize = stereo::phase::z_len(W, &PHASE, C2F.dem.max_disp);
+    pub const P_ROW: usize = W;
     pub const SEG_MAPS: usize = segment::maps_len(W, H);
     pub const SEG_TABLE: usize = segment::table_len(W, H);
 }
@@ -93,6 +99,21 @@ macro_rules! buffers {
                 sums: $alloc!(u32, len::C_SUMS, 0u32),
                 picks: $alloc!(i32, len::C_PICKS, 0i32),
                 maps: $alloc!(u8, len::C_MAPS, 0u8),
+                phase: stereo::phase::PhaseBuffers {
+                    grey: $alloc!(u16, len::P_GREY, 0u16),
+                    rgb: $alloc!(
+                        firmware_sim::pg::image::Rgb8,
+                        len::P_RGB,
+                        firmware_sim::pg::image::Rgb8::new(0, 0, 0)
+                    ),
+                    v: $alloc!(i32, len::P_V, 0i32),
+                    z: $alloc!([i16; 2], len::P_Z, [0i16; 2]),
+                    row: $alloc!(
+                        disparity::DisparityCell,
+                        len::P_ROW,
+                        disparity::DisparityCell::OFF
+                    ),
+                },
             },
             seg: [
                 $alloc!(u32, len::SEG_MAPS, 0u32),

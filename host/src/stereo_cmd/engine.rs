@@ -23,6 +23,7 @@ use crate::storage::C2fStorage;
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
 use protogist::stereo::c2f::{C2f, C2fParams};
+use protogist::stereo::phase::PhaseParams;
 use protogist::stereo::{self as qs, StereoReport};
 use std::time::{Duration, Instant};
 
@@ -189,6 +190,7 @@ pub fn c2f_params(params: &DemParams, search: Search) -> Result<C2fParams> {
         lr_from_left: params.lr_from_left,
         paths,
         finest: byte("c2f-finest", search.finest)?,
+        phase: search.phase.then_some(PhaseParams::DEFAULT),
     })
 }
 
@@ -364,6 +366,10 @@ mod tests {
         // 3 paths and the derived right map are the engine's options.
         let p = plan(&parse("--c2f 2 --c2f-finest 1"), 160).unwrap();
         assert_eq!(p.engine.finest, 1);
+        assert_eq!(p.engine.phase, None);
+        let p = plan(&parse("--c2f 2 --c2f-finest 1 --c2f-phase"), 160).unwrap();
+        assert_eq!(p.engine.phase, Some(PhaseParams::DEFAULT));
+        assert!(plan(&parse("--c2f-phase"), 160).is_err());
         let p = plan(&parse("--c2f 2 --paths 3 --lr-from-left"), 160).unwrap();
         assert_eq!((p.engine.paths, p.engine.lr_from_left), (3, true));
         let p = plan(&parse("--c2f 2"), 160).unwrap();

@@ -58,6 +58,7 @@ pub const HELD_OUT: Settings = Settings {
     c2f_radius: None,
     c2f_band: Some(2),
     c2f_finest: None,
+    c2f_phase: false,
     speckle: Some(100),
     speckle_range: Some(1.0),
 };
@@ -99,6 +100,8 @@ pub struct Settings {
     pub c2f_band: Option<u8>,
     /// `--c2f-finest`.
     pub c2f_finest: Option<u8>,
+    /// `--c2f-phase`.
+    pub c2f_phase: bool,
     /// Largest island the speckle filter removes, px (0: off).
     pub speckle: Option<u32>,
     /// Join tolerance of the speckle filter, px.
@@ -116,6 +119,8 @@ pub struct Search {
     pub band: Option<usize>,
     /// The finest level run (0: the full size), at most `levels`.
     pub finest: usize,
+    /// The phase refinement of the output (`--c2f-phase`).
+    pub phase: bool,
 }
 
 /// `--c2f-radius` default.
@@ -142,6 +147,7 @@ impl Settings {
             c2f_radius: self.c2f_radius.or(fallback.c2f_radius),
             c2f_band: self.c2f_band.or(fallback.c2f_band),
             c2f_finest: self.c2f_finest.or(fallback.c2f_finest),
+            c2f_phase: self.c2f_phase || fallback.c2f_phase,
             speckle: self.speckle.or(fallback.speckle),
             speckle_range: self.speckle_range.or(fallback.speckle_range),
         }
@@ -169,6 +175,7 @@ fn explicit(opts: &StereoOptions) -> Settings {
         c2f_radius: r.c2f_radius,
         c2f_band: r.c2f_band,
         c2f_finest: r.c2f_finest,
+        c2f_phase: r.c2f_phase,
         speckle: r.speckle,
         speckle_range: r.speckle_range,
     }
@@ -236,12 +243,14 @@ pub fn search(opts: &StereoOptions) -> Result<Option<Search>> {
             radius: usize::from(s.c2f_radius.unwrap_or(C2F_RADIUS)),
             band: s.c2f_band.map(usize::from),
             finest: usize::from(s.c2f_finest.unwrap_or(0)),
+            phase: s.c2f_phase,
         })),
         None => {
             let c2f_only = [
                 ("c2f-radius", s.c2f_radius.is_some()),
                 ("c2f-band", s.c2f_band.is_some()),
                 ("c2f-finest", s.c2f_finest.is_some()),
+                ("c2f-phase", s.c2f_phase),
             ];
             match c2f_only.into_iter().find(|&(_, given)| given) {
                 Some((name, _)) => Err(HostError::InvalidArgument {
@@ -382,6 +391,7 @@ mod tests {
             radius: 2,
             band: Some(2),
             finest: 0,
+            phase: false,
         };
         assert_eq!(speckle(&preset).unwrap(), Some((100, 1.0)));
         assert_eq!(speckle(&spelled).unwrap(), Some((100, 1.0)));
@@ -455,6 +465,7 @@ mod tests {
                 radius: usize::from(C2F_RADIUS),
                 band: None,
                 finest: 0,
+                phase: false,
             })
         );
         let s = search(&parse("--c2f 2 --c2f-finest 2")).unwrap();

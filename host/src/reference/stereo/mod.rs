@@ -16,6 +16,7 @@
 pub mod c2f;
 pub mod colour;
 pub mod filters;
+pub mod phase;
 pub mod population;
 pub mod readout;
 pub mod refine;

@@ -1,0 +1,620 @@
+//! Full-resolution phase refinement of a coarse disparity map: the last
+//! step of the coarse-to-fine energy model of Chen & Qian 2004 (dem-spec
+//! §5, alternative [B]: "set a constant position shift equal to the
+//! coarse estimate, refine the remainder with phase-shift cells at the
+//! finer scale"). It turns the half-size map of the coarse-to-fine engine
+//! ([`super::c2f::C2fParams::finest`] 1) into a map of the frame's own
+//! resolution for about 150 instructions per pixel on the M4.
+//!
+//! For each ON pixel with disparity `d`, the position shift is `s =
+//! min(round(d), max_disp)` and, with the 0° complex Gabor responses `z_L`,
+//! `z_R` of the two frames' grey,
+//!
+//! ```text
+//! P(x) = Σ_{|j| ≤ pool} z_L(x + j) · conj(z_R(x + j − s))
+//! d'   = clamp(s + arg P · λ / 2π, 0, max_disp)
+//! ```
+//!
+//! A correlation with `e^{ikt}` gives `z(x) ∝ e^{−ikx}` on a grating, so
+//! `z_L(x) = z_R(x − d)` makes `arg P = k (d − s)`. `arg P` is where the
+//! energy `|z_L + e^{iΔφ} z_R(x − s)|²` of the phase-shift cells peaks over
+//! `Δφ`, read out in closed form and pooled over `2·pool + 1` pixels of the
+//! row. Columns are clamped to the frame, rows too (replicated borders, as
+//! the filters). OFF pixels stay OFF; a pixel with `P = 0` keeps `d`. The
+//! f32 reference is `protogist_host::reference::stereo::phase` (same
+//! names).
+//!
+//! **Formats.**
+//!
+//! | quantity | format | range |
+//! |---|---|---|
+//! | grey ([`super::filters::grey`]) | `U8F8` in `u16` | 0..=255 |
+//! | taps: envelope `g_y` (Σ = 2^14 exactly), `c_x = e·(cos kt − dc)` (Σ = 0 exactly), `s_x = e·sin kt` (odd) | `I2F14` in `i32` | Σ\|c\|, Σ\|s\| ≤ 2^15 (checked) |
+//! | y pass `v`, rounded once | `U8F8` in `i32` | 0..=255 |
+//! | response `z`, rounded once | `I12F4` in `i16` | \|z\| ≤ 2^15·255/2^14 < 2^13 |
+//! | pooled product `P` | `I?F8` in `i32`, exact | \|P\| ≤ 9·2·2^26 < 2^31 |
+//! | phase | turns, `Q16` in `i32` | ±2^15 |
+//! | disparity | `U8F8` | 0..=max_disp |
+//!
+//! `c_x` is the reference's zero-DC kernel (`kx_re − dc·env` for the 0°
+//! carrier, whose y kernel is the envelope), so flat input gives `z = 0`
+//! exactly, as the model's filters do.
+//!
+//! **Error bound** against the f32 reference, per pixel (ERROR_BOUNDS.md
+//! section 7b): with `δ ≤ 0.16` grey levels the bound on each component of
+//! `z_core − z_ref` (grey ½ LSB, `2^-14` per tap with the taps' sums exact,
+//! and the two roundings), `|ΔP| ≤ Σ_j (|z_L||Δz_R| + |z_R||Δz_L| +
+//! |Δz_L||Δz_R|)` with `|Δz| ≤ √2·δ`, and `|d'_core − d'_ref| ≤ λ/2π ·
+//! (asin(min(1, |ΔP|/|P|)) + 0.0039) + 2^-8` px: the arc tangent's
+//! polynomial is within 0.0038 rad and the quotient's truncation within
+//! 2^-15. Pixels with a strong pooled response are within a few
+//! hundredths of a pixel; only weak ones (|P| near |ΔP|) can differ more.
+
+use super::c2f::RgbRows;
+use super::filters::grey;
+use super::StereoError;
+use crate::disparity::DisparityCell;
+use crate::fixed::U8F8;
+use crate::image::{ImageViewMut, Rgb8};
+
+/// Largest kernel radius.
+pub const MAX_RADIUS: usize = 5;
+/// Largest pooling half width.
+pub const MAX_POOL: usize = 4;
+/// Fraction bits of the taps (`I2F14`).
+pub const TAP_FRAC: u32 = 14;
+/// Fraction bits of a response (`I12F4`).
+pub const Z_FRAC: u32 = 4;
+/// Largest `|arg P|` used, turns in `Q16` (3/8 turn, 135°: a remainder of
+/// at most 3λ/8); a larger one keeps the cell.
+pub const MAX_TURN: i32 = 3 << 13;
+
+/// The refinement's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhaseParams {
+    /// Wavelength of the 0° carrier, px (2..=64). Default 4, the model's
+    /// finest level.
+    pub wavelength: f32,
+    /// Envelope σ / λ (isotropic). Default 0.4.
+    pub sigma_per_wavelength: f32,
+    /// Radius of the x kernel, taps `−r..=r` (1..=[`MAX_RADIUS`]).
+    /// Default 2.
+    pub radius: u8,
+    /// Pooling half width along the row (0..=[`MAX_POOL`]). Default 1
+    /// (3 px).
+    pub pool: u8,
+}
+
+impl PhaseParams {
+    /// λ 4, σ/λ 0.4, radius 2, pool 1: chosen on the held-out Motorcycle
+    /// pair (docs/STEREO.md, "Phase refinement").
+    pub const DEFAULT: Self = Self {
+        wavelength: 4.0,
+        sigma_per_wavelength: 0.4,
+        radius: 2,
+        pool: 1,
+    };
+
+    /// Taps, `2r + 1`.
+    pub const fn taps(&self) -> usize {
+        2 * self.radius as usize + 1
+    }
+}
+
+impl Default for PhaseParams {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Rows of the grey rings: the y pass's `[1 2 1]`.
+pub const Y_TAPS: usize = 3;
+
+/// `u16` elements of the grey rings: [`Y_TAPS`] rows per eye, stored
+/// column by column.
+pub const fn grey_len(w: usize, _p: &PhaseParams) -> usize {
+    2 * Y_TAPS * w
+}
+
+/// `i32` elements of the y-pass row, padded by `r` on each side.
+pub const fn v_len(w: usize, p: &PhaseParams) -> usize {
+    w + 2 * p.radius as usize
+}
+
+/// `[i16; 2]` elements of the two response rows: the left padded by
+/// `pool` on each side, the right by `pool + max_disp` on the left and
+/// `pool` on the right.
+pub const fn z_len(w: usize, p: &PhaseParams, max_disp: u8) -> usize {
+    2 * (w + 2 * p.pool as usize) + max_disp as usize
+}
+
+/// Scratch bytes of a refinement at width `w` (the map row buffer of the
+/// streaming form included).
+pub const fn scratch_bytes(w: usize, p: &PhaseParams, max_disp: u8) -> usize {
+    2 * grey_len(w, p) + 3 * w + 4 * v_len(w, p) + 4 * z_len(w, p, max_disp) + 2 * w
+}
+
+/// Caller-provided scratch, sized by the `const fn`s of this module.
+pub struct PhaseBuffers<'a> {
+    /// Grey rings ([`grey_len`]).
+    pub grey: &'a mut [u16],
+    /// One RGB row (`w`).
+    pub rgb: &'a mut [Rgb8],
+    /// y-pass row ([`v_len`]).
+    pub v: &'a mut [i32],
+    /// Response rows ([`z_len`]).
+    pub z: &'a mut [[i16; 2]],
+    /// One map row (`w`), for [`Refiner::push`].
+    pub row: &'a mut [DisparityCell],
+}
+
+/// The set-up refinement: checked parameters and quantised taps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Phase {
+    /// The parameters.
+    pub params: PhaseParams,
+    /// Largest disparity written.
+    pub max_disp: u8,
+    /// `c_x` (even, Σ = 0).
+    pub cx: [i32; 2 * MAX_RADIUS + 1],
+    /// `s_x` (odd).
+    pub sx: [i32; 2 * MAX_RADIUS + 1],
+    /// λ in `U8F8` units (`λ·256`, rounded).
+    pub lambda_q8: i32,
+    /// `c_x` at taps `0..=r`.
+    ch: Half,
+    /// `s_x` at taps `0..=r`.
+    sh: Half,
+}
+
+/// Taps `0..=r` of an even or odd kernel.
+type Half = [i32; MAX_RADIUS + 1];
+
+/// Taps `0..=r` of a kernel stored as taps `−r..=r`.
+fn half(k: &[i32], r: usize) -> Half {
+    let mut h = [0; MAX_RADIUS + 1];
+    for (o, &v) in h.iter_mut().zip(k.iter().skip(r)) {
+        *o = v;
+    }
+    h
+}
+
+impl Phase {
+    /// Checks `params` and quantises the taps (one-time setup, floats via
+    /// `libm`).
+    ///
+    /// # Errors
+    /// [`StereoError::BadParams`].
+    #[allow(
+        clippy::float_arithmetic,
+        clippy::cast_possible_truncation,
+        clippy::cast_precision_loss
+    )]
+    pub fn new(params: &PhaseParams, max_disp: u8) -> Result<Self, StereoError> {
+        let bad = |ok: bool, what| {
+            if ok {
+                Ok(())
+            } else {
+                Err(StereoError::BadParams(what))
+            }
+        };
+        bad(
+            params.wavelength >= 2.0 && params.wavelength <= 64.0,
+            "the phase wavelength must be in 2..=64 px",
+        )?;
+        bad(
+            params.sigma_per_wavelength > 0.0 && params.sigma_per_wavelength <= 4.0,
+            "the phase envelope must be in (0, 4] wavelengths",
+        )?;
+        bad(
+            (1..=MAX_RADIUS).contains(&usize::from(params.radius)),
+            "the phase radius must be 1..=5",
+        )?;
+        bad(
+            usize::from(params.pool) <= MAX_POOL,
+            "the phase pooling must be 0..=4",
+        )?;
+        let r = usize::from(params.radius);
+        let taps = 2 * r + 1;
+        let lambda = f64::from(params.wavelength);
+        let sigma = f64::from(params.sigma_per_wavelength) * lambda;
+        let t_of = |i: usize| i as f64 - r as f64;
+        let mut env = [0.0f64; 2 * MAX_RADIUS + 1];
+        for (i, e) in env.iter_mut().take(taps).enumerate() {
+            let t = t_of(i);
+            *e = libm::exp(-(t * t) / (2.0 * sigma * sigma));
+        }
+        let total: f64 = env.iter().sum();
+        env.iter_mut().for_each(|e| *e /= total);
+        let one = f64::from(1u32 << TAP_FRAC);
+        let k = core::f64::consts::TAU / lambda;
+        let dc: f64 = env
+            .iter()
+            .take(taps)
+            .enumerate()
+            .map(|(i, &e)| e * libm::cos(k * t_of(i)))
+            .sum();
+        let mut cx = [0i32; 2 * MAX_RADIUS + 1];
+        let mut sx = [0i32; 2 * MAX_RADIUS + 1];
+        for (i, ((c, s), &e)) in cx
+            .iter_mut()
+            .zip(sx.iter_mut())
+            .zip(&env)
+            .enumerate()
+            .take(taps)
+        {
+            let t = t_of(i);
+            *c = libm::round(e * (libm::cos(k * t) - dc) * one) as i32;
+            // Odd exactly: the tap at −t is minus the tap at t.
+            let st = libm::round(e * libm::sin(k * libm::fabs(t)) * one) as i32;
+            *s = if t < 0.0 { -st } else { st };
+        }
+        // Σ c_x = 0 exactly: the centre tap takes the rounding.
+        let others: i32 = cx
+            .iter()
+            .take(taps)
+            .enumerate()
+            .filter(|&(i, _)| i != r)
+            .map(|(_, &c)| c)
+            .sum();
+        if let Some(c) = cx.get_mut(r) {
+            *c = -others;
+        }
+        let abs_sum = |k: &[i32]| k.iter().map(|v| v.abs()).sum::<i32>();
+        bad(
+            abs_sum(&cx) <= 1 << 15 && abs_sum(&sx) <= 1 << 15,
+            "the phase kernel is too large for its format",
+        )?;
+        Ok(Self {
+            params: *params,
+            max_disp,
+            cx,
+            sx,
+            lambda_q8: libm::round(lambda * 256.0) as i32,
+            ch: half(&cx, r),
+            sh: half(&sx, r),
+        })
+    }
+}
+
+/// The refinement of a map row by row, rows top to bottom (any order
+/// works, at the cost of reloading the grey rings).
+pub struct Refiner<'p, 'b, S: RgbRows> {
+    phase: &'p Phase,
+    eyes: [&'p S; 2],
+    w: usize,
+    h: usize,
+    grey: &'b mut [u16],
+    rgb: &'b mut [Rgb8],
+    v: &'b mut [i32],
+    z: &'b mut [[i16; 2]],
+    row: &'b mut [DisparityCell],
+    /// Frame rows `first..next` are in the rings (`next − first ≤ N`).
+    first: usize,
+    next: usize,
+    /// Pixels refined so far.
+    refined: usize,
+}
+
+impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
+    /// Checks sizes and buffers.
+    ///
+    /// # Errors
+    /// [`StereoError::SizeMismatch`], [`StereoError::TooSmall`] for an
+    /// empty frame, [`StereoError::Buffer`] for short buffers.
+    pub fn new(
+        phase: &'p Phase,
+        left: &'p S,
+        right: &'p S,
+        bufs: PhaseBuffers<'b>,
+    ) -> Result<Self, StereoError> {
+        let (l, r) = (left.size(), right.size());
+        if l != r {
+            return Err(StereoError::SizeMismatch { left: l, right: r });
+        }
+        let (w, h) = l;
+        if w == 0 || h == 0 {
+            return Err(StereoError::TooSmall { min: 1, got: l });
+        }
+        let p = &phase.params;
+        let need = [
+            ("phase grey", bufs.grey.len(), grey_len(w, p)),
+            ("phase rgb", bufs.rgb.len(), w),
+            ("phase v", bufs.v.len(), v_len(w, p)),
+            ("phase z", bufs.z.len(), z_len(w, p, phase.max_disp)),
+            ("phase row", bufs.row.len(), w),
+        ];
+        if let Some(&(what, got, needed)) = need.iter().find(|e| e.1 < e.2) {
+            return Err(StereoError::Buffer { what, needed, got });
+        }
+        // Each buffer cut to its length: the passes size themselves by them.
+        let cut = |what| StereoError::Buffer {
+            what,
+            needed: 0,
+            got: 0,
+        };
+        Ok(Self {
+            phase,
+            eyes: [left, right],
+            w,
+            h,
+            grey: bufs
+                .grey
+                .get_mut(..grey_len(w, p))
+                .ok_or(cut("phase grey"))?,
+            rgb: bufs.rgb.get_mut(..w).ok_or(cut("phase rgb"))?,
+            v: bufs.v.get_mut(..v_len(w, p)).ok_or(cut("phase v"))?,
+            z: bufs
+                .z
+                .get_mut(..z_len(w, p, phase.max_disp))
+                .ok_or(cut("phase z"))?,
+            row: bufs.row.get_mut(..w).ok_or(cut("phase row"))?,
+            first: 0,
+            next: 0,
+            refined: 0,
+        })
+    }
+
+    /// Pixels refined so far (ON pixels with `P ≠ 0`).
+    pub const fn refined(&self) -> usize {
+        self.refined
+    }
+
+    /// Takes the cells of the map in row-major order (the coarse-to-fine
+    /// engine's sink order); at the end of each row, refines it and passes
+    /// its cells on to `sink`.
+    pub fn push(
+        &mut self,
+        x: usize,
+        y: usize,
+        cell: DisparityCell,
+        sink: &mut impl FnMut(usize, usize, DisparityCell),
+    ) {
+        if let Some(c) = self.row.get_mut(x) {
+            *c = cell;
+        }
+        if x + 1 == self.w {
+            let row = core::mem::take(&mut self.row);
+            self.refine_row(y, row);
+            for (x, &c) in row.iter().take(self.w).enumerate() {
+                sink(x, y, c);
+            }
+            self.row = row;
+        }
+    }
+
+    /// Refines map row `y` (`cells`, at least `w` long) in place.
+    pub fn refine_row(&mut self, y: usize, cells: &mut [DisparityCell]) {
+        if y >= self.h {
+            return;
+        }
+        match self.phase.params.taps() {
+            3 => self.row_n::<3>(y, cells),
+            5 => self.row_n::<5>(y, cells),
+            7 => self.row_n::<7>(y, cells),
+            9 => self.row_n::<9>(y, cells),
+            _ => self.row_n::<11>(y, cells),
+        }
+    }
+
+    /// [`Refiner::refine_row`] with `N = 2r + 1` x taps known.
+    fn row_n<const N: usize>(&mut self, y: usize, cells: &mut [DisparityCell]) {
+        const R: usize = Y_TAPS;
+        let (w, h) = (self.w, self.h);
+        let lo = y.saturating_sub(1);
+        let hi = (y + 1).min(h.saturating_sub(1));
+        // The rings hold rows `first..next` (row j in slot j % 3); reload
+        // from `lo` if a needed row is gone or not next.
+        if lo < self.first || lo > self.next {
+            (self.first, self.next) = (lo, lo);
+        }
+        // The buffers were cut to their lengths in `new`; a split that does
+        // not fit cannot happen, and leaves the row as it is.
+        let Some((gl, gr)) = self.grey.split_at_mut_checked(R * w) else {
+            return;
+        };
+        while self.next <= hi {
+            let j = self.next;
+            let slot = j % R;
+            for (eye, ring) in self.eyes.iter().zip([&mut *gl, &mut *gr]) {
+                eye.rgb_row(j, self.rgb);
+                for (col, &p) in ring.chunks_exact_mut(R).zip(self.rgb.iter()) {
+                    if let Some(c) = col.get_mut(slot) {
+                        *c = grey(p);
+                    }
+                }
+            }
+            self.next += 1;
+            self.first = self.first.max(self.next.saturating_sub(R));
+        }
+        // `[1 2 1]` permuted to the slots, replicated rows folded in.
+        let mut gslot = [0i32; R];
+        for (t, g) in [1, 2, 1].into_iter().enumerate() {
+            let j = (y + t).saturating_sub(1).min(h.saturating_sub(1));
+            if let Some(s) = gslot.get_mut(j % R) {
+                *s += g;
+            }
+        }
+        let r = N / 2;
+        let pool = usize::from(self.phase.params.pool);
+        let md = usize::from(self.phase.max_disp);
+        let Some((zl, zr)) = self.z.split_at_mut_checked(w + 2 * pool) else {
+            return;
+        };
+        for ((ring, z), pad) in [&*gl, &*gr]
+            .into_iter()
+            .zip([&mut *zl, &mut *zr])
+            .zip([pool, pool + md])
+        {
+            y_pass(ring, &gslot, self.v, r);
+            let Some(zrow) = z.get_mut(pad..pad + w) else {
+                return;
+            };
+            x_pass::<N>(self.v, &self.phase.ch, &self.phase.sh, zrow);
+            let (first, last) = (
+                zrow.first().copied().unwrap_or([0; 2]),
+                zrow.last().copied().unwrap_or([0; 2]),
+            );
+            z.iter_mut().take(pad).for_each(|v| *v = first);
+            z.iter_mut().skip(pad + w).for_each(|v| *v = last);
+        }
+        let (zl, zr) = (&*zl, &*zr);
+        let refined = match pool {
+            0 => phase_row::<1>(self.phase, zl, zr, cells),
+            1 => phase_row::<3>(self.phase, zl, zr, cells),
+            2 => phase_row::<5>(self.phase, zl, zr, cells),
+            3 => phase_row::<7>(self.phase, zl, zr, cells),
+            _ => phase_row::<9>(self.phase, zl, zr, cells),
+        };
+        self.refined += refined;
+    }
+}
+
+/// The phase step of one row with `S = 2·pool + 1` known: each ON cell's
+/// pooled product `P` over `S` pixels at its shift, its argument, the
+/// refined disparity. Returns the cells refined.
+#[inline(always)]
+fn phase_row<const S: usize>(
+    phase: &Phase,
+    zl: &[[i16; 2]],
+    zr: &[[i16; 2]],
+    cells: &mut [DisparityCell],
+) -> usize {
+    let md = usize::from(phase.max_disp);
+    let (lambda, top) = (phase.lambda_q8, (md as i32) << 8);
+    let mut refined = 0;
+    for (x, (cell, a)) in cells.iter_mut().zip(zl.windows(S)).enumerate() {
+        let Some(d) = cell.get() else { continue };
+        let s = ((usize::from(d.to_bits()) + 128) >> 8).min(md);
+        // `a` starts at left column `x − pool`, `b` at right column
+        // `x − s − pool` (the right row is padded by `md` more).
+        let Some(b) = zr.get(x + (md - s)..x + (md - s) + S) else {
+            continue;
+        };
+        let (Ok(a), Ok(b)) = (<&[[i16; 2]; S]>::try_from(a), <&[[i16; 2]; S]>::try_from(b)) else {
+            continue;
+        };
+        let (mut re, mut im) = (0i32, 0i32);
+        for (&[ar, ai], &[br, bi]) in a.iter().zip(b) {
+            let (ar, ai, br, bi) = (i32::from(ar), i32::from(ai), i32::from(br), i32::from(bi));
+            re += ar * br + ai * bi;
+            im += ai * br - ar * bi;
+        }
+        // P = 0 (below one LSB): no phase, the cell is kept.
+        let Some(turns) = atan2_turns(im, re) else {
+            continue;
+        };
+        // Beyond ±3/8 turn the remainder is ambiguous (at ±½ turn either
+        // sign fits): the cell is kept.
+        if turns.abs() > MAX_TURN {
+            continue;
+        }
+        let rq8 = (turns * lambda + (1 << 15)) >> 16;
+        let v = (((s as i32) << 8) + rq8).clamp(0, top);
+        *cell = DisparityCell::from_raw(U8F8::from_bits(v as u16));
+        refined += 1;
+    }
+    refined
+}
+
+/// The y pass of one row: `v(x) = Σ_slot g·grey / 4` (`[1 2 1]/4`),
+/// rounded to `U8F8`, into `v[r..r + w]`, then the padding replicated.
+#[inline(always)]
+fn y_pass(ring: &[u16], g: &[i32; Y_TAPS], v: &mut [i32], r: usize) {
+    let w = ring.len() / Y_TAPS;
+    if let Some(inner) = v.get_mut(r..r + w) {
+        for (col, o) in ring.chunks_exact(Y_TAPS).zip(inner.iter_mut()) {
+            if let [a, b, c] = *col {
+                let [ga, gb, gc] = *g;
+                *o = (ga * i32::from(a) + gb * i32::from(b) + gc * i32::from(c) + 2) >> 2;
+            }
+        }
+    }
+    let first = v.get(r).copied().unwrap_or(0);
+    let last = v.get(r + w.max(1) - 1).copied().unwrap_or(0);
+    v.iter_mut().take(r).for_each(|o| *o = first);
+    v.iter_mut().skip(r + w).for_each(|o| *o = last);
+}
+
+/// The x pass of one row on the padded y pass: `z = Σ (c, s)·v`, rounded
+/// to `I12F4`, with the kernels' symmetry (`c` even, `s` odd): `re = c_0
+/// v_0 + Σ_i c_i (v_{−i} + v_i)`, `im = Σ_i s_i (v_i − v_{−i})`, the same
+/// integers with half the multiplies.
+#[inline(always)]
+fn x_pass<const N: usize>(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
+    let r = N / 2;
+    let shift = TAP_FRAC + 8 - Z_FRAC;
+    let (c0, ch, sh) = (ch[0], &ch[1..], &sh[1..]);
+    for (win, o) in v.windows(N).zip(out.iter_mut()) {
+        if let Ok(win) = <&[i32; N]>::try_from(win) {
+            // `lo` holds v_{−r..−1}, `hi` v_{1..r} (both `r` long).
+            let (lo, rest) = win.split_at(r);
+            let (centre, hi) = rest.split_at(1);
+            let mut re = c0 * centre.first().copied().unwrap_or(0);
+            let mut im = 0i32;
+            for (((&a, &b), &c), &s) in lo.iter().rev().zip(hi).zip(ch).zip(sh) {
+                re += c * (a + b);
+                im += s * (b - a);
+            }
+            *o = [
+                ((re + (1 << (shift - 1))) >> shift) as i16,
+                ((im + (1 << (shift - 1))) >> shift) as i16,
+            ];
+        }
+    }
+}
+
+/// `atan2(y, x)` in turns, `Q16` (`−2^15..=2^15`; `y = 0 > x` gives
+/// `+2^15`, half a turn, as `atan2(+0, x)`), or `None` at the origin: octant reduction, `t = min/max` in `Q15` (one division, after
+/// both are shifted below 2^16), and `atan t ≈ π/4·t + 0.273·t(1 − t)`
+/// (within 0.0038 rad on `0..=1`).
+pub fn atan2_turns(y: i32, x: i32) -> Option<i32> {
+    let (ax, ay) = (x.unsigned_abs(), y.unsigned_abs());
+    let (mn, mx) = if ay > ax { (ax, ay) } else { (ay, ax) };
+    let mx_nz = core::num::NonZeroU32::new(mx)?;
+    let k = (32 - mx_nz.leading_zeros()).saturating_sub(16);
+    let (mn, mx) = (mn >> k, mx >> k);
+    let mx = core::num::NonZeroU32::new(mx)?;
+    // mn ≤ mx < 2^16, so mn·2^15 < 2^31.
+    let t = ((mn << 15) / mx) as i32;
+    // t/8 turns + 0.273/2π · t(1 − t), in Q16 (2847 = 0.273/2π · 2^16).
+    let tt = (t * (32768 - t)) >> 15;
+    let mut a = (t >> 2) + ((2847 * tt) >> 15);
+    if ay > ax {
+        a = 16384 - a;
+    }
+    if x < 0 {
+        a = 32768 - a;
+    }
+    if y < 0 {
+        a = -a;
+    }
+    Some(a)
+}
+
+/// Refines a whole map in place, rows top to bottom; returns the number of
+/// pixels refined.
+///
+/// # Errors
+/// As [`Refiner::new`], and [`StereoError::Buffer`] for a map of another
+/// size.
+pub fn refine<S: RgbRows>(
+    phase: &Phase,
+    left: &S,
+    right: &S,
+    map: &mut ImageViewMut<'_, DisparityCell>,
+    bufs: PhaseBuffers<'_>,
+) -> Result<usize, StereoError> {
+    let mut refiner = Refiner::new(phase, left, right, bufs)?;
+    if map.size() != left.size() {
+        return Err(StereoError::Buffer {
+            what: "phase map",
+            needed: refiner.w * refiner.h,
+            got: map.size().0 * map.size().1,
+        });
+    }
+    for (y, row) in map.rows_mut().enumerate() {
+        refiner.refine_row(y, row);
+    }
+    Ok(refiner.refined)
+}
