@@ -4,7 +4,9 @@
 //! coarse estimate, refine the remainder with phase-shift cells at the
 //! finer scale"). It turns the half-size map of the coarse-to-fine engine
 //! ([`super::c2f::C2fParams::finest`] 1) into a map of the frame's own
-//! resolution for about 150 instructions per pixel on the M4.
+//! resolution for about 250 instructions per pixel on the M4 (the
+//! firmware's points `r2b1l3p` against `r2b1l3h`; docs/STEREO.md, "Phase
+//! refinement").
 //!
 //! For each ON pixel with disparity `d`, the position shift is `s =
 //! min(round(d), max_disp)` and, with the 0° complex Gabor responses `z_L`,
@@ -19,8 +21,11 @@
 //! `z_L(x) = z_R(x − d)` makes `arg P = k (d − s)`. `arg P` is where the
 //! energy `|z_L + e^{iΔφ} z_R(x − s)|²` of the phase-shift cells peaks over
 //! `Δφ`, read out in closed form and pooled over `2·pool + 1` pixels of the
-//! row. Columns are clamped to the frame, rows too (replicated borders, as
-//! the filters). OFF pixels stay OFF; a pixel with `P = 0` keeps `d`. The
+//! row. The y pass is `[1 2 1]/4`, the x pass the zero-DC complex Gabor of
+//! λ, σ and radius `r`. Columns are clamped to the frame, rows too
+//! (replicated borders, as the filters). OFF pixels stay OFF; a pixel with
+//! `P = 0`, or with `|arg P|` above [`MAX_TURN`] (3/8 turn: at half a turn
+//! either sign fits, so the remainder is ambiguous), keeps `d`. The
 //! f32 reference is `protogist_host::reference::stereo::phase` (same
 //! names).
 //!
@@ -29,8 +34,8 @@
 //! | quantity | format | range |
 //! |---|---|---|
 //! | grey ([`super::filters::grey`]) | `U8F8` in `u16` | 0..=255 |
-//! | taps: envelope `g_y` (Σ = 2^14 exactly), `c_x = e·(cos kt − dc)` (Σ = 0 exactly), `s_x = e·sin kt` (odd) | `I2F14` in `i32` | Σ\|c\|, Σ\|s\| ≤ 2^15 (checked) |
-//! | y pass `v`, rounded once | `U8F8` in `i32` | 0..=255 |
+//! | y pass `v = [1 2 1]/4`, rounded once | `U8F8` in `i32` | 0..=255 |
+//! | x taps `c_x = e·(cos kt − dc)` (Σ = 0 exactly), `s_x = e·sin kt` (odd) | `I2F14` in `i32` | Σ\|c\|, Σ\|s\| ≤ 2^15 (checked) |
 //! | response `z`, rounded once | `I12F4` in `i16` | \|z\| ≤ 2^15·255/2^14 < 2^13 |
 //! | pooled product `P` | `I?F8` in `i32`, exact | \|P\| ≤ 9·2·2^26 < 2^31 |
 //! | phase | turns, `Q16` in `i32` | ±2^15 |
@@ -41,9 +46,9 @@
 //! exactly, as the model's filters do.
 //!
 //! **Error bound** against the f32 reference, per pixel (ERROR_BOUNDS.md
-//! section 7b): with `δ ≤ 0.16` grey levels the bound on each component of
-//! `z_core − z_ref` (grey ½ LSB, `2^-14` per tap with the taps' sums exact,
-//! and the two roundings), `|ΔP| ≤ Σ_j (|z_L||Δz_R| + |z_R||Δz_L| +
+//! section 7b): with `δ ≤ 0.1` grey levels the bound on each component of
+//! `z_core − z_ref` (grey and y pass ½ LSB each, `2^-15` per tap with the
+//! taps' sums exact, and the response's rounding), `|ΔP| ≤ Σ_j (|z_L||Δz_R| + |z_R||Δz_L| +
 //! |Δz_L||Δz_R|)` with `|Δz| ≤ √2·δ`, and `|d'_core − d'_ref| ≤ λ/2π ·
 //! (asin(min(1, |ΔP|/|P|)) + 0.0039) + 2^-8` px: the arc tangent's
 //! polynomial is within 0.0038 rad and the quotient's truncation within
@@ -277,6 +282,17 @@ impl Phase {
     }
 }
 
+/// The first `n` elements of `buf` (the passes size themselves by their
+/// buffers), or [`StereoError::Buffer`].
+fn take<'b, T>(buf: &'b mut [T], n: usize, what: &'static str) -> Result<&'b mut [T], StereoError> {
+    let got = buf.len();
+    buf.get_mut(..n).ok_or(StereoError::Buffer {
+        what,
+        needed: n,
+        got,
+    })
+}
+
 /// The refinement of a map row by row, rows top to bottom (any order
 /// works, at the cost of reloading the grey rings).
 pub struct Refiner<'p, 'b, S: RgbRows> {
@@ -289,7 +305,7 @@ pub struct Refiner<'p, 'b, S: RgbRows> {
     v: &'b mut [i32],
     z: &'b mut [[i16; 2]],
     row: &'b mut [DisparityCell],
-    /// Frame rows `first..next` are in the rings (`next − first ≤ N`).
+    /// Frame rows `first..next` are in the rings (`next − first ≤ 3`).
     first: usize,
     next: usize,
     /// Pixels refined so far.
@@ -317,45 +333,24 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
             return Err(StereoError::TooSmall { min: 1, got: l });
         }
         let p = &phase.params;
-        let need = [
-            ("phase grey", bufs.grey.len(), grey_len(w, p)),
-            ("phase rgb", bufs.rgb.len(), w),
-            ("phase v", bufs.v.len(), v_len(w, p)),
-            ("phase z", bufs.z.len(), z_len(w, p, phase.max_disp)),
-            ("phase row", bufs.row.len(), w),
-        ];
-        if let Some(&(what, got, needed)) = need.iter().find(|e| e.1 < e.2) {
-            return Err(StereoError::Buffer { what, needed, got });
-        }
-        // Each buffer cut to its length: the passes size themselves by them.
-        let cut = |what| StereoError::Buffer {
-            what,
-            needed: 0,
-            got: 0,
-        };
         Ok(Self {
             phase,
             eyes: [left, right],
             w,
             h,
-            grey: bufs
-                .grey
-                .get_mut(..grey_len(w, p))
-                .ok_or(cut("phase grey"))?,
-            rgb: bufs.rgb.get_mut(..w).ok_or(cut("phase rgb"))?,
-            v: bufs.v.get_mut(..v_len(w, p)).ok_or(cut("phase v"))?,
-            z: bufs
-                .z
-                .get_mut(..z_len(w, p, phase.max_disp))
-                .ok_or(cut("phase z"))?,
-            row: bufs.row.get_mut(..w).ok_or(cut("phase row"))?,
+            grey: take(bufs.grey, grey_len(w, p), "phase grey")?,
+            rgb: take(bufs.rgb, w, "phase rgb")?,
+            v: take(bufs.v, v_len(w, p), "phase v")?,
+            z: take(bufs.z, z_len(w, p, phase.max_disp), "phase z")?,
+            row: take(bufs.row, w, "phase row")?,
             first: 0,
             next: 0,
             refined: 0,
         })
     }
 
-    /// Pixels refined so far (ON pixels with `P ≠ 0`).
+    /// Pixels refined so far (ON pixels with `P ≠ 0` and `|arg P|` within
+    /// [`MAX_TURN`]).
     pub const fn refined(&self) -> usize {
         self.refined
     }
@@ -399,7 +394,7 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
 
     /// [`Refiner::refine_row`] with `N = 2r + 1` x taps known.
     fn row_n<const N: usize>(&mut self, y: usize, cells: &mut [DisparityCell]) {
-        const R: usize = Y_TAPS;
+        const ROWS: usize = Y_TAPS;
         let (w, h) = (self.w, self.h);
         let lo = y.saturating_sub(1);
         let hi = (y + 1).min(h.saturating_sub(1));
@@ -410,28 +405,28 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
         }
         // The buffers were cut to their lengths in `new`; a split that does
         // not fit cannot happen, and leaves the row as it is.
-        let Some((gl, gr)) = self.grey.split_at_mut_checked(R * w) else {
+        let Some((gl, gr)) = self.grey.split_at_mut_checked(ROWS * w) else {
             return;
         };
         while self.next <= hi {
             let j = self.next;
-            let slot = j % R;
+            let slot = j % ROWS;
             for (eye, ring) in self.eyes.iter().zip([&mut *gl, &mut *gr]) {
                 eye.rgb_row(j, self.rgb);
-                for (col, &p) in ring.chunks_exact_mut(R).zip(self.rgb.iter()) {
+                for (col, &p) in ring.chunks_exact_mut(ROWS).zip(self.rgb.iter()) {
                     if let Some(c) = col.get_mut(slot) {
                         *c = grey(p);
                     }
                 }
             }
             self.next += 1;
-            self.first = self.first.max(self.next.saturating_sub(R));
+            self.first = self.first.max(self.next.saturating_sub(ROWS));
         }
         // `[1 2 1]` permuted to the slots, replicated rows folded in.
-        let mut gslot = [0i32; R];
+        let mut gslot = [0i32; ROWS];
         for (t, g) in [1, 2, 1].into_iter().enumerate() {
             let j = (y + t).saturating_sub(1).min(h.saturating_sub(1));
-            if let Some(s) = gslot.get_mut(j % R) {
+            if let Some(s) = gslot.get_mut(j % ROWS) {
                 *s += g;
             }
         }

@@ -62,7 +62,8 @@ impl PhaseParams {
 
 /// Refines `cells` (left-referenced, `w x h` row-major as `left`) in
 /// place, writing at most `max_disp`; returns the number of pixels
-/// refined (ON, with `P ≠ 0`).
+/// refined (ON, with `P` above [`P_LSB`] and `|arg P|` within
+/// [`MAX_TURNS`]).
 ///
 /// # Errors
 /// [`StereoError::SizeMismatch`] for eyes of different sizes,
