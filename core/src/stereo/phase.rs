@@ -1,6 +1,6 @@
 //! Full-resolution phase refinement of a coarse disparity map: the last
 //! step of the coarse-to-fine energy model of Chen & Qian 2004 (dem-spec
-//! §5, alternative [B]: "set a constant position shift equal to the
+//! §5, alternative \[B\]: "set a constant position shift equal to the
 //! coarse estimate, refine the remainder with phase-shift cells at the
 //! finer scale"). It turns the half-size map of the coarse-to-fine engine
 //! ([`super::c2f::C2fParams::finest`] 1) into a map of the frame's own

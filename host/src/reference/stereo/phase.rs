@@ -1,6 +1,6 @@
 //! f32 reference of the full-resolution phase refinement
 //! (`protogist::stereo::phase`): the last step of the coarse-to-fine model
-//! of Chen & Qian 2004 (dem-spec §5, alternative [B]).
+//! of Chen & Qian 2004 (dem-spec §5, alternative \[B\]).
 //!
 //! A coarse map gives each frame pixel a disparity `d` (the half-size
 //! level's map spread over its 2x2 blocks). The position shift is set to
