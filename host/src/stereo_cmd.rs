@@ -412,18 +412,6 @@ fn cells_f32(cells: &[DisparityCell]) -> Vec<Option<f32>> {
         .collect()
 }
 
-/// The reference's phase refinement with core's default parameters (what
-/// `--c2f-phase` sets in core's engine).
-fn reference_phase() -> dem::phase::PhaseParams {
-    let p = protogist::stereo::phase::PhaseParams::DEFAULT;
-    dem::phase::PhaseParams {
-        wavelength: p.wavelength,
-        sigma_per_wavelength: p.sigma_per_wavelength,
-        radius: p.radius,
-        pool: p.pool,
-    }
-}
-
 /// The f32 reference on the packed `w x h` pair: `params`, coarse to fine
 /// with `search`.
 fn run_reference(
@@ -453,7 +441,7 @@ fn run_reference(
         let mut maps =
             dem::c2f::stereo_c2f_from(&inner, &decoders, &lv, &rv, c.radius, c.band, c.finest)?;
         dem::phase::refine(
-            &reference_phase(),
+            &protogist::stereo::phase::PhaseParams::DEFAULT.into(),
             params.max_disp,
             &lv,
             &rv,

@@ -13,15 +13,6 @@ use protogist_host::reference::stereo::phase as reference;
 use protogist_host::storage::PhaseStorage;
 use protogist_tests::{aloe_160_rgb, rds_rgb};
 
-fn ref_params(p: &PhaseParams) -> reference::PhaseParams {
-    reference::PhaseParams {
-        wavelength: p.wavelength,
-        sigma_per_wavelength: p.sigma_per_wavelength,
-        radius: p.radius,
-        pool: p.pool,
-    }
-}
-
 /// Core's and the reference's refinement of `cells` on the pair.
 fn both(
     p: &PhaseParams,
@@ -48,7 +39,7 @@ fn both(
     )
     .unwrap();
     let mut float = cells.to_vec();
-    let n_ref = reference::refine(&ref_params(p), max_disp, &lv, &rv, &mut float).unwrap();
+    let n_ref = reference::refine(&(*p).into(), max_disp, &lv, &rv, &mut float).unwrap();
     (core, float, n_core, n_ref)
 }
 

@@ -37,13 +37,13 @@
 //! | y pass `v = [1 2 1]/4`, rounded once | `U8F8` in `i32` | 0..=255 |
 //! | x taps `c_x = e·(cos kt − dc)` (Σ = 0 exactly), `s_x = e·sin kt` (odd) | `I2F14` in `i32` | Σ\|c\|, Σ\|s\| ≤ 2^15 (checked) |
 //! | response `z`, rounded once | `I12F4` in `i16` | \|z\| ≤ 2^15·255/2^14 < 2^13 |
-//! | pooled product `P` | `I?F8` in `i32`, exact | \|P\| ≤ 9·2·2^26 < 2^31 |
+//! | pooled product `P` | `Q8` grey² in `i32`, exact | \|P\| ≤ 9·2·2^26 < 2^31 |
 //! | phase | turns, `Q16` in `i32` | ±2^15 |
 //! | disparity | `U8F8` | 0..=max_disp |
 //!
-//! `c_x` is the reference's zero-DC kernel (`kx_re − dc·env` for the 0°
-//! carrier, whose y kernel is the envelope), so flat input gives `z = 0`
-//! exactly, as the model's filters do.
+//! `c_x` is the zero-DC real part (`dc = Σ e cos kt`, the envelope `e`
+//! normalised to Σ = 1), quantised with its sum kept at 0 exactly, so flat
+//! input gives `z = 0` exactly, as the model's filters do.
 //!
 //! **Error bound** against the f32 reference, per pixel (ERROR_BOUNDS.md
 //! section 7b): with `δ ≤ 0.1` grey levels the bound on each component of
@@ -160,29 +160,17 @@ pub struct Phase {
     pub params: PhaseParams,
     /// Largest disparity written.
     pub max_disp: u8,
-    /// `c_x` (even, Σ = 0).
-    pub cx: [i32; 2 * MAX_RADIUS + 1],
-    /// `s_x` (odd).
-    pub sx: [i32; 2 * MAX_RADIUS + 1],
+    /// `c_x` at taps `0..=r` (even: tap `−t` is tap `t`; Σ over
+    /// `−r..=r` is 0 exactly).
+    pub c_half: Half,
+    /// `s_x` at taps `0..=r` (odd: tap `−t` is minus tap `t`; tap 0 is 0).
+    pub s_half: Half,
     /// λ in `U8F8` units (`λ·256`, rounded).
     pub lambda_q8: i32,
-    /// `c_x` at taps `0..=r`.
-    ch: Half,
-    /// `s_x` at taps `0..=r`.
-    sh: Half,
 }
 
 /// Taps `0..=r` of an even or odd kernel.
-type Half = [i32; MAX_RADIUS + 1];
-
-/// Taps `0..=r` of a kernel stored as taps `−r..=r`.
-fn half(k: &[i32], r: usize) -> Half {
-    let mut h = [0; MAX_RADIUS + 1];
-    for (o, &v) in h.iter_mut().zip(k.iter().skip(r)) {
-        *o = v;
-    }
-    h
-}
+pub type Half = [i32; MAX_RADIUS + 1];
 
 impl Phase {
     /// Checks `params` and quantises the taps (one-time setup, floats via
@@ -220,64 +208,51 @@ impl Phase {
             "the phase pooling must be 0..=4",
         )?;
         let r = usize::from(params.radius);
-        let taps = 2 * r + 1;
         let lambda = f64::from(params.wavelength);
         let sigma = f64::from(params.sigma_per_wavelength) * lambda;
-        let t_of = |i: usize| i as f64 - r as f64;
-        let mut env = [0.0f64; 2 * MAX_RADIUS + 1];
-        for (i, e) in env.iter_mut().take(taps).enumerate() {
-            let t = t_of(i);
+        // The envelope at taps 0..=r, normalised to Σ = 1 over −r..=r.
+        let mut env = [0.0f64; MAX_RADIUS + 1];
+        for (t, e) in env.iter_mut().enumerate().take(r + 1) {
+            let t = t as f64;
             *e = libm::exp(-(t * t) / (2.0 * sigma * sigma));
         }
-        let total: f64 = env.iter().sum();
+        let total: f64 = 2.0 * env.iter().sum::<f64>() - env[0];
         env.iter_mut().for_each(|e| *e /= total);
         let one = f64::from(1u32 << TAP_FRAC);
         let k = core::f64::consts::TAU / lambda;
-        let dc: f64 = env
-            .iter()
-            .take(taps)
-            .enumerate()
-            .map(|(i, &e)| e * libm::cos(k * t_of(i)))
-            .sum();
-        let mut cx = [0i32; 2 * MAX_RADIUS + 1];
-        let mut sx = [0i32; 2 * MAX_RADIUS + 1];
-        for (i, ((c, s), &e)) in cx
+        let dc: f64 = 2.0
+            * env
+                .iter()
+                .enumerate()
+                .map(|(t, &e)| e * libm::cos(k * t as f64))
+                .sum::<f64>()
+            - env[0];
+        let (mut c_half, mut s_half) = ([0i32; MAX_RADIUS + 1], [0i32; MAX_RADIUS + 1]);
+        for (t, ((c, s), &e)) in c_half
             .iter_mut()
-            .zip(sx.iter_mut())
+            .zip(&mut s_half)
             .zip(&env)
             .enumerate()
-            .take(taps)
+            .skip(1)
         {
-            let t = t_of(i);
+            let t = t as f64;
             *c = libm::round(e * (libm::cos(k * t) - dc) * one) as i32;
-            // Odd exactly: the tap at −t is minus the tap at t.
-            let st = libm::round(e * libm::sin(k * libm::fabs(t)) * one) as i32;
-            *s = if t < 0.0 { -st } else { st };
+            *s = libm::round(e * libm::sin(k * t) * one) as i32;
         }
-        // Σ c_x = 0 exactly: the centre tap takes the rounding.
-        let others: i32 = cx
-            .iter()
-            .take(taps)
-            .enumerate()
-            .filter(|&(i, _)| i != r)
-            .map(|(_, &c)| c)
-            .sum();
-        if let Some(c) = cx.get_mut(r) {
-            *c = -others;
-        }
-        let abs_sum = |k: &[i32]| k.iter().map(|v| v.abs()).sum::<i32>();
+        // Σ c_x = 0 exactly over −r..=r: the centre tap takes the rounding.
+        c_half[0] = -2 * c_half.iter().skip(1).sum::<i32>();
+        // Σ|k| over −r..=r.
+        let abs_sum = |h: &Half| 2 * h.iter().map(|v| v.abs()).sum::<i32>() - h[0].abs();
         bad(
-            abs_sum(&cx) <= 1 << 15 && abs_sum(&sx) <= 1 << 15,
+            abs_sum(&c_half) <= 1 << 15 && abs_sum(&s_half) <= 1 << 15,
             "the phase kernel is too large for its format",
         )?;
         Ok(Self {
             params: *params,
             max_disp,
-            cx,
-            sx,
+            c_half,
+            s_half,
             lambda_q8: libm::round(lambda * 256.0) as i32,
-            ch: half(&cx, r),
-            sh: half(&sx, r),
         })
     }
 }
@@ -445,7 +420,7 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
             let Some(zrow) = z.get_mut(pad..pad + w) else {
                 return;
             };
-            x_pass::<N>(self.v, &self.phase.ch, &self.phase.sh, zrow);
+            x_pass::<N>(self.v, &self.phase.c_half, &self.phase.s_half, zrow);
             let (first, last) = (
                 zrow.first().copied().unwrap_or([0; 2]),
                 zrow.last().copied().unwrap_or([0; 2]),
@@ -560,9 +535,10 @@ fn x_pass<const N: usize>(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]])
 }
 
 /// `atan2(y, x)` in turns, `Q16` (`−2^15..=2^15`; `y = 0 > x` gives
-/// `+2^15`, half a turn, as `atan2(+0, x)`), or `None` at the origin: octant reduction, `t = min/max` in `Q15` (one division, after
-/// both are shifted below 2^16), and `atan t ≈ π/4·t + 0.273·t(1 − t)`
-/// (within 0.0038 rad on `0..=1`).
+/// `+2^15`, half a turn, as `atan2(+0, x)`), or `None` at the origin:
+/// octant reduction, `t = min/max` in `Q15` (one division, after both are
+/// shifted below 2^16), and `atan t ≈ π/4·t + 0.273·t(1 − t)` (within
+/// 0.0038 rad on `0..=1`).
 pub fn atan2_turns(y: i32, x: i32) -> Option<i32> {
     let (ax, ay) = (x.unsigned_abs(), y.unsigned_abs());
     let (mn, mx) = if ay > ax { (ax, ay) } else { (ay, ax) };

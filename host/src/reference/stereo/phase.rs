@@ -50,6 +50,18 @@ pub struct PhaseParams {
     pub pool: u8,
 }
 
+impl From<protogist::stereo::phase::PhaseParams> for PhaseParams {
+    /// The reference's parameters for core's.
+    fn from(p: protogist::stereo::phase::PhaseParams) -> Self {
+        Self {
+            wavelength: p.wavelength,
+            sigma_per_wavelength: p.sigma_per_wavelength,
+            radius: p.radius,
+            pool: p.pool,
+        }
+    }
+}
+
 impl PhaseParams {
     /// λ 4, σ/λ 0.4, radius 2, pool 1 (core's defaults).
     pub const DEFAULT: Self = Self {
