@@ -166,7 +166,6 @@ fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
         picks: &mut picks,
         maps: &mut maps,
         phase: firmware_sim::pg::stereo::phase::PhaseBuffers {
-            grey: &mut vec![0u16; len::P_GREY],
             rgb: &mut vec![Rgb8::new(0, 0, 0); len::P_RGB],
             v: &mut vec![0i32; len::P_V],
             z: &mut vec![[0i16; 2]; len::P_Z],

@@ -180,8 +180,7 @@ const fn fits(p: &C2fParams) -> bool {
         && c2f::map_len(WIDTH, HEIGHT, p) <= len::MAPS
         && match &p.phase {
             Some(ph) => {
-                phase::grey_len(WIDTH, ph) <= len::P_GREY
-                    && phase::v_len(WIDTH, ph) <= len::P_V
+                phase::v_len(WIDTH, ph) <= len::P_V
                     && phase::z_len(WIDTH, ph, p.dem.max_disp) <= len::P_Z
             }
             None => true,
@@ -224,11 +223,9 @@ pub mod len {
     pub const PICKS: usize = c2f::pick_len(WIDTH);
     /// Window maps (`u8`).
     pub const MAPS: usize = c2f::map_len(WIDTH, HEIGHT, &PARAMS);
-    /// Phase refinement grey rings (`u16`), for [`PhaseParams::DEFAULT`].
-    pub const P_GREY: usize = phase::grey_len(WIDTH, &PhaseParams::DEFAULT);
     /// Phase refinement RGB row.
     pub const P_RGB: usize = WIDTH;
-    /// Phase refinement y-pass row (`i32`).
+    /// Phase refinement grey row (`i32`), for [`PhaseParams::DEFAULT`].
     pub const P_V: usize = phase::v_len(WIDTH, &PhaseParams::DEFAULT);
     /// Phase refinement response rows (`[i16; 2]`).
     pub const P_Z: usize = phase::z_len(WIDTH, &PhaseParams::DEFAULT, PARAMS.dem.max_disp);

@@ -8,10 +8,8 @@ use firmware_sim::pg::stereo::phase::PhaseBuffers;
 use firmware_sim::stereo_run::{self, len, StereoResult, POINTS};
 use firmware_sim::NoTicks;
 
-/// The phase refinement's buffers: grey rings, RGB row, y pass, responses,
-/// map row.
+/// The phase refinement's buffers: RGB row, grey row, responses, map row.
 type PhaseStorage = (
-    Vec<u16>,
     Vec<Rgb8>,
     Vec<i32>,
     Vec<[i16; 2]>,
@@ -44,7 +42,6 @@ impl Storage {
             picks: vec![0; len::PICKS],
             maps: vec![0; len::MAPS],
             phase: (
-                vec![0; len::P_GREY],
                 vec![Rgb8::new(0, 0, 0); len::P_RGB],
                 vec![0; len::P_V],
                 vec![[0; 2]; len::P_Z],
@@ -65,11 +62,10 @@ impl Storage {
             picks: &mut self.picks,
             maps: &mut self.maps,
             phase: PhaseBuffers {
-                grey: &mut self.phase.0,
-                rgb: &mut self.phase.1,
-                v: &mut self.phase.2,
-                z: &mut self.phase.3,
-                row: &mut self.phase.4,
+                rgb: &mut self.phase.0,
+                v: &mut self.phase.1,
+                z: &mut self.phase.2,
+                row: &mut self.phase.3,
             },
         }
     }

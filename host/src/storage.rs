@@ -98,7 +98,7 @@ pub struct C2fStorage {
     pub rgb: Vec<protogist::image::Rgb8>,
     /// Response rows.
     pub z: Vec<protogist::stereo::filters::Z>,
-    /// y-pass row.
+    /// Grey row.
     pub col: Vec<[i32; 3]>,
     /// Score rows.
     pub scores: Vec<i64>,
@@ -117,11 +117,9 @@ pub struct C2fStorage {
 /// Owned storage for [`protogist::stereo::phase::PhaseBuffers`] at one
 /// width (empty without parameters).
 pub struct PhaseStorage {
-    /// Grey rings.
-    pub grey: Vec<u16>,
     /// One RGB row.
     pub rgb: Vec<protogist::image::Rgb8>,
-    /// y-pass row.
+    /// Grey row.
     pub v: Vec<i32>,
     /// Response rows.
     pub z: Vec<[i16; 2]>,
@@ -139,7 +137,6 @@ impl PhaseStorage {
         use protogist::stereo::phase as ph;
         let Some(p) = p else {
             return Self {
-                grey: Vec::new(),
                 rgb: Vec::new(),
                 v: Vec::new(),
                 z: Vec::new(),
@@ -147,7 +144,6 @@ impl PhaseStorage {
             };
         };
         Self {
-            grey: vec![0; ph::grey_len(width, p)],
             rgb: vec![protogist::image::Rgb8::new(0, 0, 0); width],
             v: vec![0; ph::v_len(width, p)],
             z: vec![[0; 2]; ph::z_len(width, p, max_disp)],
@@ -158,7 +154,6 @@ impl PhaseStorage {
     /// The refinement's view of the storage.
     pub fn buffers(&mut self) -> protogist::stereo::phase::PhaseBuffers<'_> {
         protogist::stereo::phase::PhaseBuffers {
-            grey: &mut self.grey,
             rgb: &mut self.rgb,
             v: &mut self.v,
             z: &mut self.z,

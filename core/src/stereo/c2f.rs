@@ -514,12 +514,11 @@ impl C2f {
         probe: &mut impl Probe,
     ) -> Result<StereoReport, StereoError> {
         let Some(phase) = &self.phase else {
-            return self.run_levels(tables, left, right, bufs, sink, probe);
+            return self.run_levels(tables, left, right, bufs, &mut Plain(sink), probe);
         };
         self.check(tables, left.size(), right.size())?;
         let C2fBuffers { phase: pb, .. } = bufs;
         let pb = PhaseBuffers {
-            grey: &mut *pb.grey,
             rgb: &mut *pb.rgb,
             v: &mut *pb.v,
             z: &mut *pb.z,
@@ -537,14 +536,16 @@ impl C2f {
             picks: &mut *bufs.picks,
             maps: &mut *bufs.maps,
             phase: PhaseBuffers {
-                grey: &mut [],
                 rgb: &mut [],
                 v: &mut [],
                 z: &mut [],
                 row: &mut [],
             },
         };
-        let mut refined = |x, y, c| refiner.push(x, y, c, sink);
+        let mut refined = Refined {
+            refiner: &mut refiner,
+            sink,
+        };
         self.run_levels(tables, left, right, &mut rest, &mut refined, probe)
     }
 
@@ -555,7 +556,7 @@ impl C2f {
         left: &S,
         right: &S,
         bufs: &mut C2fBuffers<'_>,
-        sink: &mut impl FnMut(usize, usize, DisparityCell),
+        sink: &mut impl Cells,
         probe: &mut impl Probe,
     ) -> Result<StereoReport, StereoError> {
         self.check(tables, left.size(), right.size())?;
@@ -634,6 +635,50 @@ struct Work<'b, 'a> {
     costs: &'b mut &'a mut [u16],
     sums: &'b mut &'a mut [u32],
     picks: &'b mut &'a mut [i32],
+}
+
+/// Where the finest level's cells go, in row-major order.
+trait Cells {
+    /// Cell `(x, y)`.
+    fn cell(&mut self, x: usize, y: usize, c: DisparityCell);
+    /// A frame row to fill before [`Cells::row_done`], for a consumer that
+    /// works on rows (the spread of a level `k > 0` then fills it instead
+    /// of calling [`Cells::cell`]).
+    fn row(&mut self) -> Option<&mut [DisparityCell]> {
+        None
+    }
+    /// Frame row `y` of [`Cells::row`] is filled.
+    fn row_done(&mut self, _y: usize) {}
+}
+
+/// A sink of cells.
+struct Plain<'f, F>(&'f mut F);
+
+impl<F: FnMut(usize, usize, DisparityCell)> Cells for Plain<'_, F> {
+    #[inline(always)]
+    fn cell(&mut self, x: usize, y: usize, c: DisparityCell) {
+        (self.0)(x, y, c);
+    }
+}
+
+/// A sink behind the phase refinement: each output row is refined, then
+/// passed on cell by cell.
+struct Refined<'r, 'p, 'b, S: RgbRows, F> {
+    refiner: &'r mut Refiner<'p, 'b, S>,
+    sink: &'r mut F,
+}
+
+impl<S: RgbRows, F: FnMut(usize, usize, DisparityCell)> Cells for Refined<'_, '_, '_, S, F> {
+    #[inline(always)]
+    fn cell(&mut self, x: usize, y: usize, c: DisparityCell) {
+        self.refiner.push(x, y, c, self.sink);
+    }
+    fn row(&mut self) -> Option<&mut [DisparityCell]> {
+        Some(self.refiner.row_mut())
+    }
+    fn row_done(&mut self, y: usize) {
+        self.refiner.flush(y, self.sink);
+    }
 }
 
 /// Where a level's result goes.
@@ -955,7 +1000,7 @@ impl<'e> Pass<'e> {
     }
 
     #[allow(clippy::too_many_lines)]
-    fn run<S: RgbRows, F: FnMut(usize, usize, DisparityCell)>(
+    fn run<S: RgbRows, F: Cells>(
         &self,
         table: &DemTable<'_>,
         src: [&S; 2],
@@ -1160,7 +1205,7 @@ impl<'e> Pass<'e> {
                     let total = raw.get(n).copied().unwrap_or(0);
                     let verdict = self.off_tests(x, d, need(total, v), rp);
                     if self.k == 0 {
-                        sink(x, y, verdict.count(report));
+                        sink.cell(x, y, verdict.count(report));
                     } else if let Some(c) = col.get_mut(x) {
                         // The row's votes are done, so `col` is free.
                         c[0] = verdict.code();
@@ -1183,13 +1228,7 @@ impl<'e> Pass<'e> {
     /// row), each level pixel's verdict in `col` (its disparity times
     /// `2^k`) over frame columns `x·2^k ..` (to the frame's last column
     /// after the level's last pixel).
-    fn spread(
-        &self,
-        y: usize,
-        col: &[[i32; 3]],
-        sink: &mut impl FnMut(usize, usize, DisparityCell),
-        report: &mut StereoReport,
-    ) {
+    fn spread(&self, y: usize, col: &[[i32; 3]], sink: &mut impl Cells, report: &mut StereoReport) {
         let (fw, fh) = self.full;
         let first = y << self.k;
         let end = if y + 1 >= self.h {
@@ -1198,15 +1237,29 @@ impl<'e> Pass<'e> {
             first + (1 << self.k)
         };
         for fy in first..end {
-            for (x, c) in col.iter().take(self.w).enumerate() {
-                let verdict = Verdict::from_code(c[0]).scaled(self.k);
+            // Each level pixel's cell, counted once for its columns.
+            let mut cells = col.iter().take(self.w).enumerate().map(|(x, c)| {
                 let cols = if x + 1 == self.w {
                     (x << self.k)..fw
                 } else {
                     (x << self.k)..(x + 1) << self.k
                 };
-                for fx in cols {
-                    sink(fx, fy, verdict.count(report));
+                let verdict = Verdict::from_code(c[0]).scaled(self.k);
+                (verdict.count_n(report, cols.len()), cols)
+            });
+            if let Some(row) = sink.row() {
+                for (cell, cols) in &mut cells {
+                    row.get_mut(cols)
+                        .into_iter()
+                        .flatten()
+                        .for_each(|c| *c = cell);
+                }
+                sink.row_done(fy);
+            } else {
+                for (cell, cols) in cells {
+                    for fx in cols {
+                        sink.cell(fx, fy, cell);
+                    }
                 }
             }
         }
@@ -1501,21 +1554,26 @@ impl Verdict {
 
     /// Counts the verdict in `report` and makes it a cell.
     fn count(self, report: &mut StereoReport) -> DisparityCell {
+        self.count_n(report, 1)
+    }
+
+    /// Counts the verdict `n` times in `report` and makes it a cell.
+    fn count_n(self, report: &mut StereoReport, n: usize) -> DisparityCell {
         match self {
             Self::On(v) => {
-                report.on += 1;
+                report.on += n;
                 DisparityCell::from_raw(U8F8::from_bits(v))
             }
             Self::Texture => {
-                report.off_texture += 1;
+                report.off_texture += n;
                 DisparityCell::OFF
             }
             Self::Ambiguous => {
-                report.off_ambiguous += 1;
+                report.off_ambiguous += n;
                 DisparityCell::OFF
             }
             Self::Inconsistent => {
-                report.off_inconsistent += 1;
+                report.off_inconsistent += n;
                 DisparityCell::OFF
             }
         }

@@ -56,7 +56,6 @@
 //! hundredths of a pixel; only weak ones (|P| near |ΔP|) can differ more.
 
 use super::c2f::RgbRows;
-use super::filters::grey;
 use super::StereoError;
 use crate::disparity::DisparityCell;
 use crate::fixed::U8F8;
@@ -112,16 +111,7 @@ impl Default for PhaseParams {
     }
 }
 
-/// Rows of the grey rings: the y pass's `[1 2 1]`.
-pub const Y_TAPS: usize = 3;
-
-/// `u16` elements of the grey rings: [`Y_TAPS`] rows per eye, stored
-/// column by column.
-pub const fn grey_len(w: usize, _p: &PhaseParams) -> usize {
-    2 * Y_TAPS * w
-}
-
-/// `i32` elements of the y-pass row, padded by `r` on each side.
+/// `i32` elements of the grey row, padded by `r` on each side.
 pub const fn v_len(w: usize, p: &PhaseParams) -> usize {
     w + 2 * p.radius as usize
 }
@@ -136,16 +126,14 @@ pub const fn z_len(w: usize, p: &PhaseParams, max_disp: u8) -> usize {
 /// Scratch bytes of a refinement at width `w` (the map row buffer of the
 /// streaming form included).
 pub const fn scratch_bytes(w: usize, p: &PhaseParams, max_disp: u8) -> usize {
-    2 * grey_len(w, p) + 3 * w + 4 * v_len(w, p) + 4 * z_len(w, p, max_disp) + 2 * w
+    3 * w + 4 * v_len(w, p) + 4 * z_len(w, p, max_disp) + 2 * w
 }
 
 /// Caller-provided scratch, sized by the `const fn`s of this module.
 pub struct PhaseBuffers<'a> {
-    /// Grey rings ([`grey_len`]).
-    pub grey: &'a mut [u16],
     /// One RGB row (`w`).
     pub rgb: &'a mut [Rgb8],
-    /// y-pass row ([`v_len`]).
+    /// Grey row ([`v_len`]).
     pub v: &'a mut [i32],
     /// Response rows ([`z_len`]).
     pub z: &'a mut [[i16; 2]],
@@ -268,21 +256,17 @@ fn take<'b, T>(buf: &'b mut [T], n: usize, what: &'static str) -> Result<&'b mut
     })
 }
 
-/// The refinement of a map row by row, rows top to bottom (any order
-/// works, at the cost of reloading the grey rings).
+/// The refinement of a map row by row (rows in any order: each reads its
+/// own frame row of both eyes).
 pub struct Refiner<'p, 'b, S: RgbRows> {
     phase: &'p Phase,
     eyes: [&'p S; 2],
     w: usize,
     h: usize,
-    grey: &'b mut [u16],
     rgb: &'b mut [Rgb8],
     v: &'b mut [i32],
     z: &'b mut [[i16; 2]],
     row: &'b mut [DisparityCell],
-    /// Frame rows `first..next` are in the rings (`next − first ≤ 3`).
-    first: usize,
-    next: usize,
     /// Pixels refined so far.
     refined: usize,
 }
@@ -313,13 +297,10 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
             eyes: [left, right],
             w,
             h,
-            grey: take(bufs.grey, grey_len(w, p), "phase grey")?,
             rgb: take(bufs.rgb, w, "phase rgb")?,
             v: take(bufs.v, v_len(w, p), "phase v")?,
             z: take(bufs.z, z_len(w, p, phase.max_disp), "phase z")?,
             row: take(bufs.row, w, "phase row")?,
-            first: 0,
-            next: 0,
             refined: 0,
         })
     }
@@ -332,7 +313,7 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
 
     /// Takes the cells of the map in row-major order (the coarse-to-fine
     /// engine's sink order); at the end of each row, refines it and passes
-    /// its cells on to `sink`.
+    /// its cells on to `sink` ([`Refiner::flush`]).
     pub fn push(
         &mut self,
         x: usize,
@@ -344,13 +325,25 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
             *c = cell;
         }
         if x + 1 == self.w {
-            let row = core::mem::take(&mut self.row);
-            self.refine_row(y, row);
-            for (x, &c) in row.iter().take(self.w).enumerate() {
-                sink(x, y, c);
-            }
-            self.row = row;
+            self.flush(y, sink);
         }
+    }
+
+    /// The map row that [`Refiner::flush`] refines (`w` cells), to fill
+    /// directly instead of by [`Refiner::push`].
+    pub fn row_mut(&mut self) -> &mut [DisparityCell] {
+        self.row
+    }
+
+    /// Refines the row of [`Refiner::row_mut`] as map row `y` and passes
+    /// its cells on to `sink`.
+    pub fn flush(&mut self, y: usize, sink: &mut impl FnMut(usize, usize, DisparityCell)) {
+        let row = core::mem::take(&mut self.row);
+        self.refine_row(y, row);
+        for (x, &c) in row.iter().enumerate() {
+            sink(x, y, c);
+        }
+        self.row = row;
     }
 
     /// Refines map row `y` (`cells`, at least `w` long) in place.
@@ -367,56 +360,25 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
         }
     }
 
-    /// [`Refiner::refine_row`] with `N = 2r + 1` x taps known.
+    /// [`Refiner::refine_row`] with `N = 2r + 1` taps known.
     fn row_n<const N: usize>(&mut self, y: usize, cells: &mut [DisparityCell]) {
-        const ROWS: usize = Y_TAPS;
-        let (w, h) = (self.w, self.h);
-        let lo = y.saturating_sub(1);
-        let hi = (y + 1).min(h.saturating_sub(1));
-        // The rings hold rows `first..next` (row j in slot j % 3); reload
-        // from `lo` if a needed row is gone or not next.
-        if lo < self.first || lo > self.next {
-            (self.first, self.next) = (lo, lo);
-        }
-        // The buffers were cut to their lengths in `new`; a split that does
-        // not fit cannot happen, and leaves the row as it is.
-        let Some((gl, gr)) = self.grey.split_at_mut_checked(ROWS * w) else {
-            return;
-        };
-        while self.next <= hi {
-            let j = self.next;
-            let slot = j % ROWS;
-            for (eye, ring) in self.eyes.iter().zip([&mut *gl, &mut *gr]) {
-                eye.rgb_row(j, self.rgb);
-                for (col, &p) in ring.chunks_exact_mut(ROWS).zip(self.rgb.iter()) {
-                    if let Some(c) = col.get_mut(slot) {
-                        *c = grey(p);
-                    }
-                }
-            }
-            self.next += 1;
-            self.first = self.first.max(self.next.saturating_sub(ROWS));
-        }
-        // `[1 2 1]` permuted to the slots, replicated rows folded in.
-        let mut gslot = [0i32; ROWS];
-        for (t, g) in [1, 2, 1].into_iter().enumerate() {
-            let j = (y + t).saturating_sub(1).min(h.saturating_sub(1));
-            if let Some(s) = gslot.get_mut(j % ROWS) {
-                *s += g;
-            }
-        }
+        let w = self.w;
         let r = N / 2;
         let pool = usize::from(self.phase.params.pool);
         let md = usize::from(self.phase.max_disp);
+        // The buffers were cut to their lengths in `new`; a split that does
+        // not fit cannot happen, and leaves the row as it is.
         let Some((zl, zr)) = self.z.split_at_mut_checked(w + 2 * pool) else {
             return;
         };
-        for ((ring, z), pad) in [&*gl, &*gr]
-            .into_iter()
+        for ((eye, z), pad) in self
+            .eyes
+            .iter()
             .zip([&mut *zl, &mut *zr])
             .zip([pool, pool + md])
         {
-            y_pass(ring, &gslot, self.v, r);
+            eye.rgb_row(y, self.rgb);
+            grey_row(self.rgb, self.v, r);
             let Some(zrow) = z.get_mut(pad..pad + w) else {
                 return;
             };
@@ -453,51 +415,68 @@ fn phase_row<const S: usize>(
     let md = usize::from(phase.max_disp);
     let (lambda, top) = (phase.lambda_q8, (md as i32) << 8);
     let mut refined = 0;
+    // `a` starts at left column `x − pool`; `zr[md..]` at right column
+    // `−pool`, so right column `x − s − pool` is `zr[x + md − s]`.
     for (x, (cell, a)) in cells.iter_mut().zip(zl.windows(S)).enumerate() {
         let Some(d) = cell.get() else { continue };
         let s = ((usize::from(d.to_bits()) + 128) >> 8).min(md);
-        // `a` starts at left column `x − pool`, `b` at right column
-        // `x − s − pool` (the right row is padded by `md` more).
-        let Some(b) = zr.get(x + (md - s)..x + (md - s) + S) else {
+        let i = x + md - s;
+        let (Ok(a), Some(Ok(b))) = (
+            <&[[i16; 2]; S]>::try_from(a),
+            zr.get(i..i + S).map(<&[[i16; 2]; S]>::try_from),
+        ) else {
             continue;
         };
-        let (Ok(a), Ok(b)) = (<&[[i16; 2]; S]>::try_from(a), <&[[i16; 2]; S]>::try_from(b)) else {
-            continue;
-        };
-        let (mut re, mut im) = (0i32, 0i32);
-        for (&[ar, ai], &[br, bi]) in a.iter().zip(b) {
-            let (ar, ai, br, bi) = (i32::from(ar), i32::from(ai), i32::from(br), i32::from(bi));
-            re += ar * br + ai * bi;
-            im += ai * br - ar * bi;
+        let (re, im) = product(a, b);
+        if let Some(rq8) = remainder_q8(im, re, lambda) {
+            let v = (((s as i32) << 8) + rq8).clamp(0, top);
+            *cell = DisparityCell::from_raw(U8F8::from_bits(v as u16));
+            refined += 1;
         }
-        // P = 0 (below one LSB): no phase, the cell is kept.
-        let Some(turns) = atan2_turns(im, re) else {
-            continue;
-        };
-        // Beyond ±3/8 turn the remainder is ambiguous (at ±½ turn either
-        // sign fits): the cell is kept.
-        if turns.abs() > MAX_TURN {
-            continue;
-        }
-        let rq8 = (turns * lambda + (1 << 15)) >> 16;
-        let v = (((s as i32) << 8) + rq8).clamp(0, top);
-        *cell = DisparityCell::from_raw(U8F8::from_bits(v as u16));
-        refined += 1;
     }
     refined
 }
 
-/// The y pass of one row: `v(x) = Σ_slot g·grey / 4` (`[1 2 1]/4`),
-/// rounded to `U8F8`, into `v[r..r + w]`, then the padding replicated.
+/// `Σ a · conj(b)` of two windows of responses, exact in `i32`.
 #[inline(always)]
-fn y_pass(ring: &[u16], g: &[i32; Y_TAPS], v: &mut [i32], r: usize) {
-    let w = ring.len() / Y_TAPS;
+fn product<const S: usize>(a: &[[i16; 2]; S], b: &[[i16; 2]; S]) -> (i32, i32) {
+    let (mut re, mut im) = (0i32, 0i32);
+    for (&[ar, ai], &[br, bi]) in a.iter().zip(b) {
+        let (ar, ai, br, bi) = (i32::from(ar), i32::from(ai), i32::from(br), i32::from(bi));
+        re += ar * br + ai * bi;
+        im += ai * br - ar * bi;
+    }
+    (re, im)
+}
+
+/// The remainder `arg P · λ / 2π` in `U8F8` px (`lambda` is λ in `U8F8`),
+/// or `None` for `P = 0` (no phase) and beyond ±[`MAX_TURN`] (at ±½ turn
+/// either sign fits, so the remainder is ambiguous): the cell is kept.
+#[inline(always)]
+fn remainder_q8(im: i32, re: i32, lambda: i32) -> Option<i32> {
+    let turns = atan2_turns(im, re)?;
+    if turns.abs() > MAX_TURN {
+        return None;
+    }
+    Some((turns * lambda + (1 << 15)) >> 16)
+}
+
+/// The grey of an RGB pixel with 8-bit weights, `U8F8` exactly:
+/// `(77 R + 150 G + 29 B) / 256` (BT.601's 0.299, 0.587, 0.114 to 1/256;
+/// the weights sum to 256, so white is 255).
+#[inline(always)]
+pub fn grey8(p: Rgb8) -> i32 {
+    77 * i32::from(p.r) + 150 * i32::from(p.g) + 29 * i32::from(p.b)
+}
+
+/// The grey of one RGB row into `v[r..r + w]`, then the padding
+/// replicated.
+#[inline(always)]
+fn grey_row(rgb: &[Rgb8], v: &mut [i32], r: usize) {
+    let w = rgb.len();
     if let Some(inner) = v.get_mut(r..r + w) {
-        for (col, o) in ring.chunks_exact(Y_TAPS).zip(inner.iter_mut()) {
-            if let [a, b, c] = *col {
-                let [ga, gb, gc] = *g;
-                *o = (ga * i32::from(a) + gb * i32::from(b) + gc * i32::from(c) + 2) >> 2;
-            }
+        for (o, &p) in inner.iter_mut().zip(rgb) {
+            *o = grey8(p);
         }
     }
     let first = v.get(r).copied().unwrap_or(0);
@@ -506,7 +485,7 @@ fn y_pass(ring: &[u16], g: &[i32; Y_TAPS], v: &mut [i32], r: usize) {
     v.iter_mut().skip(r + w).for_each(|o| *o = last);
 }
 
-/// The x pass of one row on the padded y pass: `z = Σ (c, s)·v`, rounded
+/// The filter of one row on the padded grey: `z = Σ (c, s)·v`, rounded
 /// to `I12F4`, with the kernels' symmetry (`c` even, `s` odd): `re = c_0
 /// v_0 + Σ_i c_i (v_{−i} + v_i)`, `im = Σ_i s_i (v_i − v_{−i})`, the same
 /// integers with half the multiplies.

@@ -45,7 +45,6 @@ mod len {
     pub const C_PICKS: usize = c::pick_len(W);
     pub const C_MAPS: usize = c::map_len(W, H, &C2F);
     const PHASE: stereo::phase::PhaseParams = stereo::phase::PhaseParams::DEFAULT;
-    pub const P_GREY: usize = stereo::phase::grey_len(W, &PHASE);
     pub const P_RGB: usize = W;
     pub const P_V: usize = stereo::phase::v_len(W, &PHASE);
     pub const P_Z: usize = stereo::phase::z_len(W, &PHASE, C2F.dem.max_disp);
@@ -100,7 +99,6 @@ macro_rules! buffers {
                 picks: $alloc!(i32, len::C_PICKS, 0i32),
                 maps: $alloc!(u8, len::C_MAPS, 0u8),
                 phase: stereo::phase::PhaseBuffers {
-                    grey: $alloc!(u16, len::P_GREY, 0u16),
                     rgb: $alloc!(
                         firmware_sim::pg::image::Rgb8,
                         len::P_RGB,

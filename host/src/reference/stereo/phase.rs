@@ -6,8 +6,8 @@
 //! level's map spread over its 2x2 blocks). The position shift is set to
 //! `s = round(d)`, and the remainder is read from the phase of phase-shift
 //! cells of the frame's own resolution: with the 0° responses `z_L`, `z_R`
-//! of the two grey images (`[1 2 1]/4` down the columns, then the zero-DC
-//! complex Gabor `e(t)·(cos kt − dc) + i·e(t)·sin kt` along the rows,
+//! of the two grey images ([`grey8`]; the zero-DC complex Gabor
+//! `e(t)·(cos kt − dc) + i·e(t)·sin kt` along the rows,
 //! `k = 2π/λ`, envelope `e` of σ = σ/λ·λ with Σ = 1, `dc = Σ e cos kt`),
 //!
 //! ```text
@@ -20,11 +20,11 @@
 //! argument is the peak of the phase-shift energy population
 //! `|z_L + e^{iΔφ} z_R(x − s)|²` over `Δφ` (the energy model's phase-shift
 //! cells, read out in closed form), pooled over `2·pool + 1` pixels of the
-//! row. Rows and columns are clamped to the image (replicated borders, as
-//! the model's filters). OFF pixels stay OFF; a pixel with both components of `P` below
+//! row. Columns are clamped to the image (replicated borders, as the
+//! model's filters). OFF pixels stay OFF; a pixel with both components of `P` below
 //! [`P_LSB`] keeps `d`.
 
-use super::filters::{grey, Complex, Plane, Response};
+use super::filters::{Complex, Plane, Response};
 use super::StereoError;
 use protogist::disparity::{Disparity, DisparityCell};
 use protogist::image::{ImageView, Rgb8};
@@ -105,7 +105,7 @@ pub fn refine(
     if !ok {
         return Err(StereoError::BadParams("bad phase refinement parameters"));
     }
-    let (zl, zr) = (respond(params, &grey(left)), respond(params, &grey(right)));
+    let (zl, zr) = (respond(params, &grey8(left)), respond(params, &grey8(right)));
     let last = w as isize - 1;
     let pool = isize::from(params.pool);
     let max = f32::from(max_disp);
@@ -144,8 +144,25 @@ pub fn refine(
     Ok(refined)
 }
 
-/// The 0° response of `img`: y pass `[1 2 1]/4` (clamped rows), then the
-/// zero-DC complex Gabor x pass (clamped columns).
+/// Grey with core's 8-bit weights (`protogist::stereo::phase::grey8`):
+/// `(77 R + 150 G + 29 B) / 256`, 0..255.
+pub fn grey8(img: &ImageView<'_, Rgb8>) -> Plane {
+    let (width, height) = img.size();
+    let data = img
+        .pixels()
+        .map(|p| {
+            (77.0 * f32::from(p.r) + 150.0 * f32::from(p.g) + 29.0 * f32::from(p.b)) / 256.0
+        })
+        .collect();
+    Plane {
+        width,
+        height,
+        data,
+    }
+}
+
+/// The 0° response of `img`: the zero-DC complex Gabor along each row
+/// (clamped columns).
 pub fn respond(params: &PhaseParams, img: &Plane) -> Response {
     let (w, h) = (img.width, img.height);
     let (c, s) = kernel(params);
@@ -153,9 +170,7 @@ pub fn respond(params: &PhaseParams, img: &Plane) -> Response {
     let mut z = vec![[0.0f32; 2]; w * h];
     for y in 0..h {
         let yi = y as isize;
-        let v: Vec<f32> = (0..w as isize)
-            .map(|x| (img.at(x, yi - 1) + 2.0 * img.at(x, yi) + img.at(x, yi + 1)) / 4.0)
-            .collect();
+        let v: Vec<f32> = (0..w as isize).map(|x| img.at(x, yi)).collect();
         for x in 0..w {
             let mut acc = [0.0f32; 2];
             for t in -r..=r {
