@@ -242,7 +242,6 @@ fn run_stereo(
         picks: singleton!(: [i32; len::PICKS] = [0; len::PICKS]).ok_or("stereo picks taken")?,
         maps: singleton!(: [u8; len::MAPS] = [0; len::MAPS]).ok_or("stereo maps taken")?,
         phase: PhaseBuffers {
-            grey: singleton!(: [u16; len::P_GREY] = [0; len::P_GREY]).ok_or("phase grey taken")?,
             rgb: singleton!(: [Rgb8; len::P_RGB] = [BLACK; len::P_RGB]).ok_or("phase rgb taken")?,
             v: singleton!(: [i32; len::P_V] = [0; len::P_V]).ok_or("phase v taken")?,
             z: singleton!(: [ZCell; len::P_Z] = [[0; 2]; len::P_Z]).ok_or("phase z taken")?,
