@@ -11,6 +11,7 @@ use firmware_sim::objects;
 use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, EdgeCell, Luv};
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::Rgb8;
+use firmware_sim::pg::stereo::phase::SafePhase;
 use firmware_sim::{App, Buffers, SimCamera, Ticks, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
 
 /// Counts LED toggles instead of driving hardware.
@@ -172,7 +173,7 @@ fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
             row: &mut vec![firmware_sim::pg::disparity::DisparityCell::OFF; len::P_ROW],
         },
     };
-    let r = stereo_run::run(&mut bufs, &mut WallTicks(Instant::now()))?;
+    let r = stereo_run::run::<_, SafePhase>(&mut bufs, &mut WallTicks(Instant::now()))?;
     let mut out = String::new();
     // Writing into a String cannot fail.
     let _ = stereo_run::write_result(&mut out, &r);
@@ -185,7 +186,8 @@ fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
         r.total as f64 / px
     );
     for (name, params) in &stereo_run::POINTS {
-        let r = stereo_run::run_at(params, &mut bufs, &mut WallTicks(Instant::now()))?;
+        let r =
+            stereo_run::run_at::<_, SafePhase>(params, &mut bufs, &mut WallTicks(Instant::now()))?;
         // Host ticks are nanoseconds: only the checksum line is compared.
         let mut line = String::new();
         let _ = stereo_run::write_point(&mut line, name, params, &r, |t| t);
@@ -193,6 +195,7 @@ fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
             let _ = writeln!(out, "{c}");
         }
     }
+    let _ = stereo_run::write_kernel_check(&mut out, stereo_run::kernel_check::<SafePhase>());
     print!("{out}");
     Ok(())
 }

@@ -229,7 +229,7 @@ fn run_stereo(
     use firmware_sim::pg::image::Rgb8;
     use firmware_sim::pg::stereo::c2f::C2fBuffers;
     use firmware_sim::pg::stereo::phase::PhaseBuffers;
-    use firmware_sim::stereo_run::{self, len, ZCell};
+    use firmware_sim::stereo_run::{self, len, Words, ZCell};
     const BLACK: Rgb8 = Rgb8::new(0, 0, 0);
     let mut bufs = C2fBuffers {
         grey: singleton!(: [u16; len::GREY] = [0; len::GREY]).ok_or("stereo grey taken")?,
@@ -244,18 +244,25 @@ fn run_stereo(
         phase: PhaseBuffers {
             rgb: singleton!(: [Rgb8; len::P_RGB] = [BLACK; len::P_RGB]).ok_or("phase rgb taken")?,
             v: singleton!(: [i32; len::P_V] = [0; len::P_V]).ok_or("phase v taken")?,
-            z: singleton!(: [ZCell; len::P_Z] = [[0; 2]; len::P_Z]).ok_or("phase z taken")?,
+            // Word-aligned: the phase kernel reads the responses with `ldm`.
+            z: &mut singleton!(: Words<[ZCell; len::P_Z]> = Words([[0; 2]; len::P_Z]))
+                .ok_or("phase z taken")?
+                .0,
             row: singleton!(: [DisparityCell; len::P_ROW] = [DisparityCell::OFF; len::P_ROW])
                 .ok_or("phase row taken")?,
         },
     };
-    let r = stereo_run::run(&mut bufs, ticks).map_err(|_| "stereo stage failed")?;
+    let r = stereo_run::run::<_, crate::dsp::PhaseAsm>(&mut bufs, ticks)
+        .map_err(|_| "stereo stage failed")?;
     stereo_run::write_report(out, &r, to_instructions).map_err(|_| "semihosting write failed")?;
     for (name, params) in &stereo_run::POINTS {
-        let r = stereo_run::run_at(params, &mut bufs, ticks).map_err(|_| "stereo point failed")?;
+        let r = stereo_run::run_at::<_, crate::dsp::PhaseAsm>(params, &mut bufs, ticks)
+            .map_err(|_| "stereo point failed")?;
         stereo_run::write_point(out, name, params, &r, to_instructions)
             .map_err(|_| "semihosting write failed")?;
     }
+    stereo_run::write_kernel_check(out, stereo_run::kernel_check::<crate::dsp::PhaseAsm>())
+        .map_err(|_| "semihosting write failed")?;
     Ok(())
 }
 

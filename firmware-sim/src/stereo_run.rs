@@ -23,7 +23,7 @@ use crate::pg::disparity::DisparityCell;
 use crate::pg::image::Rgb8;
 use crate::pg::stereo::c2f::{self, C2f, C2fBuffers, C2fParams, RgbRows};
 use crate::pg::stereo::filters::Z;
-use crate::pg::stereo::phase::{self, PhaseParams};
+use crate::pg::stereo::phase::{self, PhaseKernel, PhaseParams};
 use crate::pg::stereo::{DemTable, Probe, Step, StereoError, StereoReport};
 use crate::pg::synth::SceneSpec;
 use crate::Ticks;
@@ -320,19 +320,21 @@ pub struct StereoResult {
 ///
 /// # Errors
 /// [`StereoError`] (a bad table or short buffers).
-pub fn run<T: Ticks>(
+pub fn run<T: Ticks, K: PhaseKernel>(
     bufs: &mut C2fBuffers<'_>,
     ticks: &mut T,
 ) -> Result<StereoResult, StereoError> {
-    run_at(&PARAMS, bufs, ticks)
+    run_at::<T, K>(&PARAMS, bufs, ticks)
 }
 
 /// Runs the stage on the demo pair with `params` (2 coarse levels: the
-/// three tables of [`TABLES`]).
+/// three tables of [`TABLES`]), the phase refinement's step by kernel `K`
+/// (the same bits whatever the kernel: the firmware passes its assembly
+/// one, the desktop build [`SafePhase`]).
 ///
 /// # Errors
 /// [`StereoError`] (bad parameters, a bad table or short buffers).
-pub fn run_at<T: Ticks>(
+pub fn run_at<T: Ticks, K: PhaseKernel>(
     params: &C2fParams,
     bufs: &mut C2fBuffers<'_>,
     ticks: &mut T,
@@ -366,7 +368,7 @@ pub fn run_at<T: Ticks>(
         since: t1,
         spent: [0; 5],
     };
-    let report = engine.run(&tables, &left, &right, bufs, &mut sink, &mut probe)?;
+    let report = engine.run_with::<_, K>(&tables, &left, &right, bufs, &mut sink, &mut probe)?;
     probe.close();
     let t2 = probe.ticks.now();
     // The camera alone: the same row renders, into the RGB scratch.
@@ -533,4 +535,74 @@ pub fn write_report(
     )?;
     writeln!(out, "scratch stereo {WIDTH}x{HEIGHT} {SCRATCH_BYTES}")?;
     write_point_line(out, "default", &PARAMS, r, to_instructions)
+}
+
+/// Rows of the phase kernel's self-test ([`kernel_check`]).
+pub const KERNEL_ROWS: usize = 256;
+/// Cells per self-test row.
+pub const KERNEL_W: usize = 48;
+/// Largest `max_disp` of the self-test.
+const KERNEL_MD: usize = 40;
+
+/// Word-aligned storage (the phase kernel reads its responses with `ldm`).
+#[repr(C, align(4))]
+pub struct Words<T>(pub T);
+
+/// The phase kernel's self-test: [`KERNEL_ROWS`] random rows through
+/// `K::phase_row3` (responses anywhere in `±2^13`, some small or zero, OFF
+/// cells, disparities beyond `max_disp`, λ from 2 to 64 px), folded into
+/// `(checksum, cells refined)`. The firmware runs it with its assembly
+/// kernel and the desktop build with [`phase::SafePhase`]; xtask requires
+/// the two `checksum phase-kernel` lines to be equal, so every branch of
+/// the assembly is held to the portable step's bits on every CI run.
+pub fn kernel_check<K: PhaseKernel>() -> (u32, usize) {
+    let mut rng = crate::pg::rng::SplitMix64::new(0x9e37_79b9_7f4a_7c15);
+    let mut zl = Words([[0i16; 2]; KERNEL_W + 2]);
+    let mut zr = Words([[0i16; 2]; KERNEL_W + 2 + KERNEL_MD]);
+    let mut cells = [DisparityCell::OFF; KERNEL_W];
+    let (mut hash, mut refined) = (Fnv1a::new(), 0);
+    for _ in 0..KERNEL_ROWS {
+        // Response scale: full range, small, or tiny (P = 0 happens).
+        let scale = match rng.below(3) {
+            0 => 8191,
+            1 => 300,
+            _ => 2,
+        };
+        for z in zl.0.iter_mut().chain(zr.0.iter_mut()) {
+            *z = [
+                rng.range(-scale, scale) as i16,
+                rng.range(-scale, scale) as i16,
+            ];
+        }
+        let md = rng.below(KERNEL_MD as u64 + 1) as u8;
+        for c in &mut cells {
+            *c = if rng.below(8) == 0 {
+                DisparityCell::OFF
+            } else {
+                // Up to md + 2 px, and now and then anything below OFF.
+                let top = if rng.below(16) == 0 {
+                    0xfffe
+                } else {
+                    (i32::from(md) + 2) << 8
+                };
+                DisparityCell::from_raw(crate::pg::fixed::U8F8::from_bits(rng.range(0, top) as u16))
+            };
+        }
+        let lambda = rng.range(2 * 256, 64 * 256);
+        let zr_used = zr.0.get(..KERNEL_W + 2 + usize::from(md)).unwrap_or(&[]);
+        refined += K::phase_row3(md, lambda, &zl.0, zr_used, &mut cells);
+        for c in &cells {
+            hash.write(&c.raw().to_bits().to_le_bytes());
+        }
+    }
+    (hash.finish(), refined)
+}
+
+/// `checksum phase-kernel ROWSxW 0x........ refined=N` (compared host vs
+/// QEMU).
+pub fn write_kernel_check(out: &mut impl Write, (sum, refined): (u32, usize)) -> fmt::Result {
+    writeln!(
+        out,
+        "checksum phase-kernel {KERNEL_ROWS}x{KERNEL_W} 0x{sum:08x} refined={refined}"
+    )
 }

@@ -5,16 +5,12 @@ use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::pg::stereo::c2f::C2fBuffers;
 use firmware_sim::pg::stereo::phase::PhaseBuffers;
+use firmware_sim::pg::stereo::phase::SafePhase;
 use firmware_sim::stereo_run::{self, len, StereoResult, POINTS};
 use firmware_sim::NoTicks;
 
 /// The phase refinement's buffers: RGB row, grey row, responses, map row.
-type PhaseStorage = (
-    Vec<Rgb8>,
-    Vec<i32>,
-    Vec<[i16; 2]>,
-    Vec<DisparityCell>,
-);
+type PhaseStorage = (Vec<Rgb8>, Vec<i32>, Vec<[i16; 2]>, Vec<DisparityCell>);
 
 struct Storage {
     grey: Vec<u16>,
@@ -74,11 +70,12 @@ impl Storage {
 #[test]
 fn each_point_runs_its_own_window_and_band_in_the_default_buffers() {
     let mut storage = Storage::new();
-    let default = stereo_run::run(&mut storage.bufs(), &mut NoTicks).expect("default runs");
+    let default =
+        stereo_run::run::<_, SafePhase>(&mut storage.bufs(), &mut NoTicks).expect("default runs");
     let runs: Vec<(&str, StereoResult)> = POINTS
         .iter()
         .map(|(name, p)| {
-            let r = stereo_run::run_at(p, &mut storage.bufs(), &mut NoTicks)
+            let r = stereo_run::run_at::<_, SafePhase>(p, &mut storage.bufs(), &mut NoTicks)
                 .unwrap_or_else(|e| panic!("{name}: {e:?}"));
             (*name, r)
         })
@@ -140,7 +137,8 @@ fn each_point_runs_its_own_window_and_band_in_the_default_buffers() {
     // The same point twice gives the same map (the buffers carry nothing
     // over between runs).
     let (name, p) = &POINTS[0];
-    let again = stereo_run::run_at(p, &mut storage.bufs(), &mut NoTicks).expect("reruns");
+    let again =
+        stereo_run::run_at::<_, SafePhase>(p, &mut storage.bufs(), &mut NoTicks).expect("reruns");
     assert_eq!(again.checksum, runs[0].1.checksum, "{name}");
 }
 
@@ -148,7 +146,7 @@ fn each_point_runs_its_own_window_and_band_in_the_default_buffers() {
 fn a_point_line_names_its_window_band_and_figures() {
     let mut storage = Storage::new();
     let (name, p) = &POINTS[0];
-    let r = stereo_run::run_at(p, &mut storage.bufs(), &mut NoTicks).expect("runs");
+    let r = stereo_run::run_at::<_, SafePhase>(p, &mut storage.bufs(), &mut NoTicks).expect("runs");
     let mut out = String::new();
     stereo_run::write_point(&mut out, name, p, &r, |t| t).expect("writes");
     let lines: Vec<&str> = out.lines().collect();

@@ -72,7 +72,7 @@
 //! and 99 % of the OFF decisions to agree.
 
 use super::filters::{grey_row, Bank, MAX_TAPS, Z};
-use super::phase::{self, Phase, PhaseBuffers, PhaseParams, Refiner};
+use super::phase::{self, Phase, PhaseBuffers, PhaseKernel, PhaseParams, Refiner, SafePhase};
 use super::readout::take;
 use super::sgm::{self, Sgm};
 use super::{Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport};
@@ -499,12 +499,29 @@ impl C2f {
     /// Runs the engine on a pair: every output cell goes to `sink(x, y,
     /// cell)` row by row (left-referenced, `U8F8` px or OFF); `tables[k]` is
     /// level `k`'s decoder. With [`C2fParams::phase`] each output row is
-    /// refined ([`Refiner::push`]) before it goes to `sink`.
+    /// refined ([`Refiner::flush`]) before it goes to `sink`.
     ///
     /// # Errors
     /// As [`C2f::check`], and [`StereoError::Buffer`] for short buffers,
     /// before any cell is produced.
     pub fn run<S: RgbRows>(
+        &self,
+        tables: &[DemTable<'_>],
+        left: &S,
+        right: &S,
+        bufs: &mut C2fBuffers<'_>,
+        sink: &mut impl FnMut(usize, usize, DisparityCell),
+        probe: &mut impl Probe,
+    ) -> Result<StereoReport, StereoError> {
+        self.run_with::<S, SafePhase>(tables, left, right, bufs, sink, probe)
+    }
+
+    /// [`C2f::run`] with the phase refinement's step by kernel `K`
+    /// ([`PhaseKernel`]; the same bits as [`SafePhase`]).
+    ///
+    /// # Errors
+    /// As [`C2f::run`].
+    pub fn run_with<S: RgbRows, K: PhaseKernel>(
         &self,
         tables: &[DemTable<'_>],
         left: &S,
@@ -545,6 +562,7 @@ impl C2f {
         let mut refined = Refined {
             refiner: &mut refiner,
             sink,
+            kernel: core::marker::PhantomData::<K>,
         };
         self.run_levels(tables, left, right, &mut rest, &mut refined, probe)
     }
@@ -661,14 +679,17 @@ impl<F: FnMut(usize, usize, DisparityCell)> Cells for Plain<'_, F> {
     }
 }
 
-/// A sink behind the phase refinement: each output row is refined, then
-/// passed on cell by cell.
-struct Refined<'r, 'p, 'b, S: RgbRows, F> {
+/// A sink behind the phase refinement (phase step of kernel `K`): each
+/// output row is refined, then passed on cell by cell.
+struct Refined<'r, 'p, 'b, S: RgbRows, F, K> {
     refiner: &'r mut Refiner<'p, 'b, S>,
     sink: &'r mut F,
+    kernel: core::marker::PhantomData<K>,
 }
 
-impl<S: RgbRows, F: FnMut(usize, usize, DisparityCell)> Cells for Refined<'_, '_, '_, S, F> {
+impl<S: RgbRows, F: FnMut(usize, usize, DisparityCell), K: PhaseKernel> Cells
+    for Refined<'_, '_, '_, S, F, K>
+{
     #[inline(always)]
     fn cell(&mut self, x: usize, y: usize, c: DisparityCell) {
         self.refiner.push(x, y, c, self.sink);
@@ -677,7 +698,7 @@ impl<S: RgbRows, F: FnMut(usize, usize, DisparityCell)> Cells for Refined<'_, '_
         Some(self.refiner.row_mut())
     }
     fn row_done(&mut self, y: usize) {
-        self.refiner.flush(y, self.sink);
+        self.refiner.flush_with::<K>(y, self.sink);
     }
 }
 

@@ -338,8 +338,17 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
     /// Refines the row of [`Refiner::row_mut`] as map row `y` and passes
     /// its cells on to `sink`.
     pub fn flush(&mut self, y: usize, sink: &mut impl FnMut(usize, usize, DisparityCell)) {
+        self.flush_with::<SafePhase>(y, sink);
+    }
+
+    /// [`Refiner::flush`] with the phase step of kernel `K`.
+    pub fn flush_with<K: PhaseKernel>(
+        &mut self,
+        y: usize,
+        sink: &mut impl FnMut(usize, usize, DisparityCell),
+    ) {
         let row = core::mem::take(&mut self.row);
-        self.refine_row(y, row);
+        self.refine_row_with::<K>(y, row);
         for (x, &c) in row.iter().enumerate() {
             sink(x, y, c);
         }
@@ -348,20 +357,25 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
 
     /// Refines map row `y` (`cells`, at least `w` long) in place.
     pub fn refine_row(&mut self, y: usize, cells: &mut [DisparityCell]) {
+        self.refine_row_with::<SafePhase>(y, cells);
+    }
+
+    /// [`Refiner::refine_row`] with the phase step of kernel `K`.
+    pub fn refine_row_with<K: PhaseKernel>(&mut self, y: usize, cells: &mut [DisparityCell]) {
         if y >= self.h {
             return;
         }
         match self.phase.params.taps() {
-            3 => self.row_n::<3>(y, cells),
-            5 => self.row_n::<5>(y, cells),
-            7 => self.row_n::<7>(y, cells),
-            9 => self.row_n::<9>(y, cells),
-            _ => self.row_n::<11>(y, cells),
+            3 => self.row_n::<K, 3>(y, cells),
+            5 => self.row_n::<K, 5>(y, cells),
+            7 => self.row_n::<K, 7>(y, cells),
+            9 => self.row_n::<K, 9>(y, cells),
+            _ => self.row_n::<K, 11>(y, cells),
         }
     }
 
     /// [`Refiner::refine_row`] with `N = 2r + 1` taps known.
-    fn row_n<const N: usize>(&mut self, y: usize, cells: &mut [DisparityCell]) {
+    fn row_n<K: PhaseKernel, const N: usize>(&mut self, y: usize, cells: &mut [DisparityCell]) {
         let w = self.w;
         let r = N / 2;
         let pool = usize::from(self.phase.params.pool);
@@ -393,7 +407,7 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
         let (zl, zr) = (&*zl, &*zr);
         let refined = match pool {
             0 => phase_row::<1>(self.phase, zl, zr, cells),
-            1 => phase_row::<3>(self.phase, zl, zr, cells),
+            1 => K::phase_row3(self.phase.max_disp, self.phase.lambda_q8, zl, zr, cells),
             2 => phase_row::<5>(self.phase, zl, zr, cells),
             3 => phase_row::<7>(self.phase, zl, zr, cells),
             _ => phase_row::<9>(self.phase, zl, zr, cells),
@@ -402,9 +416,53 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
     }
 }
 
-/// The phase step of one row with `S = 2·pool + 1` known: each ON cell's
-/// pooled product `P` over `S` pixels at its shift, its argument, the
-/// refined disparity. Returns the cells refined.
+/// The phase step of a row with 3-pixel pooling (the default `pool` 1),
+/// replaceable by a target's kernel, as [`crate::mlp::MacKernel`]: the
+/// portable default is [`SafePhase`]; the firmware passes one in
+/// assembly (`SMUAD`/`SMLSDX` for the products, which safe Rust cannot
+/// ask for).
+///
+/// Contract of [`PhaseKernel::phase_row3`]: with `w = cells.len()`, `zl`
+/// holds the left responses of columns `−1..=w` (`w + 2`), `zr` the
+/// right's of columns `−1 − max_disp..=w` (`w + 2 + max_disp`), and
+/// `lambda_q8` is λ in `U8F8` (at most 64·256). Refine each ON cell
+/// exactly as [`phase_row3`] does and return the number refined; any
+/// kernel that honours this gives the same bits. Shorter slices are
+/// never passed by the refiner; the default refines what fits.
+pub trait PhaseKernel {
+    /// The phase step of one row ([`phase_row3`]).
+    #[inline(always)]
+    fn phase_row3(
+        max_disp: u8,
+        lambda_q8: i32,
+        zl: &[[i16; 2]],
+        zr: &[[i16; 2]],
+        cells: &mut [DisparityCell],
+    ) -> usize {
+        phase_row3(max_disp, lambda_q8, zl, zr, cells)
+    }
+}
+
+/// The portable phase step.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SafePhase;
+
+impl PhaseKernel for SafePhase {}
+
+/// The portable phase step of a row with 3-pixel pooling (see
+/// [`PhaseKernel`]).
+#[inline(always)]
+pub fn phase_row3(
+    max_disp: u8,
+    lambda_q8: i32,
+    zl: &[[i16; 2]],
+    zr: &[[i16; 2]],
+    cells: &mut [DisparityCell],
+) -> usize {
+    phase_row_at::<3>(max_disp, lambda_q8, zl, zr, cells)
+}
+
+/// [`phase_row_at`] with the set-up refinement's disparity range and λ.
 #[inline(always)]
 fn phase_row<const S: usize>(
     phase: &Phase,
@@ -412,8 +470,22 @@ fn phase_row<const S: usize>(
     zr: &[[i16; 2]],
     cells: &mut [DisparityCell],
 ) -> usize {
-    let md = usize::from(phase.max_disp);
-    let (lambda, top) = (phase.lambda_q8, (md as i32) << 8);
+    phase_row_at::<S>(phase.max_disp, phase.lambda_q8, zl, zr, cells)
+}
+
+/// The phase step of one row with `S = 2·pool + 1` known: each ON cell's
+/// pooled product `P` over `S` pixels at its shift, its argument, the
+/// refined disparity. Returns the cells refined.
+#[inline(always)]
+fn phase_row_at<const S: usize>(
+    max_disp: u8,
+    lambda: i32,
+    zl: &[[i16; 2]],
+    zr: &[[i16; 2]],
+    cells: &mut [DisparityCell],
+) -> usize {
+    let md = usize::from(max_disp);
+    let top = (md as i32) << 8;
     let mut refined = 0;
     // `a` starts at left column `x − pool`; `zr[md..]` at right column
     // `−pool`, so right column `x − s − pool` is `zr[x + md − s]`.

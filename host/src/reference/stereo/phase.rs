@@ -105,7 +105,10 @@ pub fn refine(
     if !ok {
         return Err(StereoError::BadParams("bad phase refinement parameters"));
     }
-    let (zl, zr) = (respond(params, &grey8(left)), respond(params, &grey8(right)));
+    let (zl, zr) = (
+        respond(params, &grey8(left)),
+        respond(params, &grey8(right)),
+    );
     let last = w as isize - 1;
     let pool = isize::from(params.pool);
     let max = f32::from(max_disp);
@@ -150,9 +153,7 @@ pub fn grey8(img: &ImageView<'_, Rgb8>) -> Plane {
     let (width, height) = img.size();
     let data = img
         .pixels()
-        .map(|p| {
-            (77.0 * f32::from(p.r) + 150.0 * f32::from(p.g) + 29.0 * f32::from(p.b)) / 256.0
-        })
+        .map(|p| (77.0 * f32::from(p.r) + 150.0 * f32::from(p.g) + 29.0 * f32::from(p.b)) / 256.0)
         .collect();
     Plane {
         width,
