@@ -1,4 +1,6 @@
-//! The Cortex-M4 dot-product kernel of the classifier (issue 5 §10):
+//! The Cortex-M4 assembly kernels: the phase step of the stereo stage's
+//! refinement ([`PhaseAsm`], at the end of this file) and the dot-product
+//! kernel of the classifier (issue 5 §10), described here:
 //! `SMLAD`, two 16x16 multiply-accumulates per instruction, which safe
 //! Rust cannot ask for (core forbids `unsafe`, and LLVM does not form
 //! `SMLAD` from byte weights). Core exposes the hook

@@ -152,7 +152,7 @@ pub struct ReadoutOptions {
     #[arg(long)]
     pub c2f_finest: Option<u8>,
     /// With `--c2f`: refine the map with the phase of the frame's own 0°
-    /// Gabor responses (λ 4, σ/λ 0.4, radius 3, 3 px pooling): each pixel
+    /// Gabor responses (λ 4, σ/λ 0.4, radius 2, 3 px pooling): each pixel
     /// keeps the position shift round(d) and takes the remainder from the
     /// phase difference between the eyes; with `--c2f-finest 1`, a map of
     /// the frame's resolution (docs/STEREO.md "Phase refinement").

@@ -639,6 +639,27 @@ const ENGINE_CORE_HALF: [&str; 13] = [
     "1",
 ];
 
+/// r2b1l3p in the operating points above: the cheapest half-size point
+/// (band 1, the right map from the left sums, 3 paths) with the phase
+/// refinement to the frame's resolution (docs/STEREO.md, section Phase
+/// refinement).
+const ENGINE_CORE_PHASE: [&str; 14] = [
+    "--engine",
+    "core",
+    "--c2f",
+    "2",
+    "--c2f-band",
+    "1",
+    "--p2",
+    "4",
+    "--lr-from-left",
+    "--paths",
+    "3",
+    "--c2f-finest",
+    "1",
+    "--c2f-phase",
+];
+
 fn dem_aloe() -> Section {
     let title = "Disparity energy model on Middlebury Aloe (f32 reference)";
     let dir = data_root().join("aloe");
@@ -679,7 +700,9 @@ fn dem_aloe() -> Section {
          engine's cheapest full-size point, r2b1l3 in the operating points above; the row \
          with `--c2f-finest 1` is r2b2l3h, the map of the half-size pair spread over 2x2 \
          blocks, at the setting chosen on Motorcycle among the points within 1,500 \
-         instructions/px, docs/STEREO.md, section Finest level); the `--engine reference` rows \
+         instructions/px, docs/STEREO.md, section Finest level; the row with `--c2f-phase` is \
+         r2b1l3p, that of r2b1l3h refined to the frame's resolution by phase, section Phase \
+         refinement); the `--engine reference` rows \
          beside them are the same settings in the f32 reference.\n\n{STEREO_TABLE_HEAD}",
     );
     // (width, D, extra options); every row runs with `--refine 0` unless it
@@ -769,7 +792,7 @@ fn dem_aloe() -> Section {
         "--p2",
         "4",
     ];
-    let rows: [(&str, &str, &[&str]); 28] = [
+    let rows: [(&str, &str, &[&str]); 30] = [
         ("160", "32", &[]),
         ("160", "32", &["--refine", "1"]),
         ("160", "32", &["--complete"]),
@@ -783,6 +806,7 @@ fn dem_aloe() -> Section {
         ("160", "32", &ENGINE_CORE),
         ("160", "32", &ENGINE_CORE_FAST),
         ("160", "32", &ENGINE_CORE_HALF),
+        ("160", "32", &ENGINE_CORE_PHASE),
         ("160", "32", &ENGINE_REF),
         ("320", "64", &[]),
         ("320", "64", &["--refine", "1"]),
@@ -797,6 +821,7 @@ fn dem_aloe() -> Section {
         ("320", "64", &ENGINE_CORE),
         ("320", "64", &ENGINE_CORE_FAST),
         ("320", "64", &ENGINE_CORE_HALF),
+        ("320", "64", &ENGINE_CORE_PHASE),
         ("320", "64", &ENGINE_REF),
     ];
     for (w, d, extra) in rows {
@@ -894,7 +919,8 @@ fn dem_motorcycle() -> Section {
          `--preset held-out` is the setting chosen on this pair for both sizes, `--speckle 0` \
          the same without its speckle filter; the `--engine core` rows are core's fixed-point \
          engine at r2b2l3h (the operating points above; chosen on this pair, docs/STEREO.md, \
-         section Finest level), ms its run alone, the best of at least 15 runs over at least 1 s, \
+         section Finest level) and at r2b1l3p (`--c2f-phase`: r2b1l3h refined to the frame's \
+         resolution, section Phase refinement), ms its run alone, the best of at least 15 runs over at least 1 s, \
          single thread \
          (`host/src/stereo_cmd/preset.rs`; docs/STEREO.md, section Settings chosen on a \
          held-out pair).\n\n{STEREO_TABLE_HEAD}"
@@ -906,6 +932,7 @@ fn dem_motorcycle() -> Section {
             &["--preset", "held-out", "--speckle", "0"],
             &["--preset", "held-out"],
             &ENGINE_CORE_HALF,
+            &ENGINE_CORE_PHASE,
         ] {
             body.push_str(&stereo_row([&l, &r, &gt], w, d, extra));
         }

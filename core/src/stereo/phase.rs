@@ -4,9 +4,9 @@
 //! coarse estimate, refine the remainder with phase-shift cells at the
 //! finer scale"). It turns the half-size map of the coarse-to-fine engine
 //! ([`super::c2f::C2fParams::finest`] 1) into a map of the frame's own
-//! resolution for about 250 instructions per pixel on the M4 (the
-//! firmware's points `r2b1l3p` against `r2b1l3h`; docs/STEREO.md, "Phase
-//! refinement").
+//! resolution for about 160 instructions per pixel on the M4 with the
+//! firmware's assembly phase step ([`PhaseKernel`]; the points `r2b1l3p`
+//! against `r2b1l3h`, docs/STEREO.md, "Phase refinement").
 //!
 //! For each ON pixel with disparity `d`, the position shift is `s =
 //! min(round(d), max_disp)` and, with the 0° complex Gabor responses `z_L`,
@@ -21,9 +21,10 @@
 //! `z_L(x) = z_R(x − d)` makes `arg P = k (d − s)`. `arg P` is where the
 //! energy `|z_L + e^{iΔφ} z_R(x − s)|²` of the phase-shift cells peaks over
 //! `Δφ`, read out in closed form and pooled over `2·pool + 1` pixels of the
-//! row. The y pass is `[1 2 1]/4`, the x pass the zero-DC complex Gabor of
-//! λ, σ and radius `r`. Columns are clamped to the frame, rows too
-//! (replicated borders, as the filters). OFF pixels stay OFF; a pixel with
+//! row. The filter is 1-D, the zero-DC complex Gabor of λ, σ and radius
+//! `r` along the row of [`grey8`] (no y pass: dropping the `[1 2 1]/4` one
+//! cost nothing on the held-out pair, docs/STEREO.md). Columns are clamped
+//! to the frame (replicated borders, as the filters). OFF pixels stay OFF; a pixel with
 //! `P = 0`, or with `|arg P|` above [`MAX_TURN`] (3/8 turn: at half a turn
 //! either sign fits, so the remainder is ambiguous), keeps `d`. The
 //! f32 reference is `protogist_host::reference::stereo::phase` (same
@@ -33,8 +34,7 @@
 //!
 //! | quantity | format | range |
 //! |---|---|---|
-//! | grey ([`super::filters::grey`]) | `U8F8` in `u16` | 0..=255 |
-//! | y pass `v = [1 2 1]/4`, rounded once | `U8F8` in `i32` | 0..=255 |
+//! | grey ([`grey8`], exact) | `U8F8` in `i32` | 0..=255 |
 //! | x taps `c_x = e·(cos kt − dc)` (Σ = 0 exactly), `s_x = e·sin kt` (odd) | `I2F14` in `i32` | Σ\|c\|, Σ\|s\| ≤ 2^15 (checked) |
 //! | response `z`, rounded once | `I12F4` in `i16` | \|z\| ≤ 2^15·255/2^14 < 2^13 |
 //! | pooled product `P` | `Q8` grey² in `i32`, exact | \|P\| ≤ 9·2·2^26 < 2^31 |
@@ -47,8 +47,8 @@
 //!
 //! **Error bound** against the f32 reference, per pixel (ERROR_BOUNDS.md
 //! section 7b): with `δ ≤ 0.1` grey levels the bound on each component of
-//! `z_core − z_ref` (grey and y pass ½ LSB each, `2^-15` per tap with the
-//! taps' sums exact, and the response's rounding), `|ΔP| ≤ Σ_j (|z_L||Δz_R| + |z_R||Δz_L| +
+//! `z_core − z_ref` (`2^-15` per tap with the taps' sums exact, and the
+//! response's rounding; the grey is exact), `|ΔP| ≤ Σ_j (|z_L||Δz_R| + |z_R||Δz_L| +
 //! |Δz_L||Δz_R|)` with `|Δz| ≤ √2·δ`, and `|d'_core − d'_ref| ≤ λ/2π ·
 //! (asin(min(1, |ΔP|/|P|)) + 0.0039) + 2^-8` px: the arc tangent's
 //! polynomial is within 0.0038 rad and the quotient's truncation within
