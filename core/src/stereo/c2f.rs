@@ -692,7 +692,7 @@ impl<S: RgbRows, F: FnMut(usize, usize, DisparityCell), K: PhaseKernel> Cells
 {
     #[inline(always)]
     fn cell(&mut self, x: usize, y: usize, c: DisparityCell) {
-        self.refiner.push(x, y, c, self.sink);
+        self.refiner.push_with::<K>(x, y, c, self.sink);
     }
     fn row(&mut self) -> Option<&mut [DisparityCell]> {
         Some(self.refiner.row_mut())

@@ -321,11 +321,22 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
         cell: DisparityCell,
         sink: &mut impl FnMut(usize, usize, DisparityCell),
     ) {
+        self.push_with::<SafePhase>(x, y, cell, sink);
+    }
+
+    /// [`Refiner::push`] with the phase step of kernel `K`.
+    pub fn push_with<K: PhaseKernel>(
+        &mut self,
+        x: usize,
+        y: usize,
+        cell: DisparityCell,
+        sink: &mut impl FnMut(usize, usize, DisparityCell),
+    ) {
         if let Some(c) = self.row.get_mut(x) {
             *c = cell;
         }
         if x + 1 == self.w {
-            self.flush(y, sink);
+            self.flush_with::<K>(y, sink);
         }
     }
 
