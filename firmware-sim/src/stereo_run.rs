@@ -433,7 +433,16 @@ pub fn write_point(
         "checksum stereo@{name} {WIDTH}x{HEIGHT} 0x{:08x} on={}",
         r.checksum, r.report.on
     )?;
-    write_point_line(out, name, params, r, to_instructions)
+    write_point_line(out, name, params, r, to_instructions)?;
+    // The refinement's buffers come on top of the engine's.
+    if params.phase.is_some() {
+        writeln!(
+            out,
+            "scratch stereo@{name} {WIDTH}x{HEIGHT} {}",
+            c2f::scratch_bytes(WIDTH, HEIGHT, params)
+        )?;
+    }
+    Ok(())
 }
 
 /// `point stereo NAME WxH radius=R band=B lr=L paths=P finest=F phase=Q

@@ -390,6 +390,22 @@ fn scratch_at_160x120() {
     let b = c2f::scratch_bytes(160, 120, &C2fParams::DEFAULT);
     println!("c2f scratch 160x120 D32: {b} bytes");
     assert!(b <= 96 * 1024, "{b}");
+    // The firmware's r2b1l3p: the half-size map refined by phase, whose
+    // buffers come on top of the engine's.
+    let phase = protogist::stereo::phase::PhaseParams::DEFAULT;
+    let p3 = C2fParams {
+        band: Some(1),
+        lr_from_left: true,
+        paths: 3,
+        finest: 1,
+        phase: Some(phase),
+        ..C2fParams::DEFAULT
+    };
+    let bp = c2f::scratch_bytes(160, 120, &p3);
+    let own = protogist::stereo::phase::scratch_bytes(160, &phase, p3.dem.max_disp);
+    println!("c2f scratch 160x120 D32 with phase: {bp} bytes ({own} the refinement's)");
+    assert!(bp <= 96 * 1024, "{bp}");
+    assert!(own > 0 && bp >= own, "{bp} {own}");
     // The buffers the const fns size are the ones the run needs: one
     // element less in any of them is a typed error.
     let p = params(15);

@@ -212,11 +212,29 @@ fn stereo_m4(stdout: &str) -> Section {
     } else {
         within.join(", ")
     };
+    // `scratch stereo@NAME WxH BYTES`: the points with the phase refinement.
+    let phase_scratch: Vec<String> = stdout
+        .lines()
+        .filter_map(|l| l.strip_prefix("scratch stereo@"))
+        .filter_map(|l| match l.split_whitespace().collect::<Vec<_>>()[..] {
+            [name, _, bytes] => Some(format!("{name} {bytes}")),
+            _ => None,
+        })
+        .collect();
+    let phase_scratch = if phase_scratch.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " With the phase refinement's buffers (`c2f::scratch_bytes` of the point): **{} \
+             bytes**.",
+            phase_scratch.join(", ")
+        )
+    };
     body.push_str(&format!(
         "\n**Targets** (issue 3 §4): 1,500 instructions/px or fewer: by the default **{}, \
          {total:.0}** ({:.1}x the target); operating points within it (next section): \
          **{within}**; scratch ≤ 96 KB (98,304 bytes) beyond the two frames: **{scratch} bytes \
-         ({:.1} KB), {}** (`c2f::scratch_bytes(160, 120, &C2fParams::DEFAULT)`). The \
+         ({:.1} KB), {}** (`c2f::scratch_bytes(160, 120, &C2fParams::DEFAULT)`).{phase_scratch} The \
          full-search engine took 101,581 instructions/px (`git checkout 05f3e88 && cargo xtask \
          firmware`); see docs/STEREO.md, The coarse-to-fine engine in core.\n",
         if total <= 1500.0 {
