@@ -551,3 +551,60 @@ fn firmware_tables_are_reproduced_by_training() {
         );
     }
 }
+
+/// A phase kernel that marks every cell it is given (the refined count is
+/// the row's length), to show that `C2f::run_with` hands the phase step to
+/// the kernel it names and `C2f::run` to the portable one.
+struct Marking;
+
+const MARK: u16 = 7;
+
+impl protogist::stereo::phase::PhaseKernel for Marking {
+    fn phase_row3(
+        _max_disp: u8,
+        _lambda_q8: i32,
+        _zl: &[[i16; 2]],
+        _zr: &[[i16; 2]],
+        cells: &mut [DisparityCell],
+    ) -> usize {
+        cells.fill(DisparityCell::from_raw(protogist::fixed::U8F8::from_bits(
+            MARK,
+        )));
+        cells.len()
+    }
+}
+
+#[test]
+fn the_engine_runs_the_phase_step_of_the_kernel_it_is_given() {
+    let p = C2fParams {
+        finest: 1,
+        phase: Some(protogist::stereo::phase::PhaseParams::DEFAULT),
+        ..params(15)
+    };
+    let ts = tables(&p);
+    let parsed: Vec<qs::DemTable<'_>> =
+        ts.iter().map(|t| qs::DemTable::parse(t).unwrap()).collect();
+    let (w, h) = (96, 64);
+    let (l, r) = rds_rgb(w, h, 4, 7);
+    let (lv, rv) = (
+        ImageView::packed(&l, w, h).unwrap(),
+        ImageView::packed(&r, w, h).unwrap(),
+    );
+    let e = C2f::new(&p).unwrap();
+    let run = |marking: bool| {
+        let mut st = C2fStorage::new(w, h, &p);
+        let mut marked = 0;
+        let mut sink = |_: usize, _: usize, c: DisparityCell| {
+            marked += usize::from(c.raw().to_bits() == MARK);
+        };
+        if marking {
+            e.run_with::<_, Marking>(&parsed, &lv, &rv, &mut st.buffers(), &mut sink, &mut ())
+        } else {
+            e.run(&parsed, &lv, &rv, &mut st.buffers(), &mut sink, &mut ())
+        }
+        .unwrap();
+        marked
+    };
+    assert_eq!(run(true), w * h);
+    assert!(run(false) < w * h / 10, "{}", run(false));
+}
