@@ -416,12 +416,13 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
             z.iter_mut().skip(pad + w).for_each(|v| *v = last);
         }
         let (zl, zr) = (&*zl, &*zr);
+        let (md, lambda) = (self.phase.max_disp, self.phase.lambda_q8);
         let refined = match pool {
-            0 => phase_row::<1>(self.phase, zl, zr, cells),
-            1 => K::phase_row3(self.phase.max_disp, self.phase.lambda_q8, zl, zr, cells),
-            2 => phase_row::<5>(self.phase, zl, zr, cells),
-            3 => phase_row::<7>(self.phase, zl, zr, cells),
-            _ => phase_row::<9>(self.phase, zl, zr, cells),
+            0 => phase_row_at::<1>(md, lambda, zl, zr, cells),
+            1 => K::phase_row3(md, lambda, zl, zr, cells),
+            2 => phase_row_at::<5>(md, lambda, zl, zr, cells),
+            3 => phase_row_at::<7>(md, lambda, zl, zr, cells),
+            _ => phase_row_at::<9>(md, lambda, zl, zr, cells),
         };
         self.refined += refined;
     }
@@ -471,17 +472,6 @@ pub fn phase_row3(
     cells: &mut [DisparityCell],
 ) -> usize {
     phase_row_at::<3>(max_disp, lambda_q8, zl, zr, cells)
-}
-
-/// [`phase_row_at`] with the set-up refinement's disparity range and λ.
-#[inline(always)]
-fn phase_row<const S: usize>(
-    phase: &Phase,
-    zl: &[[i16; 2]],
-    zr: &[[i16; 2]],
-    cells: &mut [DisparityCell],
-) -> usize {
-    phase_row_at::<S>(phase.max_disp, phase.lambda_q8, zl, zr, cells)
 }
 
 /// The phase step of one row with `S = 2·pool + 1` known: each ON cell's
