@@ -330,7 +330,7 @@ pub fn run<T: Ticks, K: PhaseKernel>(
 /// Runs the stage on the demo pair with `params` (2 coarse levels: the
 /// three tables of [`TABLES`]), the phase refinement's step by kernel `K`
 /// (the same bits whatever the kernel: the firmware passes its assembly
-/// one, the desktop build [`SafePhase`]).
+/// one, the desktop build [`phase::SafePhase`]).
 ///
 /// # Errors
 /// [`StereoError`] (bad parameters, a bad table or short buffers).
