@@ -657,11 +657,10 @@ const ENGINE_CORE_HALF: [&str; 13] = [
     "1",
 ];
 
-/// r2b1l3p in the operating points above: the cheapest half-size point
-/// (band 1, the right map from the left sums, 3 paths) with the phase
-/// refinement to the frame's resolution (docs/STEREO.md, section Phase
-/// refinement).
-const ENGINE_CORE_PHASE: [&str; 14] = [
+/// The cheapest measured full-size point of the core engine: band 1, the
+/// right map derived from the left sums (no right eye), 3 SGM paths
+/// (r2b1l3 in the operating points above).
+const ENGINE_CORE_FAST: [&str; 11] = [
     "--engine",
     "core",
     "--c2f",
@@ -673,10 +672,14 @@ const ENGINE_CORE_PHASE: [&str; 14] = [
     "--lr-from-left",
     "--paths",
     "3",
-    "--c2f-finest",
-    "1",
-    "--c2f-phase",
 ];
+
+/// r2b1l3p in the operating points above: [`ENGINE_CORE_FAST`] stopped at
+/// level 1 and refined to the frame's resolution by phase (docs/STEREO.md,
+/// section Phase refinement).
+fn engine_core_phase() -> Vec<&'static str> {
+    [&ENGINE_CORE_FAST[..], &["--c2f-finest", "1", "--c2f-phase"]].concat()
+}
 
 fn dem_aloe() -> Section {
     let title = "Disparity energy model on Middlebury Aloe (f32 reference)";
@@ -778,21 +781,7 @@ fn dem_aloe() -> Section {
         "--p2",
         "4",
     ];
-    // The cheapest measured point of the same engine: band 1, the right
-    // map derived from the left sums (no right eye), 3 SGM paths.
-    const ENGINE_CORE_FAST: [&str; 11] = [
-        "--engine",
-        "core",
-        "--c2f",
-        "2",
-        "--c2f-band",
-        "1",
-        "--p2",
-        "4",
-        "--lr-from-left",
-        "--paths",
-        "3",
-    ];
+    let engine_core_phase = engine_core_phase();
     const ENGINE_REF: [&str; 15] = [
         "--engine",
         "reference",
@@ -824,7 +813,7 @@ fn dem_aloe() -> Section {
         ("160", "32", &ENGINE_CORE),
         ("160", "32", &ENGINE_CORE_FAST),
         ("160", "32", &ENGINE_CORE_HALF),
-        ("160", "32", &ENGINE_CORE_PHASE),
+        ("160", "32", &engine_core_phase),
         ("160", "32", &ENGINE_REF),
         ("320", "64", &[]),
         ("320", "64", &["--refine", "1"]),
@@ -839,7 +828,7 @@ fn dem_aloe() -> Section {
         ("320", "64", &ENGINE_CORE),
         ("320", "64", &ENGINE_CORE_FAST),
         ("320", "64", &ENGINE_CORE_HALF),
-        ("320", "64", &ENGINE_CORE_PHASE),
+        ("320", "64", &engine_core_phase),
         ("320", "64", &ENGINE_REF),
     ];
     for (w, d, extra) in rows {
@@ -943,6 +932,7 @@ fn dem_motorcycle() -> Section {
          (`host/src/stereo_cmd/preset.rs`; docs/STEREO.md, section Settings chosen on a \
          held-out pair).\n\n{STEREO_TABLE_HEAD}"
     );
+    let engine_core_phase = engine_core_phase();
     for (w, d) in [("160", "32"), ("320", "64")] {
         for extra in [
             &[][..],
@@ -950,7 +940,7 @@ fn dem_motorcycle() -> Section {
             &["--preset", "held-out", "--speckle", "0"],
             &["--preset", "held-out"],
             &ENGINE_CORE_HALF,
-            &ENGINE_CORE_PHASE,
+            &engine_core_phase,
         ] {
             body.push_str(&stereo_row([&l, &r, &gt], w, d, extra));
         }

@@ -75,7 +75,7 @@ use super::filters::{grey_row, Bank, MAX_TAPS, Z};
 use super::phase::{self, Phase, PhaseBuffers, PhaseKernel, PhaseParams, Refiner, SafePhase};
 use super::readout::take;
 use super::sgm::{self, Sgm};
-use super::{Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport};
+use super::{param, Dem, DemParams, DemTable, Probe, Step, StereoError, StereoReport};
 use crate::disparity::DisparityCell;
 use crate::fixed::U8F8;
 use crate::image::{ImageView, Rgb8};
@@ -394,31 +394,24 @@ impl C2f {
         clippy::cast_sign_loss
     )]
     pub fn new(params: &C2fParams) -> Result<Self, StereoError> {
-        let bad = |ok: bool, what| {
-            if ok {
-                Ok(())
-            } else {
-                Err(StereoError::BadParams(what))
-            }
-        };
-        bad(params.dem.levels == 1, "coarse to fine needs levels = 1")?;
-        bad(
+        param(params.dem.levels == 1, "coarse to fine needs levels = 1")?;
+        param(
             params.dem.pool_radius == 0,
             "coarse to fine needs pool_radius = 0",
         )?;
-        bad(
+        param(
             (1..=MAX_COARSE).contains(&usize::from(params.coarse)),
             "coarse levels must be 1..=3",
         )?;
-        bad(
+        param(
             params.p1 >= 0.0 && params.p2 >= params.p1 && params.p2 <= 128.0,
             "SGM penalties must satisfy 0 <= p1 <= p2 <= 128",
         )?;
-        bad(
+        param(
             params.paths == 3 || u32::from(params.paths) == PATHS,
             "SGM paths must be 3 or 5",
         )?;
-        bad(
+        param(
             params.finest <= params.coarse,
             "the finest level must be at most the coarse levels",
         )?;
@@ -430,7 +423,7 @@ impl C2f {
             .map(|k| params.candidates(k))
             .max()
             .unwrap_or(1);
-        bad(
+        param(
             256 * n_max + usize::from(p2_q8) <= usize::from(u16::MAX),
             "too many candidates per pixel for the SGM costs",
         )?;

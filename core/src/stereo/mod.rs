@@ -137,47 +137,40 @@ impl DemParams {
     /// # Errors
     /// [`StereoError::BadParams`] naming the first bad one.
     pub fn check(&self) -> Result<(), StereoError> {
-        let bad = |ok: bool, what| {
-            if ok {
-                Ok(())
-            } else {
-                Err(StereoError::BadParams(what))
-            }
-        };
-        bad(
+        param(
             (1..=MAX_CARRIERS).contains(&usize::from(self.carriers)),
             "carriers must be 1..=6",
         )?;
-        bad(
+        param(
             (1..=MAX_LEVELS).contains(&usize::from(self.levels)),
             "levels must be 1..=4",
         )?;
-        bad(
+        param(
             self.wavelength >= 2.0 && self.wavelength <= 64.0,
             "wavelength must be 2..=64",
         )?;
-        bad(
+        param(
             self.sigma_per_wavelength > 0.1 && self.sigma_per_wavelength < 4.0,
             "sigma_per_wavelength must be in (0.1, 4)",
         )?;
-        bad(
+        param(
             (1..=filters::MAX_RADIUS).contains(&usize::from(self.radius)),
             "radius must be 1..=15",
         )?;
-        bad(self.shift_step >= 1, "shift_step must be at least 1")?;
-        bad(
+        param(self.shift_step >= 1, "shift_step must be at least 1")?;
+        param(
             self.pool_radius <= MAX_POOL_RADIUS,
             "pool_radius must be at most 7",
         )?;
-        bad(
+        param(
             self.min_energy >= 0.0 && self.min_energy <= 1.0e6,
             "min_energy must be in 0..=1e6",
         )?;
-        bad(
+        param(
             self.min_margin >= 0.0 && self.min_margin <= 1.0e4,
             "min_margin must be in 0..=1e4",
         )?;
-        bad(
+        param(
             self.lr_tolerance <= 255.0 && !self.lr_tolerance.is_nan(),
             "lr_tolerance must be at most 255",
         )
@@ -237,6 +230,16 @@ pub enum StereoError {
     },
     /// The output map cannot be viewed.
     Image(ImageError),
+}
+
+/// `Ok` if `ok`, else [`StereoError::BadParams`]`(what)`: the parameter
+/// checks of the stage's set-ups.
+pub(crate) fn param(ok: bool, what: &'static str) -> Result<(), StereoError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(StereoError::BadParams(what))
+    }
 }
 
 impl fmt::Display for StereoError {

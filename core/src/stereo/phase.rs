@@ -56,7 +56,7 @@
 //! hundredths of a pixel; only weak ones (|P| near |ΔP|) can differ more.
 
 use super::c2f::RgbRows;
-use super::StereoError;
+use super::{param, StereoError};
 use crate::disparity::DisparityCell;
 use crate::fixed::U8F8;
 use crate::image::{ImageViewMut, Rgb8};
@@ -172,26 +172,19 @@ impl Phase {
         clippy::cast_precision_loss
     )]
     pub fn new(params: &PhaseParams, max_disp: u8) -> Result<Self, StereoError> {
-        let bad = |ok: bool, what| {
-            if ok {
-                Ok(())
-            } else {
-                Err(StereoError::BadParams(what))
-            }
-        };
-        bad(
+        param(
             params.wavelength >= 2.0 && params.wavelength <= 64.0,
             "the phase wavelength must be in 2..=64 px",
         )?;
-        bad(
+        param(
             params.sigma_per_wavelength > 0.0 && params.sigma_per_wavelength <= 4.0,
             "the phase envelope must be in (0, 4] wavelengths",
         )?;
-        bad(
+        param(
             (1..=MAX_RADIUS).contains(&usize::from(params.radius)),
             "the phase radius must be 1..=5",
         )?;
-        bad(
+        param(
             usize::from(params.pool) <= MAX_POOL,
             "the phase pooling must be 0..=4",
         )?;
@@ -231,7 +224,7 @@ impl Phase {
         c_half[0] = -2 * c_half.iter().skip(1).sum::<i32>();
         // Σ|k| over −r..=r.
         let abs_sum = |h: &Half| 2 * h.iter().map(|v| v.abs()).sum::<i32>() - h[0].abs();
-        bad(
+        param(
             abs_sum(&c_half) <= 1 << 15 && abs_sum(&s_half) <= 1 << 15,
             "the phase kernel is too large for its format",
         )?;
