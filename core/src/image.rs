@@ -122,7 +122,7 @@ pub fn check_same_size<A, B>(a: &ImageView<'_, A>, b: &ImageView<'_, B>) -> Resu
 pub struct Luma8(pub u8);
 
 /// An 8-bit sRGB pixel.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct Rgb8 {
     /// Red.

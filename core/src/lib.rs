@@ -41,6 +41,7 @@ pub mod fixed;
 pub mod image;
 pub mod mlp;
 pub mod off;
+pub mod pipeline;
 pub mod rng;
 pub mod segment;
 pub mod shape;

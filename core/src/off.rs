@@ -16,7 +16,7 @@
 //! ```
 
 /// A type with one value reserved to mean OFF.
-pub trait OffValue: Copy + Eq {
+pub trait OffValue: Copy + Eq + bytemuck::Pod {
     /// The reserved value.
     const OFF: Self;
 }
@@ -38,9 +38,9 @@ impl OffValue for i32 {
 }
 
 /// A value or OFF, in the space of one `T`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(transparent)]
-pub struct MaybeOff<T: OffValue>(T);
+pub struct MaybeOff<T>(T);
 
 impl<T: OffValue> MaybeOff<T> {
     /// The OFF state.

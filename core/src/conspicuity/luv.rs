@@ -54,7 +54,7 @@ const UV_FRAC: u32 = 18;
 pub const LUV_LIMIT_BITS: i16 = 16_383;
 
 /// A CIELUV pixel, each channel in [`I10F6`] within ±[`LUV_LIMIT_BITS`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct Luv {
     l: I10F6,

@@ -83,8 +83,8 @@ pub use morph::{
     close, dilate, dilate_n, erode, erode_n, non_max_suppression, Disk, NMS_DIRECTIONS,
 };
 pub use pipeline::{
-    bounding_box, inhibit, refine_border, segment, segment_timed, BoundingBox, Detection,
-    SegmentReport, Step,
+    bounding_box, inhibit, refine_border, segment, segment_into, segment_timed, BoundingBox,
+    Detection, Masks, SegmentObserver, SegmentReport, Step,
 };
 pub use stats::{
     above_mean, foreground, foreground_conspicuity, in_selected_area, object_conspicuity,

@@ -224,19 +224,89 @@ pub fn segment_timed(
     masks: &mut [bool],
     probe: &mut dyn FnMut(Step),
 ) -> Result<SegmentReport, SegmentError> {
+    segment_into(
+        params,
+        disparity,
+        conspicuity,
+        bufs,
+        Masks::Bools(masks),
+        &mut StepsOnly(probe),
+    )
+}
+
+/// Sees the steps and the objects of [`segment_into`]; both methods do
+/// nothing by default.
+pub trait SegmentObserver {
+    /// `step` is done.
+    fn step(&mut self, _step: Step) {}
+    /// One object's search is done: its mask is written and every map of
+    /// `bufs` shows its search (before it is inhibited).
+    fn object(&mut self, _det: &Detection, _bufs: &SegmentBuffers<'_>) {}
+}
+
+impl SegmentObserver for () {}
+
+struct StepsOnly<'p>(&'p mut dyn FnMut(Step));
+
+impl SegmentObserver for StepsOnly<'_> {
+    fn step(&mut self, step: Step) {
+        (self.0)(step);
+    }
+}
+
+/// Where [`segment_into`] writes the object masks: one chunk per object.
+#[derive(Debug)]
+pub enum Masks<'m> {
+    /// `width · height` `bool`s per object (as [`segment`]).
+    Bools(&'m mut [bool]),
+    /// One bit map per object, [`bit_map_len`](super::bit_map_len) words
+    /// each, read with [`BitView::new`](super::BitView::new).
+    Bits(&'m mut [u32]),
+}
+
+impl Masks<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Self::Bools(m) => m.len(),
+            Self::Bits(m) => m.len(),
+        }
+    }
+}
+
+/// [`segment_timed`] with the masks as `bool`s or bit maps ([`Masks`]),
+/// reporting its steps and each object's maps to `observer`.
+///
+/// # Errors
+/// As [`segment`] ([`SegmentError::MasksTooSmall`] counts `bool`s or
+/// words).
+pub fn segment_into(
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+    conspicuity: &ImageView<'_, EdgeCell>,
+    bufs: &mut SegmentBuffers<'_>,
+    mut masks: Masks<'_>,
+    observer: &mut impl SegmentObserver,
+) -> Result<SegmentReport, SegmentError> {
     params.validate()?;
     let (w, h) = bufs.size();
     check_size((w, h), disparity.size())?;
     check_size((w, h), conspicuity.size())?;
     let k = usize::from(params.max_objects);
-    let needed = k * w * h;
+    let chunk = match masks {
+        Masks::Bools(_) => (w * h).max(1),
+        Masks::Bits(_) => bufs.g.len().max(1),
+    };
+    let needed = k * chunk;
     if masks.len() < needed {
         return Err(SegmentError::MasksTooSmall {
             needed,
             got: masks.len(),
         });
     }
-    masks.fill(false);
+    match &mut masks {
+        Masks::Bools(m) => m.fill(false),
+        Masks::Bits(m) => m.fill(0),
+    }
     bufs.clear();
     let g = bufs.g;
     let mut report = SegmentReport {
@@ -252,15 +322,15 @@ pub fn segment_timed(
     report.stats = Some(stats);
     report.thresholds = Some(t);
     report.foreground = passes::foreground(params, disparity, &t, g, bufs.d_fg);
-    probe(Step::Foreground);
+    observer.step(Step::Foreground);
     // `w·h >= 1` (`check_size`); `max` shows the compiler, so that the
     // chunk loops have no panic path.
-    for (index, mask) in masks.chunks_exact_mut((w * h).max(1)).take(k).enumerate() {
+    for index in 0..k {
         let counts = passes::slice_counts(conspicuity, disparity, g, bufs.d_fg);
         let Some(slice) = select_slice(&counts, params.exponent) else {
             break;
         };
-        probe(Step::Slice);
+        observer.step(Step::Slice);
         let range = slice_range(params, &stats, slice.delta);
         passes::object(
             params.psi_mean,
@@ -273,7 +343,7 @@ pub fn segment_timed(
             bufs.region,
             bufs.c_obj_reg,
         );
-        probe(Step::Region);
+        observer.step(Step::Region);
         bits::morph_n(
             g,
             params.disk,
@@ -297,9 +367,9 @@ pub fn segment_timed(
         {
             *o = a & b;
         }
-        probe(Step::Refine);
+        observer.step(Step::Refine);
         bits::nms(g, conspicuity, bufs.c_obj, bufs.nms);
-        probe(Step::Nms);
+        observer.step(Step::Nms);
         bits::copy_map(bufs.closed, bufs.nms);
         bits::close(
             g,
@@ -309,9 +379,9 @@ pub fn segment_timed(
             bufs.morph_rows,
             params.closing_steps,
         );
-        probe(Step::Close);
+        observer.step(Step::Close);
         bits::fill_holes(g, bufs.closed, bufs.filled, bufs.scratch);
-        probe(Step::Fill);
+        observer.step(Step::Fill);
         let comps = bits::components(g, bufs.filled, Connectivity::Eight, bufs.rows, bufs.table)?;
         let largest = comps.largest.map_or(0, |(_, a)| a);
         let keep = params.min_area;
@@ -328,15 +398,25 @@ pub fn segment_timed(
             area,
         };
         let bbox = bits::bbox(g, bufs.mask);
-        if let Some((_, y0, _, y1)) = bbox {
-            let rows = mask
-                .chunks_exact_mut(w.max(1))
-                .zip(bufs.mask.chunks_exact(g.stride.max(1)));
-            for (out, words) in rows.take(y1 + 1).skip(y0) {
-                for (o, b) in out.chunks_mut(32).zip(words) {
-                    for (i, o) in o.iter_mut().enumerate() {
-                        *o = b >> i & 1 != 0;
+        let span = index * chunk..(index + 1) * chunk;
+        match &mut masks {
+            Masks::Bools(m) => {
+                if let (Some((_, y0, _, y1)), Some(mask)) = (bbox, m.get_mut(span)) {
+                    let rows = mask
+                        .chunks_exact_mut(w.max(1))
+                        .zip(bufs.mask.chunks_exact(g.stride.max(1)));
+                    for (out, words) in rows.take(y1 + 1).skip(y0) {
+                        for (o, b) in out.chunks_mut(32).zip(words) {
+                            for (i, o) in o.iter_mut().enumerate() {
+                                *o = b >> i & 1 != 0;
+                            }
+                        }
                     }
+                }
+            }
+            Masks::Bits(m) => {
+                if let Some(mask) = m.get_mut(span) {
+                    bits::copy_map(mask, bufs.mask);
                 }
             }
         }
@@ -354,6 +434,7 @@ pub fn segment_timed(
             }),
             regions,
         };
+        observer.object(&det, bufs);
         // Capacity MAX_OBJECTS >= max_objects, checked by `validate`.
         let _ = report.objects.push(det);
         // Inhibit only before another search, so that after the run every
@@ -369,7 +450,7 @@ pub fn segment_timed(
                 slice.delta,
             );
         }
-        probe(Step::Mask);
+        observer.step(Step::Mask);
     }
     Ok(report)
 }

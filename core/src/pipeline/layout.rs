@@ -1,0 +1,110 @@
+//! How the workspace is laid out, in bytes, by `const fn`.
+//!
+//! ```text
+//! ┌ kept for the frame's result ─────────────┬ one region, reused by phase ─────────────┐
+//! │ edges C │ disparity │ K masks │ K vectors │ stereo scratch                          │
+//! │         │           │ (bits)  │           │ or: CIELUV map + rows + completion      │
+//! │         │           │         │           │ or: segmentation maps + classifier      │
+//! └─────────┴───────────┴─────────┴───────────┴──────────────────────────────────────────┘
+//! ```
+//!
+//! The stages reuse each other's scratch: stereo's is free once its map is
+//! written, the CIELUV map once the completion has used it. Each buffer is
+//! rounded up to whole 8-byte words ([`super::arena`]).
+
+use super::arena::bytes;
+use super::PipelineParams;
+use crate::complete::DEFAULT_REGION_CAPACITY;
+use crate::conspicuity::{row_scratch_len, EdgeCell, Luv};
+use crate::disparity::DisparityCell;
+use crate::image::Rgb8;
+use crate::mlp;
+use crate::segment::{bit_map_len, label_capacity, maps_len, table_len};
+use crate::shape::{ShapeElem, SHAPE_LEN};
+use crate::stereo::c2f;
+use crate::stereo::filters::Z;
+use crate::stereo::phase;
+use core::mem::size_of;
+
+/// Bytes kept for the result: the edge map C, the completed disparity, and
+/// per object a bit mask and a shape vector.
+pub const fn kept_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
+    let n = width * height;
+    let k = params.segment.max_objects as usize;
+    bytes(n, size_of::<EdgeCell>())
+        + bytes(n, size_of::<DisparityCell>())
+        + k * bytes(bit_map_len(width, height), 4)
+        + k * bytes(SHAPE_LEN, size_of::<ShapeElem>())
+}
+
+/// Bytes of the stereo engine's buffers (the phase refinement's included).
+pub const fn stereo_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
+    let p = &params.stereo;
+    let w = width;
+    let phase = match &p.phase {
+        Some(ph) => {
+            bytes(w, size_of::<Rgb8>())
+                + bytes(phase::v_len(w, ph), 4)
+                + bytes(phase::z_len(w, ph, p.dem.max_disp), size_of::<[i16; 2]>())
+                + bytes(w, size_of::<DisparityCell>())
+        }
+        None => 0,
+    };
+    bytes(c2f::grey_len(w, p), 2)
+        + bytes(c2f::rgb_len(w, p), size_of::<Rgb8>())
+        + bytes(c2f::z_len(w, p), size_of::<Z>())
+        + bytes(w, size_of::<[i32; 3]>())
+        + bytes(c2f::score_len(w, p), 8)
+        + bytes(c2f::cost_len(w, p), 2)
+        + bytes(c2f::sum_len(w, p), 4)
+        + bytes(c2f::pick_len(w), 4)
+        + bytes(c2f::map_len(w, height, p), 1)
+        + phase
+}
+
+/// Bytes of the conspicuity stage and the completion: the CIELUV map,
+/// its row scratch and one RGB row, then the labelling and the region
+/// tables.
+pub const fn colour_bytes(width: usize, height: usize) -> usize {
+    let n = width * height;
+    let cap = label_capacity(width, height);
+    let regions = DEFAULT_REGION_CAPACITY;
+    bytes(n, size_of::<Luv>())
+        + bytes(row_scratch_len(width), size_of::<Luv>())
+        + bytes(width, size_of::<Rgb8>())
+        + bytes(n, 2)
+        + bytes(cap, 2)
+        + bytes(cap, 4)
+        + bytes(n, 1)
+        + 2 * bytes(regions, 4)
+        + 2 * bytes(regions, 1)
+}
+
+/// Bytes of segmentation and of the classifier's activations.
+pub const fn object_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
+    let m = &params.model;
+    bytes(maps_len(width, height), 4)
+        + bytes(table_len(width, height), 4)
+        + bytes(mlp::packed_len(SHAPE_LEN, m.hidden as usize), 4)
+        + bytes(mlp::hidden_len(m.hidden as usize), 1)
+        + bytes(mlp::output_len(m.classes as usize), 2)
+}
+
+const fn max(a: usize, b: usize) -> usize {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Bytes of the region the phases share.
+pub const fn shared_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
+    max(
+        stereo_bytes(width, height, params),
+        max(
+            colour_bytes(width, height),
+            object_bytes(width, height, params),
+        ),
+    )
+}

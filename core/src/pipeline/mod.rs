@@ -1,0 +1,566 @@
+//! The whole job in one call: a rectified stereo pair in, up to K
+//! categorised proto-objects out, most salient first.
+//!
+//! ```text
+//! left, right ─► stereo (c2f) ─► D ──────────────┐
+//! left ────────► CIELUV, smoothing, C ─► complete D over C's regions
+//!                                          └─► segment (K searches) ─► per object:
+//!                                              mask, box, slice ─► shape vector ─► MLP
+//!                                              ─► top-5 cosines, known/unknown against Δ
+//! ```
+//!
+//! A [`Pipeline`] is set up once from [`PipelineParams`] and the borrowed
+//! assets: one DEM decoder table per stereo level and the classifier's
+//! model blob. [`Pipeline::run`] then takes the two frames (anything that
+//! gives RGB rows: an [`ImageView`] or a camera's format, see
+//! [`RgbRows`]) and one workspace of [`workspace_bytes`] (as `u64` words,
+//! [`workspace_words`]), and nothing else: every stage works inside it,
+//! reusing the scratch of the stages before ([`layout`]).
+//!
+//! ```
+//! use protogist::image::{ImageView, Rgb8};
+//! use protogist::pipeline::{workspace_words, Pipeline, PipelineParams};
+//! # fn run(tables: [&[u8]; 3], model: &[u8], l: &[Rgb8], r: &[Rgb8])
+//! #     -> Result<(), protogist::pipeline::PipelineError> {
+//! let (w, h) = (160, 120);
+//! let params = PipelineParams::DEFAULT.with_objects(4);
+//! let pipeline = Pipeline::new(&params, &tables, model)?;
+//! let mut ws = vec![0u64; workspace_words(w, h, &params)];
+//! let frame = pipeline.run(&ImageView::packed(l, w, h)?, &ImageView::packed(r, w, h)?, &mut ws)?;
+//! for o in frame.objects() {
+//!     let best = o.top().first().map(|r| pipeline.class_name(r.class));
+//!     println!("{:?} at {:?}, disparity {} px: {:?}", best, o.bbox, o.delta, o.identity);
+//! }
+//! # Ok(()) }
+//! ```
+//!
+//! Intermediate maps go to an [`Observer`] ([`Pipeline::run_observed`]),
+//! whose methods do nothing by default, so an unobserved run pays nothing.
+
+mod arena;
+pub mod layout;
+mod run;
+
+use crate::complete::{CompleteError, CompleteParams};
+use crate::conspicuity::{ConspicuityError, EdgeCell, EdgeParams, Luv, LuvTables, SmoothParams};
+use crate::disparity::DisparityCell;
+use crate::image::{ImageError, ImageView};
+use crate::mlp::{blob::Model, Identity, MlpError, ModelError, Ranked};
+use crate::segment::{
+    BitView, BoundingBox, Detection, Disk, DisparityRange, PsiMean, Ratio, SegmentBuffers,
+    SegmentError, SegmentParams,
+};
+use crate::shape::{Centroid, ShapeElem, ShapeError, SHAPE_LEN};
+use crate::stereo::c2f::{C2f, C2fParams, MAX_COARSE};
+use crate::stereo::phase::PhaseParams;
+use crate::stereo::{DemTable, StereoError, TableError};
+use core::fmt;
+
+pub use crate::stereo::c2f::RgbRows;
+pub use layout::{kept_bytes, shared_bytes};
+
+/// Most objects one run reports.
+pub const MAX_OBJECTS: usize = crate::segment::MAX_OBJECTS;
+/// Ranked categories per object.
+pub const TOP_K: usize = 5;
+
+/// The classifier sizes a workspace is laid out for: any model with at most
+/// this many hidden units and classes (and [`SHAPE_LEN`] inputs) runs in it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ModelCapacity {
+    /// Hidden units.
+    pub hidden: u16,
+    /// Classes.
+    pub classes: u16,
+}
+
+/// Every parameter of a run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PipelineParams {
+    /// The stereo engine's operating point (its `dem.max_disp` is the
+    /// largest disparity, px).
+    pub stereo: C2fParams,
+    /// Smoothing and the edge threshold.
+    pub edges: EdgeParams,
+    /// The completion of the disparity over the conspicuity regions.
+    pub complete: CompleteParams,
+    /// Figure-ground; `max_objects` is K, the objects searched (1..=8).
+    pub segment: SegmentParams,
+    /// The acceptance threshold Δ of identification, a Q16 cosine
+    /// (65536 = 1); `None` takes the model's own.
+    pub delta_q16: Option<u32>,
+    /// The largest classifier the workspace holds.
+    pub model: ModelCapacity,
+}
+
+/// The stereo point the pipeline runs by default: the half-size search
+/// (band 1, 3 SGM paths, the left-right check from the left sums) refined
+/// to the frame's resolution by phase.
+pub const STEREO_DEFAULT: C2fParams = C2fParams {
+    band: Some(1),
+    lr_from_left: true,
+    paths: 3,
+    finest: 1,
+    phase: Some(PhaseParams::DEFAULT),
+    ..C2fParams::DEFAULT
+};
+
+impl PipelineParams {
+    /// The defaults: [`STEREO_DEFAULT`] with 32 disparities, the paper's
+    /// conspicuity and figure-ground settings, one object, the model's Δ,
+    /// and room for classifiers up to 2048 hidden units and 64 classes.
+    pub const DEFAULT: Self = Self {
+        stereo: STEREO_DEFAULT,
+        edges: EdgeParams {
+            smooth: SmoothParams { iterations: 2 },
+            threshold_percent: 10,
+        },
+        complete: CompleteParams {
+            guard: 1,
+            min_trusted: 1,
+        },
+        segment: SegmentParams {
+            top_bottom_strip: Ratio::new(1, 6),
+            left_strip: Ratio::new(1, 8),
+            fg_low: Ratio::new(1, 10),
+            fg_high: Ratio::new(2, 1),
+            range: Ratio::new(2, 5),
+            exponent: 1,
+            psi_mean: PsiMean::Region,
+            disk: Disk::Cross,
+            refine_dilations: 4,
+            closing_steps: 4,
+            min_area: Ratio::new(1, 5),
+            max_objects: 1,
+        },
+        delta_q16: None,
+        model: ModelCapacity {
+            hidden: 2048,
+            classes: 64,
+        },
+    };
+
+    /// These parameters searching `k` objects.
+    #[must_use]
+    pub const fn with_objects(mut self, k: u8) -> Self {
+        self.segment.max_objects = k;
+        self
+    }
+
+    /// These parameters with `d` as the largest disparity, px.
+    #[must_use]
+    pub const fn with_max_disp(mut self, d: u8) -> Self {
+        self.stereo.dem.max_disp = d;
+        self
+    }
+
+    /// The largest disparity, px.
+    pub const fn max_disp(&self) -> u8 {
+        self.stereo.dem.max_disp
+    }
+
+    /// Decoder tables the stereo engine needs: one per level.
+    pub const fn tables(&self) -> usize {
+        self.stereo.coarse as usize + 1
+    }
+}
+
+impl Default for PipelineParams {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Bytes of the workspace of a `width` x `height` run.
+pub const fn workspace_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
+    kept_bytes(width, height, params) + shared_bytes(width, height, params)
+}
+
+/// [`workspace_bytes`] as `u64` words, the unit [`Pipeline::run`] takes.
+pub const fn workspace_words(width: usize, height: usize, params: &PipelineParams) -> usize {
+    workspace_bytes(width, height, params).div_ceil(8)
+}
+
+/// Why a pipeline could not be set up or run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum PipelineError {
+    /// A parameter is out of range; what is wrong.
+    BadParams(&'static str),
+    /// The decoder tables are not one per stereo level.
+    TableCount {
+        /// Tables the operating point needs.
+        expected: usize,
+        /// Tables given.
+        got: usize,
+    },
+    /// A decoder table is corrupt.
+    Table(TableError),
+    /// The model blob is corrupt.
+    Model(ModelError),
+    /// The model does not fit the pipeline: its inputs are not the shape
+    /// vector's, or it is larger than [`PipelineParams::model`].
+    ModelMismatch {
+        /// What does not fit: `"inputs"`, `"hidden"` or `"classes"`.
+        what: &'static str,
+        /// The largest (or, for inputs, the only) value the pipeline takes.
+        expected: usize,
+        /// The model's.
+        got: usize,
+    },
+    /// The workspace is smaller than [`workspace_bytes`].
+    WorkspaceTooSmall {
+        /// Bytes needed.
+        needed: usize,
+        /// Bytes given.
+        got: usize,
+    },
+    /// A workspace buffer could not be typed (not expected with a `u64`
+    /// workspace).
+    WorkspaceAlignment,
+    /// A frame buffer is invalid.
+    Image(ImageError),
+    /// The stereo stage: frames of different sizes, too small for the
+    /// engine, or a table of another layout.
+    Stereo(StereoError),
+    /// The conspicuity stage.
+    Conspicuity(ConspicuityError),
+    /// The disparity completion.
+    Complete(CompleteError),
+    /// Figure-ground segregation.
+    Segment(SegmentError),
+    /// The shape stage (other than an empty or degenerate mask, which
+    /// drops the object).
+    Shape(ShapeError),
+    /// The classifier.
+    Mlp(MlpError),
+}
+
+impl fmt::Display for PipelineError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::BadParams(what) => write!(f, "pipeline parameters: {what}"),
+            Self::TableCount { expected, got } => write!(
+                f,
+                "the stereo point needs {expected} decoder tables (one per level), got {got}"
+            ),
+            Self::Table(e) => write!(f, "decoder table: {e}"),
+            Self::Model(e) => write!(f, "model blob: {e}"),
+            Self::ModelMismatch {
+                what: "inputs",
+                expected,
+                got,
+            } => write!(
+                f,
+                "the model takes {got} inputs; the pipeline gives it the {expected}-element shape vector"
+            ),
+            Self::ModelMismatch {
+                what,
+                expected,
+                got,
+            } => write!(
+                f,
+                "the model has {got} {what}; the workspace is laid out for at most {expected}"
+            ),
+            Self::WorkspaceTooSmall { needed, got } => write!(
+                f,
+                "workspace of {got} bytes is too small: the run needs {needed}"
+            ),
+            Self::WorkspaceAlignment => f.write_str("workspace buffer could not be typed"),
+            Self::Image(e) => write!(f, "frame: {e}"),
+            Self::Stereo(e) => write!(f, "stereo: {e}"),
+            Self::Conspicuity(e) => write!(f, "conspicuity: {e}"),
+            Self::Complete(e) => write!(f, "{e}"),
+            Self::Segment(e) => write!(f, "figure-ground: {e}"),
+            Self::Shape(e) => write!(f, "shape: {e}"),
+            Self::Mlp(e) => write!(f, "classifier: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for PipelineError {}
+
+macro_rules! from_stage {
+    ($($t:ty => $v:ident),*) => {$(
+        impl From<$t> for PipelineError {
+            fn from(e: $t) -> Self {
+                Self::$v(e)
+            }
+        }
+    )*};
+}
+
+from_stage!(
+    TableError => Table, ModelError => Model, ImageError => Image,
+    StereoError => Stereo, ConspicuityError => Conspicuity,
+    CompleteError => Complete, SegmentError => Segment, ShapeError => Shape,
+    MlpError => Mlp
+);
+
+/// The stages of a run, in order, as [`Observer::enter`] reports them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// The stereo engine.
+    Stereo,
+    /// CIELUV, smoothing, C~ and the threshold.
+    Conspicuity,
+    /// The completion of the disparity over the conspicuity regions.
+    Complete,
+    /// Figure-ground, every object.
+    Segment,
+    /// Shape vectors.
+    Shape,
+    /// The classifier and the ranking.
+    Classify,
+    /// The run is over.
+    Done,
+}
+
+/// Sees the intermediate maps of a run (for panels, tests and timing).
+/// Every method does nothing by default.
+pub trait Observer {
+    /// A stage starts (and so the one before it ends).
+    fn enter(&mut self, _stage: Stage) {}
+    /// A step of the stereo engine starts.
+    fn stereo_step(&mut self, _step: crate::stereo::Step) {}
+    /// A step of figure-ground starts.
+    fn segment_step(&mut self, _step: crate::segment::Step) {}
+    /// The stereo engine's map.
+    fn raw_disparity(&mut self, _map: &ImageView<'_, DisparityCell>) {}
+    /// The smoothed CIELUV map and the edge map C.
+    fn conspicuity(&mut self, _smoothed: &ImageView<'_, Luv>, _edges: &ImageView<'_, EdgeCell>) {}
+    /// The completed disparity, as segmentation takes it.
+    fn disparity(&mut self, _map: &ImageView<'_, DisparityCell>) {}
+    /// One figure-ground search (rank `det.index`), with every map of its
+    /// search, before it is inhibited.
+    fn object(&mut self, _det: &Detection, _maps: &SegmentBuffers<'_>) {}
+}
+
+impl Observer for () {}
+
+/// A categorised proto-object.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Object {
+    /// Rank among the frame's objects: 0 is the most salient.
+    pub rank: usize,
+    /// The figure-ground search that found it (its mask's slot).
+    pub search: usize,
+    /// Bounding box of the mask.
+    pub bbox: BoundingBox,
+    /// Centroid of the mask (Q8) and its area.
+    pub centroid: Centroid,
+    /// Mask pixels.
+    pub area: u32,
+    /// δ, the object's disparity, whole px.
+    pub delta: u16,
+    /// The disparity slice `[δ − r, δ + r]`.
+    pub range: DisparityRange,
+    /// Saliency A^C(δ)·δ^A.
+    pub score: u64,
+    /// The best classes by cosine with their templates, best first
+    /// (`top_len` of them).
+    pub top: [Ranked; TOP_K],
+    /// Valid entries of `top`.
+    pub top_len: u8,
+    /// Known (the best class reaches Δ) or unknown.
+    pub identity: Identity,
+}
+
+impl Object {
+    /// The ranked classes.
+    pub fn top(&self) -> &[Ranked] {
+        self.top.get(..usize::from(self.top_len)).unwrap_or(&[])
+    }
+}
+
+/// What a run found; its maps live in the workspace.
+#[derive(Debug)]
+pub struct Frame<'w> {
+    width: usize,
+    height: usize,
+    objects: heapless::Vec<Object, MAX_OBJECTS>,
+    searches: usize,
+    masks: &'w [u32],
+    vectors: &'w [ShapeElem],
+    edges: ImageView<'w, EdgeCell>,
+    disparity: ImageView<'w, DisparityCell>,
+}
+
+impl<'w> Frame<'w> {
+    /// `(width, height)` of the frames.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// The objects, most salient first. Searches whose mask came out
+    /// empty or degenerate are not objects.
+    pub fn objects(&self) -> &[Object] {
+        &self.objects
+    }
+
+    /// Figure-ground searches run (at most K; fewer when the foreground
+    /// ran out).
+    pub fn searches(&self) -> usize {
+        self.searches
+    }
+
+    /// The object's mask.
+    pub fn mask(&self, o: &Object) -> Option<BitView<'w>> {
+        let n = crate::segment::bit_map_len(self.width, self.height);
+        let words = self.masks.get(o.search * n..(o.search + 1) * n)?;
+        BitView::new(words, self.width, self.height).ok()
+    }
+
+    /// The object's shape vector.
+    pub fn shape(&self, o: &Object) -> Option<&'w [ShapeElem]> {
+        self.vectors
+            .get(o.search * SHAPE_LEN..(o.search + 1) * SHAPE_LEN)
+    }
+
+    /// The edge map C.
+    pub fn edges(&self) -> ImageView<'w, EdgeCell> {
+        self.edges
+    }
+
+    /// The completed disparity map segmentation took.
+    pub fn disparity(&self) -> ImageView<'w, DisparityCell> {
+        self.disparity
+    }
+}
+
+/// The set-up pipeline: checked parameters, stereo kernels, colour
+/// tables, the parsed decoder tables and model.
+#[derive(Clone, Debug)]
+pub struct Pipeline<'a> {
+    params: PipelineParams,
+    c2f: C2f,
+    luv: LuvTables,
+    tables: heapless::Vec<DemTable<'a>, { MAX_COARSE + 1 }>,
+    model: Model<'a>,
+    delta_q16: u32,
+}
+
+impl<'a> Pipeline<'a> {
+    /// Checks `params`, parses the decoder tables (level 0 first) and the
+    /// model blob, and sets up the stereo kernels (one-time setup).
+    ///
+    /// # Errors
+    /// [`PipelineError::BadParams`] (K not in 1..=8, …),
+    /// [`PipelineError::TableCount`], [`PipelineError::Table`],
+    /// [`PipelineError::Model`], [`PipelineError::ModelMismatch`], and the
+    /// stereo engine's [`StereoError::BadParams`].
+    pub fn new(
+        params: &PipelineParams,
+        tables: &[&'a [u8]],
+        model: &'a [u8],
+    ) -> Result<Self, PipelineError> {
+        let k = usize::from(params.segment.max_objects);
+        if !(1..=MAX_OBJECTS).contains(&k) {
+            return Err(PipelineError::BadParams("objects (K) must be 1..=8"));
+        }
+        params.segment.validate()?;
+        if params.edges.threshold_percent > 100 {
+            return Err(PipelineError::BadParams("edge threshold above 100 %"));
+        }
+        let c2f = C2f::new(&params.stereo)?;
+        if tables.len() != params.tables() {
+            return Err(PipelineError::TableCount {
+                expected: params.tables(),
+                got: tables.len(),
+            });
+        }
+        let mut parsed = heapless::Vec::new();
+        for t in tables {
+            let t = DemTable::parse(t)?;
+            parsed
+                .push(t)
+                .map_err(|_| PipelineError::BadParams("too many decoder tables"))?;
+        }
+        let model = Model::parse(model)?;
+        let fits = [
+            (
+                "inputs",
+                SHAPE_LEN,
+                model.inputs(),
+                model.inputs() == SHAPE_LEN,
+            ),
+            (
+                "hidden",
+                usize::from(params.model.hidden),
+                model.hidden(),
+                model.hidden() <= usize::from(params.model.hidden),
+            ),
+            (
+                "classes",
+                usize::from(params.model.classes),
+                model.classes(),
+                model.classes() <= usize::from(params.model.classes),
+            ),
+        ];
+        if let Some(&(what, expected, got, _)) = fits.iter().find(|f| !f.3) {
+            return Err(PipelineError::ModelMismatch {
+                what,
+                expected,
+                got,
+            });
+        }
+        Ok(Self {
+            params: *params,
+            c2f,
+            luv: LuvTables::new(),
+            tables: parsed,
+            delta_q16: params.delta_q16.unwrap_or(model.delta_q16()),
+            model,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &PipelineParams {
+        &self.params
+    }
+
+    /// The classifier.
+    pub fn model(&self) -> &Model<'a> {
+        &self.model
+    }
+
+    /// Class `c`'s name (`"?"` past the model's classes).
+    pub fn class_name(&self, c: u16) -> &'a str {
+        self.model.class_name(usize::from(c)).unwrap_or("?")
+    }
+
+    /// The acceptance threshold Δ in force, Q16.
+    pub fn delta_q16(&self) -> u32 {
+        self.delta_q16
+    }
+
+    /// Runs a frame pair through every stage (see the module docs).
+    ///
+    /// # Errors
+    /// [`PipelineError::Stereo`] for frames of different sizes or too
+    /// small for the engine, [`PipelineError::WorkspaceTooSmall`] with the
+    /// bytes needed; both before any work. A frame with no object is an
+    /// empty result, not an error.
+    pub fn run<'w, S: RgbRows>(
+        &self,
+        left: &S,
+        right: &S,
+        workspace: &'w mut [u64],
+    ) -> Result<Frame<'w>, PipelineError> {
+        self.run_observed(left, right, workspace, &mut ())
+    }
+
+    /// [`Pipeline::run`], showing the intermediate maps to `observer`.
+    ///
+    /// # Errors
+    /// As [`Pipeline::run`].
+    pub fn run_observed<'w, S: RgbRows, O: Observer>(
+        &self,
+        left: &S,
+        right: &S,
+        workspace: &'w mut [u64],
+        observer: &mut O,
+    ) -> Result<Frame<'w>, PipelineError> {
+        run::run(self, left, right, workspace, observer)
+    }
+}

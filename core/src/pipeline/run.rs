@@ -1,0 +1,259 @@
+//! One frame through every stage, inside the workspace.
+
+use super::arena::Arena;
+use super::{
+    layout, Frame, Object, Observer, Pipeline, PipelineError, RgbRows, Stage, MAX_OBJECTS, TOP_K,
+};
+use crate::complete::{complete, RegionTables, DEFAULT_REGION_CAPACITY};
+use crate::conspicuity::{self, EdgeCell, Luv};
+use crate::disparity::DisparityCell;
+use crate::image::{ImageView, ImageViewMut, Rgb8};
+use crate::mlp::{self, Identity, Ranked, Scratch};
+use crate::segment::{
+    bit_map_len, label_capacity, maps_len, segment_into, table_len, BitView, Labeller, Masks,
+    SegmentBuffers, SegmentObserver,
+};
+use crate::shape::{shape_vector_bits, RadialProfile, ShapeError, ShapeVector, SHAPE_LEN};
+use crate::stereo::c2f::{self, C2fBuffers};
+use crate::stereo::phase::{self, PhaseBuffers};
+use crate::stereo::{Probe, Step};
+
+/// Passes the stereo engine's steps to the observer.
+struct StereoSteps<'o, O>(&'o mut O);
+
+impl<O: Observer> Probe for StereoSteps<'_, O> {
+    fn enter(&mut self, step: Step) {
+        self.0.stereo_step(step);
+    }
+}
+
+/// Passes figure-ground's steps and objects to the observer.
+struct SegmentSteps<'o, O>(&'o mut O);
+
+impl<O: Observer> SegmentObserver for SegmentSteps<'_, O> {
+    fn step(&mut self, step: crate::segment::Step) {
+        self.0.segment_step(step);
+    }
+
+    fn object(&mut self, det: &crate::segment::Detection, bufs: &SegmentBuffers<'_>) {
+        self.0.object(det, bufs);
+    }
+}
+
+pub(super) fn run<'w, S: RgbRows, O: Observer>(
+    p: &Pipeline<'_>,
+    left: &S,
+    right: &S,
+    workspace: &'w mut [u64],
+    obs: &mut O,
+) -> Result<Frame<'w>, PipelineError> {
+    let params = &p.params;
+    let (w, h) = left.size();
+    let tables = p.tables.as_slice();
+    p.c2f.check(tables, (w, h), right.size())?;
+    let needed = super::workspace_bytes(w, h, params);
+    if workspace.len() * 8 < needed {
+        return Err(PipelineError::WorkspaceTooSmall {
+            needed,
+            got: workspace.len() * 8,
+        });
+    }
+    let n = w * h;
+    let k = usize::from(params.segment.max_objects);
+    let (kept, shared) = workspace.split_at_mut(layout::kept_bytes(w, h, params).div_ceil(8));
+    let mut a = Arena::new(kept);
+    let edges: &'w mut [EdgeCell] = a.take(n)?;
+    let disparity: &'w mut [DisparityCell] = a.take(n)?;
+    let masks: &'w mut [u32] = a.take(k * bit_map_len(w, h))?;
+    let vectors = a.take(k * SHAPE_LEN)?;
+
+    // Stereo: its buffers take the shared region first.
+    obs.enter(Stage::Stereo);
+    {
+        let mut s = Arena::new(&mut *shared);
+        let sp = &params.stereo;
+        let phase = match &sp.phase {
+            Some(ph) => PhaseBuffers {
+                rgb: s.take(w)?,
+                v: s.take(phase::v_len(w, ph))?,
+                z: s.take(phase::z_len(w, ph, sp.dem.max_disp))?,
+                row: s.take(w)?,
+            },
+            None => PhaseBuffers {
+                rgb: &mut [],
+                v: &mut [],
+                z: &mut [],
+                row: &mut [],
+            },
+        };
+        let mut bufs = C2fBuffers {
+            grey: s.take(c2f::grey_len(w, sp))?,
+            rgb: s.take(c2f::rgb_len(w, sp))?,
+            z: s.take(c2f::z_len(w, sp))?,
+            col: s.take(w)?,
+            scores: s.take(c2f::score_len(w, sp))?,
+            costs: s.take(c2f::cost_len(w, sp))?,
+            sums: s.take(c2f::sum_len(w, sp))?,
+            picks: s.take(c2f::pick_len(w))?,
+            maps: s.take(c2f::map_len(w, h, sp))?,
+            phase,
+        };
+        disparity.fill(DisparityCell::OFF);
+        let mut sink = |x: usize, y: usize, c: DisparityCell| {
+            if let Some(d) = disparity.get_mut(y * w + x) {
+                *d = c;
+            }
+        };
+        p.c2f.run(
+            tables,
+            left,
+            right,
+            &mut bufs,
+            &mut sink,
+            &mut StereoSteps(obs),
+        )?;
+    }
+    obs.raw_disparity(&ImageView::packed(&*disparity, w, h)?);
+
+    // Conspicuity, then the completion, which needs the smoothed colours.
+    obs.enter(Stage::Conspicuity);
+    {
+        let mut s = Arena::new(&mut *shared);
+        let luv: &mut [Luv] = s.take(n)?;
+        let rows: &mut [Luv] = s.take(conspicuity::row_scratch_len(w))?;
+        let rgb: &mut [Rgb8] = s.take(w)?;
+        for (y, out) in luv.chunks_exact_mut(w.max(1)).enumerate() {
+            left.rgb_row(y, rgb);
+            for (o, &px) in out.iter_mut().zip(rgb.iter()) {
+                *o = p.luv.convert(px);
+            }
+        }
+        let mut luv_v = ImageViewMut::packed(luv, w, h)?;
+        conspicuity::smooth(&params.edges.smooth, &mut luv_v, rows)?;
+        let mut c_v = ImageViewMut::packed(&mut *edges, w, h)?;
+        let max = conspicuity::conspicuity(&luv_v.as_view(), &mut c_v, rows)?;
+        conspicuity::threshold(&mut c_v, max, params.edges.threshold_percent)?;
+        obs.conspicuity(&luv_v.as_view(), &c_v.as_view());
+
+        obs.enter(Stage::Complete);
+        let cap = label_capacity(w, h);
+        let mut lab = Labeller::new(w, h, s.take(n)?, s.take(cap)?, s.take(cap)?)?;
+        let r = DEFAULT_REGION_CAPACITY;
+        let mut tables = RegionTables {
+            total: s.take(r)?,
+            below: s.take(r)?,
+            lo: s.take(r)?,
+            hi: s.take(r)?,
+        };
+        let edge_map = s.take_bools(n)?;
+        complete(
+            &params.complete,
+            &c_v.as_view(),
+            &luv_v.as_view(),
+            &mut ImageViewMut::packed(&mut *disparity, w, h)?,
+            &mut ImageViewMut::packed(edge_map, w, h)?,
+            &mut lab,
+            &mut tables,
+        )?;
+    }
+    let edges: &'w [EdgeCell] = edges;
+    let disparity: &'w [DisparityCell] = disparity;
+    let edges_v = ImageView::packed(edges, w, h)?;
+    let disparity_v = ImageView::packed(disparity, w, h)?;
+    obs.disparity(&disparity_v);
+
+    // Figure-ground, then shape and the classifier per object.
+    obs.enter(Stage::Segment);
+    let mut s = Arena::new(shared);
+    let mut seg = SegmentBuffers::new(w, h, s.take(maps_len(w, h))?, s.take(table_len(w, h))?)?;
+    let report = segment_into(
+        &params.segment,
+        &disparity_v,
+        &edges_v,
+        &mut seg,
+        Masks::Bits(&mut *masks),
+        &mut SegmentSteps(obs),
+    )?;
+
+    let masks: &'w [u32] = masks;
+
+    obs.enter(Stage::Shape);
+    let mut profile = RadialProfile::new();
+    let mut shaped: heapless::Vec<(usize, crate::shape::Centroid), MAX_OBJECTS> =
+        heapless::Vec::new();
+    let words = bit_map_len(w, h);
+    for (det, v) in report
+        .objects
+        .iter()
+        .zip(vectors.chunks_exact_mut(SHAPE_LEN))
+    {
+        if det.area == 0 || det.bbox.is_none() {
+            continue;
+        }
+        let Some(mask) = masks.get(det.index * words..(det.index + 1) * words) else {
+            continue;
+        };
+        let Ok(out) = <&mut ShapeVector>::try_from(v) else {
+            continue;
+        };
+        match shape_vector_bits(&BitView::new(mask, w, h)?, &mut profile, out) {
+            Ok(r) => {
+                let _ = shaped.push((det.index, r.centroid));
+            }
+            Err(ShapeError::EmptyMask | ShapeError::ZeroVariance) => {}
+            Err(e) => return Err(e.into()),
+        }
+    }
+    let vectors: &'w [crate::shape::ShapeElem] = vectors;
+
+    obs.enter(Stage::Classify);
+    let m = &p.model;
+    let mut scratch = Scratch {
+        input: s.take(mlp::packed_len(m.inputs(), m.hidden()))?,
+        hidden: s.take(mlp::hidden_len(m.hidden()))?,
+        output: s.take(mlp::output_len(m.classes()))?,
+    };
+    let mut objects = heapless::Vec::new();
+    for &(search, centroid) in &shaped {
+        let Some(det) = report.objects.get(search) else {
+            continue;
+        };
+        let Some(bbox) = det.bbox else {
+            continue;
+        };
+        let v = vectors
+            .get(search * SHAPE_LEN..(search + 1) * SHAPE_LEN)
+            .unwrap_or(&[]);
+        let outputs = mlp::forward(m, v, &mut scratch)?;
+        let mut top = [Ranked::default(); TOP_K];
+        let filled = mlp::top_k(m, outputs, &mut top)?;
+        let identity = match top.first() {
+            Some(b) if filled > 0 && b.score >= p.delta_q16 => Identity::Known(b.class),
+            _ => Identity::Unknown,
+        };
+        let _ = objects.push(Object {
+            rank: objects.len(),
+            search,
+            bbox,
+            centroid,
+            area: det.area,
+            delta: det.delta,
+            range: det.range,
+            score: det.score,
+            top,
+            top_len: u8::try_from(filled).unwrap_or(0),
+            identity,
+        });
+    }
+    obs.enter(Stage::Done);
+    Ok(Frame {
+        width: w,
+        height: h,
+        objects,
+        searches: report.objects.len(),
+        masks,
+        vectors,
+        edges: edges_v,
+        disparity: disparity_v,
+    })
+}
