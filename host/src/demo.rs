@@ -8,11 +8,12 @@
 use crate::error::{HostError, Result};
 use crate::io;
 use crate::panels::{self, Panel};
-use crate::stages::{run_conspicuity, run_segment, run_shape};
+use crate::stages::{run_conspicuity, run_segment};
 use crate::summary::Summary;
 use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::from_pixels;
 use protogist::image::{buffer_len, ImageViewMut, Rgb8};
+use protogist::pipeline::PipelineParams;
 use protogist::segment::SegmentParams;
 use protogist::synth::{render_disparity, render_left, render_mask, render_right, SceneSpec};
 use std::path::PathBuf;
@@ -137,68 +138,76 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
     maps.summarise(&mut summary);
     maps.boundary_score(&scene.mask).summarise(&mut summary);
 
-    // Stage 2: disparity from the stereo pair by the disparity energy model
-    // (the f32 reference; the fixed-point core stage is to come).
-    let dem_params = crate::reference::stereo::DemParams::default();
-    let decoder = crate::stereo_cmd::decoder_for(&dem_params, None)?;
-    let dem = crate::stages::run_dem(
-        &dem_params,
-        &decoder,
+    // Stages 2 to 5: core's pipeline, the firmware's bits: stereo,
+    // completion, figure-ground, shape vectors and categories.
+    let params = PipelineParams::DEFAULT
+        .with_objects(4)
+        .with_max_disp(crate::run_cmd::default_max_disp(w));
+    let tables = crate::product::tables_for(&params)?;
+    let run = crate::product::run_frame(
+        &params,
+        &tables,
+        crate::classify::shipped::SHIPPED_MODEL,
         &scene.left,
         &scene.right,
-        &scene.disparity,
         w,
         h,
     )?;
-    out.extend(dem.panels());
-    dem.summarise(&mut summary);
-
-    // Stage 3: figure-ground and the object mask, from the model's disparity;
-    // with ground-truth disparity too, for comparison.
+    out.extend(
+        run.panels(&scene.left)
+            .into_iter()
+            .filter(|p| p.name != "a_left"),
+    );
+    summary.push(
+        "pipeline",
+        format!(
+            "core, fixed point (the firmware's bits): {} objects in {} searches, {:.1} ms, {} bytes of workspace",
+            run.objects.len(),
+            run.searches,
+            run.elapsed.as_secs_f64() * 1e3,
+            run.workspace_bytes
+        ),
+    );
+    for o in &run.objects {
+        let iou = mask_iou(&o.mask, &scene.mask);
+        summary.push(
+            format!("object {}", o.object.rank),
+            format!(
+                "{} (top 5: {}), disparity {} px, mask IoU with GT {iou:.3}",
+                o.label(),
+                o.top
+                    .iter()
+                    .map(|(c, v)| format!("{c} {v:.2}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                o.object.delta
+            ),
+        );
+    }
+    // Figure-ground from ground-truth disparity, for comparison.
     let gt_disparity: Vec<_> = scene.disparity.iter().map(|&d| from_pixels(d)).collect();
     let seg_gt = run_segment(&SegmentParams::default(), &gt_disparity, &maps.edges, w, h)?;
     summary.push(
         "mask IoU, GT disparity",
         format!("{:.3}", seg_gt.iou(0, &scene.mask)),
     );
-    // The model's borders, completed over the conspicuity regions.
-    let (completed, _) = crate::stages::run_complete(
-        &protogist::complete::CompleteParams::default(),
-        &maps.edges,
-        &maps.smoothed,
-        &dem.disparity,
-        w,
-        h,
-    )?;
-    let completed_f32: Vec<_> = completed
-        .iter()
-        .map(|c| c.get().map(|d| d.to_num::<f32>()))
-        .collect();
-    out.push(Panel::new(
-        "b2_completed_disparity",
-        crate::stereo_cmd::disparity_panel(&completed_f32, w, h, dem.max_gt),
-    ));
-    let seg = run_segment(&SegmentParams::default(), &completed, &maps.edges, w, h)?;
-    out.extend(seg.panels(&scene.left));
-    summary.push(
-        "disparity input",
-        "disparity energy model, completed over conspicuity regions",
-    );
-    seg.summarise(&mut summary, Some(&scene.mask));
-
-    // Stage 4: the shape vector of the most salient object's mask.
-    if seg.report.objects.first().is_some_and(|d| d.area > 0) {
-        let shape = run_shape(&seg.mask_u8(0), w, h, "segmented mask")?;
-        out.extend(shape.panels(w, h));
-        shape.summarise(&mut summary);
-    }
-    // Stage 5: each object's category with the shipped int8 model, on the
-    // masks from the model's disparity and from ground-truth disparity.
-    crate::classify::shipped::summarise_objects(&seg, "", &mut summary)?;
     crate::classify::shipped::summarise_objects(&seg_gt, ", GT disparity", &mut summary)?;
 
     finish(&opts.out, out, &mut summary, start)?;
     Ok(summary)
+}
+
+/// IoU of a mask and a 0/255 GT mask.
+fn mask_iou(a: &[bool], gt: &[u8]) -> f64 {
+    let (i, u) = a.iter().zip(gt).fold((0usize, 0usize), |(i, u), (&x, &y)| {
+        let y = y != 0;
+        (i + usize::from(x && y), u + usize::from(x || y))
+    });
+    if u == 0 {
+        1.0
+    } else {
+        i as f64 / u as f64
+    }
 }
 
 /// Adds the overview montage to `panels`, writes them all into `dir`, and

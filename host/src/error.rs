@@ -35,6 +35,9 @@ pub enum HostError {
     /// The shape stage rejected its mask.
     #[error("shape stage: {0}")]
     Shape(#[from] protogist::shape::ShapeError),
+    /// Core's pipeline rejected its inputs.
+    #[error("pipeline: {0}")]
+    Pipeline(protogist::pipeline::PipelineError),
     /// The disparity completion stage rejected its input.
     #[error("disparity completion: {0}")]
     Complete(#[from] protogist::complete::CompleteError),

@@ -22,6 +22,7 @@ pub mod ground_truth;
 pub mod io;
 pub mod panels;
 pub mod plot;
+pub mod product;
 pub mod reference;
 pub mod run_cmd;
 pub mod stages;

@@ -1,11 +1,15 @@
-//! `protogist run`: the whole pipeline on a stereo pair: conspicuity,
-//! disparity (the f32 disparity energy model, or given ground truth),
-//! figure-ground, object masks and shape vectors, with the paper's Fig. 2
-//! panels, Fig. 4-style shape plots and a `report.json`.
+//! `protogist run`: the product on a stereo pair. By default core's
+//! fixed-point pipeline ([`protogist::pipeline`], the firmware's bits):
+//! stereo, conspicuity, completion, figure-ground for K objects, shape
+//! vectors and categories, with per-object Fig. 2 panels, shape plots and
+//! a `report.json`. `--reference` runs the f32 chain (the reference stereo,
+//! or given ground truth with `--gt-disparity`) and prints its agreement
+//! with core's.
 
 use crate::demo::finish;
 use crate::error::{HostError, Result};
 use crate::panels::{rgb_from, Panel};
+use crate::product::{run_frame, tables_for};
 use crate::reference::stereo::DemParams;
 use crate::stages::{run_complete, run_conspicuity, run_segment, run_shape};
 use crate::stereo_cmd::{decoder_for, disparity_panel, load_pair};
@@ -14,6 +18,7 @@ use protogist::complete::CompleteParams;
 use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::{Disparity, DisparityCell};
 use protogist::image::ImageView;
+use protogist::pipeline::PipelineParams;
 use protogist::segment::{SegmentParams, STAT_FRAC_BITS};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -37,16 +42,24 @@ pub struct RunOptions {
     /// Working width, px (area-averaged down, aspect kept).
     #[arg(long, default_value_t = 160)]
     pub width: u32,
-    /// Objects to detect, most salient first (the paper: 1).
-    #[arg(long, default_value_t = 1)]
+    /// Objects to detect (K), most salient first (the paper: 1).
+    #[arg(long, default_value_t = 4)]
     pub objects: u8,
+    /// The classifier's model blob (default: the shipped model).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Also run the f32 reference chain, and print its agreement with
+    /// core's pipeline (implied by `--gt-disparity`).
+    #[arg(long)]
+    pub reference: bool,
     /// Segment the model's raw disparity, without the completion over
     /// conspicuity regions (`protogist::complete`).
     #[arg(long)]
     pub raw_disparity: bool,
-    /// Largest disparity the model searches, px of the working size.
-    #[arg(long, default_value_t = 15)]
-    pub max_disp: u8,
+    /// Largest disparity searched, px of the working size (default: a
+    /// fifth of the working width, less 1: 31 at 160 px).
+    #[arg(long)]
+    pub max_disp: Option<u8>,
     /// Border refinement radius of the model, px (0: off, the default).
     #[arg(long, default_value_t = 0)]
     pub refine: u8,
@@ -62,19 +75,31 @@ fn gt_cell(v: Option<f32>) -> DisparityCell {
         .into()
 }
 
-/// Runs the pipeline and writes the panels and `report.json`.
+/// The default largest disparity at a working width: a fifth of it, less
+/// 1 (31 at 160 px, the firmware's 32 disparities).
+pub fn default_max_disp(width: usize) -> u8 {
+    u8::try_from((width / 5).saturating_sub(1).max(1)).unwrap_or(u8::MAX)
+}
+
+/// Runs core's pipeline (and, when asked, the f32 chain), and writes the
+/// panels and `report.json`.
 ///
 /// # Errors
 /// [`HostError`] for unreadable or mismatched inputs, bad parameters, or an
-/// unwritable output directory. Nothing is left under a final name when a
-/// run fails.
+/// unwritable output directory, checked before any training. Nothing is
+/// left under a final name when a run fails.
 pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
     let start = Instant::now();
-    let seg_params = SegmentParams {
-        max_objects: opts.objects,
-        ..SegmentParams::default()
+    if !(1..=8).contains(&opts.objects) {
+        return Err(HostError::InvalidArgument {
+            name: "objects",
+            reason: format!("must be 1..=8, got {}", opts.objects),
+        });
+    }
+    let model = match &opts.model {
+        Some(path) => std::fs::read(path).map_err(|e| HostError::io(path, e))?,
+        None => crate::classify::shipped::SHIPPED_MODEL.to_vec(),
     };
-    seg_params.validate()?;
     let pair = load_pair(
         &opts.left,
         &opts.right,
@@ -83,8 +108,157 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
         opts.width,
     )?;
     let (w, h) = (pair.width, pair.height);
+    let max_disp = opts.max_disp.unwrap_or_else(|| default_max_disp(w));
+    if usize::from(max_disp) * 2 >= w {
+        return Err(HostError::InvalidArgument {
+            name: "max-disp",
+            reason: format!("must be below half the working width {w}, got {max_disp}"),
+        });
+    }
+    let params = PipelineParams::DEFAULT
+        .with_objects(opts.objects)
+        .with_max_disp(max_disp);
+    // The model is checked before any table is trained.
+    let mut model_check = params;
+    model_check.stereo = PipelineParams::DEFAULT.stereo;
+    protogist::pipeline::Pipeline::new(&model_check, &crate::product::DEFAULT_TABLES, &model)
+        .map_err(|e| match (&opts.model, e) {
+            (Some(path), protogist::pipeline::PipelineError::Model(source)) => {
+                HostError::BadModel {
+                    path: path.clone(),
+                    reason: source.to_string(),
+                }
+            }
+            (_, e) => e.into(),
+        })?;
+    let scale = f64::from(pair.input_size.0) / w as f64;
     let mut s = Summary::new(format!("protogist run: {}", opts.left.display()));
-    s.push("working size", format!("{w}x{h}"));
+    s.push(
+        "working size",
+        format!(
+            "{w}x{h} (input {}x{}, scale {scale:.3})",
+            pair.input_size.0, pair.input_size.1
+        ),
+    );
+    s.push(
+        "pipeline",
+        format!(
+            "core, fixed point (the firmware's bits), max disparity {max_disp}, K = {}",
+            opts.objects
+        ),
+    );
+    let tables = tables_for(&params)?;
+    let run = run_frame(&params, &tables, &model, &pair.left, &pair.right, w, h)?;
+    s.push(
+        "objects",
+        format!("{} found in {} searches", run.objects.len(), run.searches),
+    );
+    for o in &run.objects {
+        let b = o.object.bbox;
+        s.push(
+            format!("object {}", o.object.rank),
+            format!(
+                "{} at ({}, {}) {}x{}, {} px, disparity {} px; top 5: {}",
+                o.label(),
+                b.x,
+                b.y,
+                b.width,
+                b.height,
+                o.object.area,
+                o.object.delta,
+                o.top
+                    .iter()
+                    .map(|(c, v)| format!("{c} {v:.2}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        );
+    }
+    s.push(
+        "pipeline time",
+        format!(
+            "{:.1} ms ({} bytes of workspace)",
+            run.elapsed.as_secs_f64() * 1e3,
+            run.workspace_bytes
+        ),
+    );
+    let mut panels = run.panels(&pair.left);
+    let mut report = serde_json::json!({
+        "left": opts.left.display().to_string(),
+        "right": opts.right.display().to_string(),
+        "input_size": [pair.input_size.0, pair.input_size.1],
+        "width": w,
+        "height": h,
+        "scale": scale,
+        "max_disp": max_disp,
+        "pipeline": "core",
+        "objects": run.objects.iter().map(|o| o.to_json(scale)).collect::<Vec<_>>(),
+    });
+    if opts.reference || opts.gt_disparity.is_some() {
+        let r = reference_chain(opts, &pair, max_disp, &mut s)?;
+        let ious: Vec<String> = run
+            .objects
+            .iter()
+            .zip(&r.masks)
+            .map(|(o, m)| format!("{:.3}", mask_iou(&o.mask, m)))
+            .collect();
+        s.push(
+            "agreement with the f32 chain",
+            format!(
+                "{} objects against {}; mask IoU by rank: [{}] ({})",
+                run.objects.len(),
+                r.masks.len(),
+                ious.join(", "),
+                r.source
+            ),
+        );
+        report["reference"] = serde_json::json!({
+            "disparity": r.source,
+            "objects": r.objects,
+            "mask_iou_by_rank": ious,
+        });
+        panels.extend(r.panels);
+    }
+    finish(&opts.out, panels, &mut s, start)?;
+    write_report(&opts.out, &report)?;
+    Ok(s)
+}
+
+/// IoU of two masks of one size.
+fn mask_iou(a: &[bool], b: &[bool]) -> f64 {
+    let (i, u) = a.iter().zip(b).fold((0usize, 0usize), |(i, u), (&x, &y)| {
+        (i + usize::from(x && y), u + usize::from(x || y))
+    });
+    if u == 0 {
+        1.0
+    } else {
+        i as f64 / u as f64
+    }
+}
+
+/// What the f32 reference chain found.
+struct ReferenceRun {
+    panels: Vec<Panel>,
+    objects: Vec<serde_json::Value>,
+    /// Masks of the objects with an area, most salient first.
+    masks: Vec<Vec<bool>>,
+    source: &'static str,
+}
+
+/// The f32 chain: the reference stereo (or ground truth), core's
+/// completion, segmentation and shape.
+fn reference_chain(
+    opts: &RunOptions,
+    pair: &crate::stereo_cmd::Pair,
+    max_disp: u8,
+    s: &mut Summary,
+) -> Result<ReferenceRun> {
+    let seg_params = SegmentParams {
+        max_objects: opts.objects,
+        ..SegmentParams::default()
+    };
+    seg_params.validate()?;
+    let (w, h) = (pair.width, pair.height);
 
     let edges = run_conspicuity(&LuvTables::new(), &EdgeParams::default(), &pair.left, w, h)?;
     let (disparity, disparity_f32, source) = match &pair.gt {
@@ -95,7 +269,7 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
         ),
         None => {
             let params = DemParams {
-                max_disp: opts.max_disp,
+                max_disp,
                 refine_radius: opts.refine,
                 ..DemParams::default()
             };
@@ -140,13 +314,13 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
             }
         }
     };
-    s.push("disparity", source);
+    s.push("reference disparity", source);
     let max_d = disparity_f32
         .iter()
         .flatten()
         .fold(1.0f32, |a, &b| a.max(b));
     let seg = run_segment(&seg_params, &disparity, &edges.edges, w, h)?;
-    seg.summarise(&mut s, None);
+    seg.summarise(s, None);
 
     let mut panels = vec![
         Panel::new("a_left", rgb_from(&pair.left, w, h)),
@@ -172,6 +346,9 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
                 crate::plot::shape_vector(&sh.vector, w as u32, h as u32),
             ));
         }
+        if d.area == 0 {
+            continue;
+        }
         objects.push(serde_json::json!({
             "rank": k,
             "bbox": d.bbox.map(|b| serde_json::json!({
@@ -184,17 +361,23 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
             "shape_vector": shape.map(|sh| sh.vector),
         }));
     }
-    let report = serde_json::json!({
-        "left": opts.left.display().to_string(),
-        "right": opts.right.display().to_string(),
-        "width": w,
-        "height": h,
-        "disparity": source,
-        "objects": objects,
-    });
-    finish(&opts.out, panels, &mut s, start)?;
-    write_report(&opts.out, &report)?;
-    Ok(s)
+    let masks = seg
+        .report
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.area > 0)
+        .map(|(k, _)| seg.mask_u8(k).iter().map(|&m| m != 0).collect())
+        .collect();
+    Ok(ReferenceRun {
+        panels: panels
+            .into_iter()
+            .map(|p| Panel::new(format!("reference_{}", p.name), p.image))
+            .collect(),
+        objects,
+        masks,
+        source,
+    })
 }
 
 /// Writes `report.json` under a temporary name, then renames it.

@@ -106,12 +106,27 @@ fn demo_takes_a_frame_size_and_rejects_zero() {
     let dir = tmp.path().join("o");
     let d = dir.to_str().unwrap();
     let out = protogist(
-        &["demo", "--out", d, "--width", "64", "--height", "48"],
+        &["demo", "--out", d, "--width", "96", "--height", "72"],
         tmp.path(),
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
     let left = image::open(dir.join("left.png")).unwrap();
-    assert_eq!((left.width(), left.height()), (64, 48));
+    assert_eq!((left.width(), left.height()), (96, 72));
+    // Below what the stereo engine's coarsest level needs: a clear error.
+    let small = tmp.path().join("s");
+    let out = protogist(
+        &[
+            "demo",
+            "--out",
+            small.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ],
+        tmp.path(),
+    );
+    assert_fails(&out, "smaller than the filter support", &small);
 
     let zero = tmp.path().join("z");
     let out = protogist(
