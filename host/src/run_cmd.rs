@@ -47,9 +47,6 @@ pub struct RunOptions {
     /// Largest disparity the model searches, px of the working size.
     #[arg(long, default_value_t = 15)]
     pub max_disp: u8,
-    /// Border refinement radius of the model, px (0: off, the default).
-    #[arg(long, default_value_t = 0)]
-    pub refine: u8,
     /// Output directory (created if missing).
     #[arg(long)]
     pub out: PathBuf,
@@ -96,7 +93,6 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
         None => {
             let params = DemParams {
                 max_disp: opts.max_disp,
-                refine_radius: opts.refine,
                 ..DemParams::default()
             };
             let decoder = decoder_for(&params, None)?;
