@@ -1,7 +1,6 @@
 //! The stereo stage on the board: the demo scene's 160x120 stereo pair,
 //! 32 disparities, through the coarse-to-fine engine
-//! (`protogist::stereo::c2f`, docs/STEREO.md "The coarse-to-fine engine in
-//! core").
+//! (`protogist::stereo::c2f`, docs/STEREO.md), at its named points.
 //!
 //! The simulated stereo camera renders each RGB row when the engine asks
 //! for it (`synth::SceneSpec::colour`; the coarse levels ask for 2 and 4

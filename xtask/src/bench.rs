@@ -425,7 +425,13 @@ fn point_accuracy(files: [&Path; 3], point: &str) -> String {
     if !files[2].is_file() {
         return format!("{NOT_YET} (`cargo xtask fetch-data`)");
     }
-    let args = point_args(files, point, "160", "32", &root().join("target/bench-points"));
+    let args = point_args(
+        files,
+        point,
+        "160",
+        "32",
+        &root().join("target/bench-points"),
+    );
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     protogist_json(&args)
         .and_then(|v| {
@@ -628,12 +634,7 @@ fn stereo_aloe(stdout: &str) -> Section {
          over all GT pixels with a missing estimate counted as an error.\n\n{}",
         point_rows(stdout, &files)
     );
-    stereo_pair(
-        "Stereo on Middlebury Aloe",
-        body,
-        &files,
-        "aloe",
-    )
+    stereo_pair("Stereo on Middlebury Aloe", body, &files, "aloe")
 }
 
 fn stereo_motorcycle(stdout: &str) -> Section {
@@ -980,7 +981,10 @@ mod stereo_tests {
             (at("--point"), at("--width"), at("--max-disp")),
             ("fast", "160", "32")
         );
-        assert_eq!((at("--left"), at("--right"), at("--gt")), ("l.png", "r.png", "gt.png"));
+        assert_eq!(
+            (at("--left"), at("--right"), at("--gt")),
+            ("l.png", "r.png", "gt.png")
+        );
         assert!(a.iter().any(|x| x == "--json"));
     }
 

@@ -5,8 +5,8 @@
 //! finer scale"). It turns the half-size map of the coarse-to-fine engine
 //! ([`super::c2f::C2fParams::finest`] 1) into a map of the frame's own
 //! resolution for about 160 instructions per pixel on the M4 with the
-//! firmware's assembly phase step ([`PhaseKernel`]; the points `r2b1l3p`
-//! against `r2b1l3h`, docs/STEREO.md, "Phase refinement").
+//! firmware's assembly phase step ([`PhaseKernel`]; the named points
+//! `fast` against `half`, docs/STEREO.md, "Operating points").
 //!
 //! For each ON pixel with disparity `d`, the position shift is `s =
 //! min(round(d), max_disp)` and, with the 0° complex Gabor responses `z_L`,
@@ -92,7 +92,7 @@ pub struct PhaseParams {
 
 impl PhaseParams {
     /// λ 4, σ/λ 0.4, radius 2, pool 1: chosen on the held-out Motorcycle
-    /// pair (docs/STEREO.md, "Phase refinement").
+    /// pair (docs/STEREO.md, "How the parameters were chosen").
     pub const DEFAULT: Self = Self {
         wavelength: 4.0,
         sigma_per_wavelength: 0.4,

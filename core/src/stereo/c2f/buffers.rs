@@ -147,7 +147,7 @@ pub struct C2fBuffers<'a> {
     pub picks: &'a mut [i32],
     /// Window maps ([`map_len`]).
     pub maps: &'a mut [u8],
-    /// The phase refinement's ([`super::phase`]; empty slices without
+    /// The phase refinement's ([`crate::stereo::phase`]; empty slices without
     /// [`C2fParams::phase`]).
     pub phase: PhaseBuffers<'a>,
 }

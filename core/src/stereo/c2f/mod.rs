@@ -2,10 +2,15 @@
 //! per pixel, with row-streamed semi-global aggregation, mirroring the f32
 //! reference `protogist_host::reference::stereo::c2f::stereo_c2f` with one
 //! pyramid level per c2f level (`levels = 1`), no pooling (`pool_radius =
-//! 0`) and 5 SGM paths, or 3 ([`C2fParams::paths`]) (docs/STEREO.md, "The
-//! coarse-to-fine engine in core"). With [`C2fParams::lr_from_left`] the
-//! left-right check's right map comes from the left path sums and the
-//! right eye is not run.
+//! 0`) and 5 SGM paths, or 3 ([`C2fParams::paths`]) (docs/STEREO.md). The
+//! left-right check ([`LeftRight`]) reads the right eye, derives its map
+//! from the left path sums, or is off; the named operating points are
+//! [`C2fParams::FULL`], [`C2fParams::FAST`] and [`C2fParams::HALF`].
+//!
+//! The code, by concern: `params` (the parameters and the named points),
+//! `buffers` (the `const fn` sizes and [`C2fBuffers`]), `rows` (the levels'
+//! rows in, the sinks out), `pass` (one level's run), `votes` (cells,
+//! votes, costs) and `decision` (argmin, derived right map, OFF tests).
 //!
 //! ```text
 //! level K (w/2^K) ── full search 0..=⌈D/2^K⌉, every cell group ──► lo maps
@@ -17,7 +22,7 @@
 //! **Levels.** Level `k` is the pair halved `k` times by rounded 2x2 means of
 //! the RGB pixels (`⌊w/2^k⌋ x ⌊h/2^k⌋`), produced row by row from the frames
 //! ([`RgbRows`]), so no level is stored: a level's grey rows go through a
-//! ring of `2r + 1` rows as in [`super::readout`]. Each level runs the DEM
+//! ring of `2r + 1` rows. Each level runs the DEM
 //! with its own decoder table (`max_disp` = `⌈D/2^k⌉`).
 //!
 //! **Windows.** A level finer than the coarsest searches, per pixel and
@@ -47,9 +52,10 @@
 //! `⌈D/2^F⌉`, spread (`tests/tests/stereo_c2f_core.rs`). The report counts
 //! frame pixels.
 //!
-//! **Formats.** Energies as the full read-out (`Q8` grey², rounded once),
-//! votes and totals in `i64` from the `i16` table. The scores
-//! `n(d) = raw(d)·2^bf − bias(d)·T·2^wf` ([`super::readout::pick`]) give
+//! **Formats.** Cell energies in `Q8` grey² (rounded once), votes and
+//! totals in `i64` from the `i16` table. The scores
+//! `n(d) = raw(d)·2^bf − bias(d)·T·2^wf` (the Poisson score `raw/T − bias`
+//! without a division) give
 //! the SGM costs `C(d) = (max n − n(d)) · m / Σ_e (max n − n(e))` over the
 //! `m` valid candidates (the reference's gap to the best over the mean
 //! gap), in `Q8` (`u16`, at most `256·m`): the gaps are truncated to 15

@@ -64,7 +64,7 @@ pub struct C2fParams {
     /// level"). [`C2f::run`] still takes and checks one table per level.
     pub finest: u8,
     /// Refine the output map with the phase of the frame's own 0° Gabor
-    /// responses ([`super::phase`]): with `finest` 1, a map of the frame's
+    /// responses ([`crate::stereo::phase`]): with `finest` 1, a map of the frame's
     /// resolution from the half-size level. Default `None`.
     pub phase: Option<PhaseParams>,
 }
