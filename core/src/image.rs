@@ -299,6 +299,30 @@ impl<P: Copy> ImageView<'_, P> {
     }
 }
 
+/// RGB rows of an input frame, on demand: a frame in memory
+/// ([`ImageView`]), or a camera that renders rows as a stage asks for them
+/// (the stereo engine, `crate::stereo::c2f`, reads its frames this way).
+pub trait RgbRows {
+    /// `(width, height)`.
+    fn size(&self) -> (usize, usize);
+    /// Row `y` (`y < height`) into `out` (`width` long).
+    fn rgb_row(&self, y: usize, out: &mut [Rgb8]);
+}
+
+impl RgbRows for ImageView<'_, Rgb8> {
+    fn size(&self) -> (usize, usize) {
+        ImageView::size(self)
+    }
+
+    fn rgb_row(&self, y: usize, out: &mut [Rgb8]) {
+        if let Some(row) = self.row(y) {
+            for (o, &p) in out.iter_mut().zip(row) {
+                *o = p;
+            }
+        }
+    }
+}
+
 impl<'a, P> ImageViewMut<'a, P> {
     /// Views `data` mutably as `width` x `height` pixels, rows `stride` apart.
     ///

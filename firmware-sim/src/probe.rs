@@ -22,14 +22,14 @@ use crate::pg::shape::{shape_vector, RadialProfile, ShapeVector, SHAPE_LEN};
 use crate::pg::stereo::c2f::{C2f, C2fBuffers, C2fParams};
 use crate::pg::stereo::phase::PhaseParams;
 
-/// The coarse-to-fine engine's parameters in the probe: the defaults with
+use crate::pg::stereo::table::DemTable;
+
+/// The stereo engine's parameters in the probe: [`C2fParams::FULL`] with
 /// the phase refinement, so that its path runs too.
 pub const C2F: C2fParams = C2fParams {
     phase: Some(PhaseParams::DEFAULT),
-    ..C2fParams::DEFAULT
+    ..C2fParams::FULL
 };
-use crate::pg::stereo::table::DemTable;
-use crate::pg::stereo::{stereo, Dem, StereoBuffers};
 
 /// Caller-owned memory of the probe: one slice per buffer of every stage.
 /// Any lengths: the stages check them.
@@ -42,9 +42,7 @@ pub struct ProbeBuffers<'a> {
     pub edges: &'a mut [EdgeCell],
     /// Stereo output, and the completion's input and output.
     pub disparity: &'a mut [DisparityCell],
-    /// Full-search stereo scratch (level 0 of `C2fParams::DEFAULT`).
-    pub stereo: StereoBuffers<'a>,
-    /// Coarse-to-fine scratch.
+    /// Stereo scratch.
     pub c2f: C2fBuffers<'a>,
     /// Segmentation: bit maps and component table.
     pub seg: [&'a mut [u32]; 2],
@@ -80,8 +78,7 @@ fn seen<T, E>(r: &Result<T, E>, bit: u32) -> u32 {
 }
 
 /// Runs every stage on `w x h` frames, the decoder tables `tables` (one
-/// per level of the coarse-to-fine engine; the first also for the full
-/// search) and the model blob `model`, each stage on its own buffers, with
+/// per level of the stereo engine) and the model blob `model`, each stage on its own buffers, with
 /// everything opaque to the optimiser. Returns one bit per stage that
 /// succeeded.
 #[allow(clippy::too_many_lines)]
@@ -93,7 +90,6 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
         luv: [luv, smoothed, rows],
         edges,
         disparity,
-        stereo: mut stereo_bufs,
         mut c2f,
         seg: [maps, seg_table],
         masks: [masks, edge_map],
@@ -121,17 +117,11 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
         bits |= seen(&r, 0);
     }
 
-    // Stereo: the decoder tables, full search and coarse to fine.
+    // Stereo: the decoder tables and the engine (bit 2 was the full-search
+    // engine's, removed).
     let parsed = tables.map(DemTable::parse);
     bits |= seen(&parsed[0], 1);
-    if let (Ok(t), Ok(l), Ok(r)) = (&parsed[0], view(left, w, h), view(right, w, h)) {
-        if let (Ok(dem), Ok(mut out)) = (
-            Dem::new(&black_box(C2fParams::DEFAULT.level_params(0))),
-            view_mut(&mut *disparity, w, h),
-        ) {
-            let s = stereo(&dem, t, &l, &r, &mut stereo_bufs, &mut out);
-            bits |= seen(&s, 2);
-        }
+    if let (Ok(l), Ok(r)) = (view(left, w, h), view(right, w, h)) {
         if let ([Ok(t0), Ok(t1), Ok(t2)], Ok(engine)) = (&parsed, C2f::new(&black_box(C2F))) {
             let levels = [*t0, *t1, *t2];
             let mut sink = |x: usize, y: usize, d: DisparityCell| {

@@ -1,7 +1,6 @@
 //! The stereo stage on the board: the demo scene's 160x120 stereo pair,
 //! 32 disparities, through the coarse-to-fine engine
-//! (`protogist::stereo::c2f`, docs/STEREO.md "The coarse-to-fine engine in
-//! core").
+//! (`protogist::stereo::c2f`, docs/STEREO.md), at its named points.
 //!
 //! The simulated stereo camera renders each RGB row when the engine asks
 //! for it (`synth::SceneSpec::colour`; the coarse levels ask for 2 and 4
@@ -13,15 +12,15 @@
 //!
 //! The full-search engine (`stereo::stereo_streamed`) ran here until
 //! 2026-11-21 (101,581 instructions/px, `git checkout 05f3e88 && cargo
-//! xtask firmware`); the two do not fit in RAM together with the rest of
-//! the firmware.
+//! xtask firmware`); it left core at a8b9fbc.
 
 use core::fmt::{self, Write};
 
 use crate::pg::checksum::Fnv1a;
 use crate::pg::disparity::DisparityCell;
 use crate::pg::image::Rgb8;
-use crate::pg::stereo::c2f::{self, C2f, C2fBuffers, C2fParams, RgbRows};
+use crate::pg::image::RgbRows;
+use crate::pg::stereo::c2f::{self, C2f, C2fBuffers, C2fParams, LeftRight};
 use crate::pg::stereo::filters::Z;
 use crate::pg::stereo::phase::{self, PhaseKernel, PhaseParams};
 use crate::pg::stereo::{DemTable, Probe, Step, StereoError, StereoReport};
@@ -32,143 +31,16 @@ use crate::Ticks;
 pub const WIDTH: usize = 160;
 /// Frame height.
 pub const HEIGHT: usize = 120;
-/// The parameters: the engine's defaults (32 disparities, 2 coarse levels,
-/// windows of 5, band 2).
-pub const PARAMS: C2fParams = C2fParams::DEFAULT;
-/// Cheaper operating points of the same engine, run after [`PARAMS`] to
-/// measure what each saving costs (docs/STEREO.md, "Operating points"):
-/// `rRbB` sets the window half width `R` and the band `B`, a trailing `l`
-/// derives the left-right check's right map from the left sums
-/// (`lr_from_left`, no right eye) and a trailing `3` runs 3 SGM paths
-/// instead of 5, and a trailing `h` stops at level 1 (`finest: 1`: the map
-/// of the half-size pair spread over 2x2 blocks), and a trailing `p` then
-/// refines that map to the frame's resolution by phase
-/// ([`PhaseParams::DEFAULT`], docs/STEREO.md "Phase refinement"); nothing
-/// else changes (the same tables, levels and penalties). Each needs no
-/// more scratch than [`PARAMS`] (`R <= 2`) and the phase buffers of
-/// [`len`], which the `const` assertion below checks at compile time.
-pub const POINTS: [(&str, C2fParams); 14] = [
-    (
-        "r2b1",
-        C2fParams {
-            band: Some(1),
-            ..PARAMS
-        },
-    ),
-    (
-        "r1b2",
-        C2fParams {
-            radius: 1,
-            ..PARAMS
-        },
-    ),
-    (
-        "r1b1",
-        C2fParams {
-            radius: 1,
-            band: Some(1),
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b2l",
-        C2fParams {
-            lr_from_left: true,
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b1l",
-        C2fParams {
-            band: Some(1),
-            lr_from_left: true,
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b1l3",
-        C2fParams {
-            band: Some(1),
-            lr_from_left: true,
-            paths: 3,
-            ..PARAMS
-        },
-    ),
-    (
-        "r1b1l3",
-        C2fParams {
-            radius: 1,
-            band: Some(1),
-            lr_from_left: true,
-            paths: 3,
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b2h",
-        C2fParams {
-            finest: 1,
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b2lh",
-        C2fParams {
-            lr_from_left: true,
-            finest: 1,
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b2l3h",
-        C2fParams {
-            lr_from_left: true,
-            paths: 3,
-            finest: 1,
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b1lh",
-        C2fParams {
-            band: Some(1),
-            lr_from_left: true,
-            finest: 1,
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b1l3h",
-        C2fParams {
-            band: Some(1),
-            lr_from_left: true,
-            paths: 3,
-            finest: 1,
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b2l3p",
-        C2fParams {
-            lr_from_left: true,
-            paths: 3,
-            finest: 1,
-            phase: Some(PhaseParams::DEFAULT),
-            ..PARAMS
-        },
-    ),
-    (
-        "r2b1l3p",
-        C2fParams {
-            band: Some(1),
-            lr_from_left: true,
-            paths: 3,
-            finest: 1,
-            phase: Some(PhaseParams::DEFAULT),
-            ..PARAMS
-        },
-    ),
-];
+/// The parameters: [`C2fParams::FULL`] (32 disparities, 2 coarse levels,
+/// windows of 5, band 2, both eyes read, 5 paths).
+pub const PARAMS: C2fParams = C2fParams::FULL;
+/// The other named operating points of the same engine
+/// ([`C2fParams::NAMED`]), run after [`PARAMS`] to measure what each
+/// costs (docs/STEREO.md, "Operating points"): the same tables, levels and
+/// penalties. Each needs no more scratch than [`PARAMS`] and the phase
+/// buffers of [`len`], which the `const` assertion below checks at
+/// compile time.
+pub const POINTS: [(&str, C2fParams); 2] = [("fast", C2fParams::FAST), ("half", C2fParams::HALF)];
 
 const fn fits(p: &C2fParams) -> bool {
     c2f::grey_len(WIDTH, p) <= len::GREY
@@ -351,7 +223,7 @@ pub fn run_at<T: Ticks, K: PhaseKernel>(
         },
     );
     let t0 = ticks.now();
-    let engine = C2f::new(params)?;
+    let engine = C2f::<K>::with_kernel(params)?;
     let tables = [
         DemTable::parse(TABLES[0])?,
         DemTable::parse(TABLES[1])?,
@@ -368,7 +240,7 @@ pub fn run_at<T: Ticks, K: PhaseKernel>(
         since: t1,
         spent: [0; 5],
     };
-    let report = engine.run_with::<_, K>(&tables, &left, &right, bufs, &mut sink, &mut probe)?;
+    let report = engine.run(&tables, &left, &right, bufs, &mut sink, &mut probe)?;
     probe.close();
     let t2 = probe.ticks.now();
     // The camera alone: the same row renders, into the RGB scratch.
@@ -447,7 +319,7 @@ pub fn write_point(
 
 /// `point stereo NAME WxH radius=R band=B lr=L paths=P finest=F phase=Q
 /// engine=E cells=C STEP=I ...`: the window half width, the band (`-`:
-/// none), the right map of the left-right check (`read` or `derived` from
+/// none), the right map of the left-right check (`off`, `read`, or `derived` from
 /// the left sums), the SGM paths, the finest level run and the phase
 /// refinement (1: on; its cost is the difference to the same point without
 /// it, since it runs inside the output step), then instructions per
@@ -472,10 +344,10 @@ pub fn write_point_line(
         Some(b) => write!(out, "{b}")?,
         None => write!(out, "-")?,
     }
-    let lr = if params.lr_from_left {
-        "derived"
-    } else {
-        "read"
+    let lr = match params.left_right {
+        LeftRight::Off => "off",
+        LeftRight::Read => "read",
+        LeftRight::Derived => "derived",
     };
     write!(
         out,
@@ -513,7 +385,7 @@ pub type ZCell = Z;
 
 /// The result lines, then `ipp` per step and in total (from ticks, through
 /// `to_instructions`), `scratch stereo WxH BYTES` and the
-/// [`write_point_line`] of [`PARAMS`], named `default`.
+/// [`write_point_line`] of [`PARAMS`], named `full`.
 pub fn write_report(
     out: &mut impl Write,
     r: &StereoResult,
@@ -543,7 +415,7 @@ pub fn write_report(
         to_instructions(r.total.saturating_sub(r.camera)),
     )?;
     writeln!(out, "scratch stereo {WIDTH}x{HEIGHT} {SCRATCH_BYTES}")?;
-    write_point_line(out, "default", &PARAMS, r, to_instructions)
+    write_point_line(out, "full", &PARAMS, r, to_instructions)
 }
 
 /// Rows of the phase kernel's self-test ([`kernel_check`]).

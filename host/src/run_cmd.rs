@@ -60,9 +60,6 @@ pub struct RunOptions {
     /// fifth of the working width, less 1: 31 at 160 px).
     #[arg(long)]
     pub max_disp: Option<u8>,
-    /// Border refinement radius of the model, px (0: off, the default).
-    #[arg(long, default_value_t = 0)]
-    pub refine: u8,
     /// Output directory (created if missing).
     #[arg(long)]
     pub out: PathBuf,
@@ -270,7 +267,6 @@ fn reference_chain(
         None => {
             let params = DemParams {
                 max_disp,
-                refine_radius: opts.refine,
                 ..DemParams::default()
             };
             let decoder = decoder_for(&params, None)?;

@@ -1,5 +1,6 @@
-//! `protogist stereo` and `protogist train-dem`: the DEM reference on a
-//! stereo pair, with optional ground truth, and the decoder table.
+//! `protogist stereo` and `protogist train-dem`: the stereo engine at a
+//! named operating point on a pair, with optional ground truth, and the
+//! decoder table.
 
 use crate::demo::finish;
 use crate::error::{HostError, Result};
@@ -11,14 +12,12 @@ use crate::reference::stereo::{self as dem, Decoder, DemParams, StereoError};
 use crate::summary::Summary;
 use image::{Rgb, RgbImage};
 use protogist::disparity::DisparityCell;
-use protogist::image::ImageView;
+use protogist::stereo::c2f::C2fParams;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub mod engine;
-pub mod preset;
-pub use engine::Engine;
-pub use preset::Preset;
+pub use engine::{Engine, Lr};
 
 /// Options of `protogist stereo`.
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -30,7 +29,8 @@ pub struct StereoOptions {
     #[arg(long)]
     pub right: PathBuf,
     /// Ground-truth disparity of the left view at the input size: a
-    /// grey PNG (0 = unknown) or a Middlebury PFM (inf = unknown).
+    /// grey PNG (0 = unknown), a Middlebury PFM (inf = unknown) or a NumPy
+    /// array.
     #[arg(long)]
     pub gt: Option<PathBuf>,
     /// PNG ground-truth values per pixel of disparity.
@@ -39,38 +39,29 @@ pub struct StereoOptions {
     /// Working width, px (area-averaged down, aspect kept).
     #[arg(long, default_value_t = 160)]
     pub width: u32,
-    /// Largest disparity searched, px of the working size.
-    #[arg(long, default_value_t = 15)]
+    /// Largest disparity searched, px of the working size (candidates
+    /// `0..=max-disp`).
+    #[arg(long, default_value_t = 31)]
     pub max_disp: u8,
-    /// Score pooling radius, px (default: the model's, 2).
-    #[arg(long)]
-    pub pool: Option<u8>,
-    /// Pyramid levels (default: the model's, 2: λ 4 and 8).
-    #[arg(long)]
-    pub levels: Option<u8>,
-    /// Decoder table (default: built in for max-disp 15, else trained).
-    #[arg(long)]
-    pub table: Option<PathBuf>,
-    /// Border refinement radius, px (default: the model's; 0 disables).
-    #[arg(long)]
-    pub refine: Option<u8>,
-    /// Input channels of the DEM (experiment): grey (the default), or
-    /// energies summed over R, G, B or over CIELUV L*, u*, v*
-    /// (docs/STEREO.md).
+    /// Operating point of the engine (`protogist::stereo::c2f::C2fParams`):
+    /// `full` (most accurate estimates), `fast` (full resolution within
+    /// 1,500 M4 instructions per pixel) or `half` (half-size map spread
+    /// over 2x2 blocks, cheapest); docs/STEREO.md, "Operating points".
+    #[arg(long, default_value = "full", value_parser = point_names())]
+    pub point: String,
+    /// The left-right check instead of the point's: `off`, `read` (the
+    /// right eye read out) or `derived` (from the left map's path sums).
     #[arg(long, value_enum)]
-    pub colour: Option<dem::Colour>,
-    /// With `--colour luv`: weight of u*, v* against L* (default 1; 0: L*
-    /// only).
-    #[arg(long)]
-    pub chroma_weight: Option<f32>,
+    pub lr: Option<Lr>,
+    /// Implementation: `core` (fixed point, what the board runs) or
+    /// `reference` (the f32 reference of the same point).
+    #[arg(long, value_enum, default_value_t = Engine::Core)]
+    pub engine: Engine,
     /// Complete the map over the conspicuity regions of the left view
     /// (`protogist::complete`, the pipeline's border step); the metrics
     /// then score the completed map, and `model` the map before it.
     #[arg(long)]
     pub complete: bool,
-    /// Read-out options: aggregation and OFF thresholds.
-    #[command(flatten)]
-    pub readout: ReadoutOptions,
     /// Print the numbers as JSON.
     #[arg(long)]
     pub json: bool,
@@ -85,96 +76,31 @@ pub struct StereoOptions {
     pub out: PathBuf,
 }
 
-/// Read-out options of `protogist stereo`: the engine, a named preset,
-/// semi-global aggregation and the OFF thresholds (all default to the
-/// model's).
-#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
-pub struct ReadoutOptions {
-    /// Implementation: `reference` (f32, every option) or `core` (the
-    /// fixed-point coarse-to-fine engine, single thread). `core` runs
-    /// `--levels 1 --pool 0 --sgm --paths 5`, grey, `--refine 0`, and these
-    /// are its defaults, so `--engine core --c2f 2` alone is valid; it
-    /// needs `--c2f 1..=3`, and any other value, `--preset`, `--table`,
-    /// `--colour` other than grey or `--complete` is an error.
-    #[arg(long, value_enum, default_value_t = Engine::Reference)]
-    pub engine: Engine,
-    /// Named settings (f32 reference; options given explicitly override
-    /// them): `held-out`, chosen on the Middlebury Motorcycle pair
-    /// (docs/STEREO.md, "Settings chosen on a held-out pair").
-    #[arg(long, value_enum)]
-    pub preset: Option<Preset>,
-    /// Semi-global aggregation of the read-out's costs after the box
-    /// pooling (an experiment, docs/STEREO.md; `--pool 0` for none).
-    #[arg(long)]
-    pub sgm: bool,
-    /// SGM penalty for a 1 px step, in units of a pixel's mean cost gap
-    /// (default 0.25).
-    #[arg(long)]
-    pub p1: Option<f32>,
-    /// SGM penalty for a larger step, in the same units (default 16).
-    #[arg(long)]
-    pub p2: Option<f32>,
-    /// SGM path set: 3, 4, 5 (one top-to-bottom pass, the default) or 8.
-    #[arg(long)]
-    pub paths: Option<u8>,
-    /// Scale P2 with the working width: P2 · width / this (default: off).
-    #[arg(long)]
-    pub p2_ref_width: Option<u32>,
-    /// Ambiguity threshold (default: the model's, 0); with `--sgm`, per
-    /// path in units of a pixel's mean cost gap.
-    #[arg(long)]
-    pub min_margin: Option<f32>,
-    /// Left-right tolerance, px (default: the model's, 1; negative: off).
-    #[arg(long, allow_negative_numbers = true)]
-    pub lr: Option<f32>,
-    /// Left-right check against a right map derived from the left map's
-    /// SGM sums, as SGBM does, instead of the right-referenced read-out
-    /// (both engines; needs --sgm; the engine then skips the right eye).
-    #[arg(long)]
-    pub lr_from_left: bool,
-    /// Coarse-to-fine (an experiment, docs/STEREO.md): halve the pair this
-    /// many times, search every candidate on the coarsest level and only
-    /// `2·d ± --c2f-radius` on each finer one (default 0: off).
-    #[arg(long)]
-    pub c2f: Option<u8>,
-    /// Half width of the fine windows of `--c2f`, px of the finer level
-    /// (default 2).
-    #[arg(long)]
-    pub c2f_radius: Option<u8>,
-    /// With `--c2f`: decode a fine pixel only from the groups whose shift
-    /// is within this many px of its window's centre (default: every group).
-    #[arg(long)]
-    pub c2f_band: Option<u8>,
-    /// With `--c2f`: stop at this level (1..=--c2f; default 0, the full
-    /// size) and spread its map over the frame, each pixel over its
-    /// 2^k x 2^k block with its disparity times 2^k: about 4^k times fewer
-    /// operations for a coarser map (docs/STEREO.md "Finest level").
-    #[arg(long)]
-    pub c2f_finest: Option<u8>,
-    /// With `--c2f`: refine the map with the phase of the frame's own 0°
-    /// Gabor responses (λ 4, σ/λ 0.4, radius 2, 3 px pooling): each pixel
-    /// keeps the position shift round(d) and takes the remainder from the
-    /// phase difference between the eyes; with `--c2f-finest 1`, a map of
-    /// the frame's resolution (docs/STEREO.md "Phase refinement").
-    #[arg(long)]
-    pub c2f_phase: bool,
-    /// Speckle filter (both engines, after the read-out; docs/STEREO.md
-    /// "Third round"): pixels in an island of at most this many pixels go
-    /// OFF (default 0: off).
-    #[arg(long)]
-    pub speckle: Option<u32>,
-    /// With `--speckle`: 4-neighbours join an island when their
-    /// disparities differ by at most this, px (default 1).
-    #[arg(long, allow_negative_numbers = true)]
-    pub speckle_range: Option<f32>,
+/// The names of `--point`, from [`C2fParams::NAMED`].
+fn point_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(C2fParams::NAMED.map(|(n, _)| n))
 }
 
-/// `--p1` default (docs/STEREO.md, semi-global aggregation).
-pub const SGM_P1: f32 = 0.25;
-/// `--p2` default.
-pub const SGM_P2: f32 = 16.0;
-/// `--paths` default.
-pub const SGM_PATHS: u8 = 5;
+impl StereoOptions {
+    /// The options with every default: `left`, `right`, `out` as given.
+    pub fn new(left: PathBuf, right: PathBuf, out: PathBuf) -> Self {
+        Self {
+            left,
+            right,
+            gt: None,
+            gt_scale: 1.0,
+            width: 160,
+            max_disp: C2fParams::FULL.dem.max_disp,
+            point: "full".into(),
+            lr: None,
+            engine: Engine::Core,
+            complete: false,
+            json: false,
+            time_at_least: 0,
+            out,
+        }
+    }
+}
 
 /// The decoder for `params`: `table` if given (it must match), else the
 /// built-in default table when it matches, else trained now. A trained
@@ -384,26 +310,6 @@ pub fn load_pair(
     })
 }
 
-/// One run of an engine on the pair, before the report.
-struct Estimate {
-    /// The engine that ran.
-    engine: Engine,
-    /// The map, left-referenced (what `--complete` starts from).
-    cells: Vec<DisparityCell>,
-    /// The same in px (`None`: OFF).
-    disparity: Vec<Option<f32>>,
-    /// The reference's argmax before the OFF tests (the core engine does
-    /// not expose it).
-    raw: Option<Vec<Option<f32>>>,
-    /// Pixels OFF for lack of texture, as ambiguous, by the left-right
-    /// check.
-    off: [usize; 3],
-    /// Time to train (or load) the decoders, ms.
-    train_ms: f64,
-    /// Time of the stage's run, ms.
-    run_ms: f64,
-}
-
 /// A map of cells in px (`None`: OFF).
 fn cells_f32(cells: &[DisparityCell]) -> Vec<Option<f32>> {
     cells
@@ -412,85 +318,17 @@ fn cells_f32(cells: &[DisparityCell]) -> Vec<Option<f32>> {
         .collect()
 }
 
-/// The f32 reference on the packed `w x h` pair: `params`, coarse to fine
-/// with `search`.
-fn run_reference(
-    opts: &StereoOptions,
-    params: &DemParams,
-    search: Option<preset::Search>,
-    pair: &Pair,
-) -> Result<Estimate> {
-    let (w, h) = (pair.width, pair.height);
-    let t_train = Instant::now();
-    let mut decoders = vec![decoder_for(params, opts.table.as_deref())?];
-    for k in 1..=search.map_or(0, |c| c.levels) {
-        decoders.push(decoder_for(&dem::c2f::level_params(params, k), None)?);
-    }
-    let train_ms = t_train.elapsed().as_secs_f64() * 1e3;
-    let t_run = Instant::now();
-    let (lv, rv) = (
-        ImageView::packed(&pair.left, w, h)?,
-        ImageView::packed(&pair.right, w, h)?,
-    );
-    let maps = if let Some(c) = search.filter(|c| c.phase) {
-        // Spread, then the phase refinement, then the border refinement.
-        let inner = DemParams {
-            refine_radius: 0,
-            ..*params
-        };
-        let mut maps =
-            dem::c2f::stereo_c2f_from(&inner, &decoders, &lv, &rv, c.radius, c.band, c.finest)?;
-        dem::phase::refine(
-            &protogist::stereo::phase::PhaseParams::DEFAULT.into(),
-            params.max_disp,
-            &lv,
-            &rv,
-            &mut maps.disparity,
-        )?;
-        maps.disparity_f32 = cells_f32(&maps.disparity);
-        dem::refine::refine_borders(params, &lv, &mut maps);
-        maps
-    } else if let Some(c) = search {
-        dem::c2f::stereo_c2f_from(params, &decoders, &lv, &rv, c.radius, c.band, c.finest)?
-    } else {
-        dem::stereo(params, &decoders[0], &lv, &rv)?
-    };
-    let run_ms = t_run.elapsed().as_secs_f64() * 1e3;
-    Ok(Estimate {
-        engine: Engine::Reference,
-        cells: maps.disparity,
-        disparity: maps.disparity_f32,
-        raw: Some(maps.left_raw),
-        off: [maps.off_texture, maps.off_ambiguous, maps.off_inconsistent],
-        train_ms,
-        run_ms,
-    })
-}
-
-/// Sets OFF, in `est`'s map and cells alike, the pixels in islands of at
-/// most `size` px ([`dem::speckle::speckles`]); returns how many.
-fn remove_speckles(est: &mut Estimate, w: usize, h: usize, size: usize, range: f32) -> usize {
-    let removed = dem::speckle::speckles(&est.disparity, w, h, size, range);
-    let mut count = 0;
-    for ((r, d), c) in removed.iter().zip(&mut est.disparity).zip(&mut est.cells) {
-        if *r {
-            *d = None;
-            *c = DisparityCell::OFF;
-            count += 1;
-        }
-    }
-    count
-}
-
-/// `protogist stereo`: loads, downscales, runs the DEM (the f32 reference,
-/// or core's engine with `--engine core`), writes the panels and, with GT,
-/// the error map and metrics.
+/// `protogist stereo`: loads, downscales, runs the engine at the named
+/// point (core's, or the f32 reference of it with `--engine reference`),
+/// writes the panels and, with GT, the error map and metrics.
 ///
 /// # Errors
-/// [`HostError`] for unreadable or mismatched inputs, bad GT, parameters
-/// the stage (or the engine) rejects, or an unwritable output directory.
+/// [`HostError`] for unreadable or mismatched inputs, bad GT, an unknown
+/// point, parameters the engine rejects, or an unwritable output
+/// directory.
 pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     let start = Instant::now();
+    let plan = engine::plan(&opts.point, opts.max_disp, opts.lr)?;
     let pair = load_pair(
         &opts.left,
         &opts.right,
@@ -500,20 +338,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
     )?;
     let (ow, oh) = pair.input_size;
     let (w, h) = (pair.width, pair.height);
-    let plan = match opts.readout.engine {
-        Engine::Reference => None,
-        Engine::Core => Some(engine::plan(opts, w)?),
-    };
-    let (params, search, complete) = match &plan {
-        Some(p) => (p.params, Some(p.search), false),
-        None => (
-            preset::params_for(opts, w)?,
-            preset::search(opts)?,
-            preset::complete(opts),
-        ),
-    };
-    params.check()?;
-    let speckle = preset::speckle(opts)?;
+    let params = plan.params;
     // Size checks first: training for a hopeless size is wasted time.
     if usize::from(params.max_disp) >= w {
         return Err(StereoError::MaxDispTooLarge {
@@ -522,137 +347,95 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         }
         .into());
     }
-    // The coarsest level searched (the pair itself without `--c2f`) must
-    // hold the filters.
+    // The coarsest level must hold the filters.
     let min = params.min_size();
-    let coarse_levels = search.map_or(0, |c| c.levels);
-    let coarsest = (w >> coarse_levels, h >> coarse_levels);
+    let coarse = plan.search.levels;
+    let coarsest = (w >> coarse, h >> coarse);
     if coarsest.0 < min || coarsest.1 < min {
         return Err(StereoError::TooSmall { min, got: coarsest }.into());
     }
-    let mut est = match &plan {
-        Some(p) => {
-            let r = engine::run(p, &pair.left, &pair.right, w, h, opts.time_at_least)?;
-            Estimate {
-                engine: Engine::Core,
-                disparity: cells_f32(&r.cells),
-                cells: r.cells,
-                raw: None,
-                off: [
-                    r.report.off_texture,
-                    r.report.off_ambiguous,
-                    r.report.off_inconsistent,
-                ],
-                train_ms: r.train_ms,
-                run_ms: r.run_ms,
-            }
+    let (cells, off, raw, train_ms, run_ms) = match opts.engine {
+        Engine::Core => {
+            let r = engine::run(&plan, &pair.left, &pair.right, w, h, opts.time_at_least)?;
+            let off = [
+                r.report.off_texture,
+                r.report.off_ambiguous,
+                r.report.off_inconsistent,
+            ];
+            (r.cells, off, None, r.train_ms, r.run_ms)
         }
-        None => run_reference(opts, &params, search, &pair)?,
+        Engine::Reference => {
+            let (maps, train_ms, run_ms) =
+                engine::run_reference(&plan, &pair.left, &pair.right, w, h)?;
+            let off = [maps.off_texture, maps.off_ambiguous, maps.off_inconsistent];
+            (maps.disparity, off, Some(maps.left_raw), train_ms, run_ms)
+        }
     };
-    let off_speckle = match speckle {
-        Some((size, range)) => remove_speckles(&mut est, w, h, size, range),
-        None => 0,
-    };
-    let (train_ms, run_ms) = (est.train_ms, est.run_ms);
+    let disparity = cells_f32(&cells);
     let (lp, gt_small) = (pair.left, pair.gt);
+    let e = &plan.engine;
 
     let mut s = Summary::new(format!("protogist stereo: {}", opts.left.display()));
     s.push("input", format!("{ow}x{oh}"));
     s.push("working size", format!("{w}x{h}"));
-    s.push("engine", est.engine.name());
+    s.push("engine", opts.engine.name());
+    s.push("point", &opts.point);
     s.push("max disparity", params.max_disp);
-    s.push("pool radius", params.pool_radius);
-    s.push("levels", params.levels);
-    if let dem::Aggregation::Sgm { p1, p2, paths } = params.aggregation {
-        s.push(
-            "aggregation",
-            format!("SGM, P1 {p1}, P2 {p2}, {paths} paths"),
-        );
-    }
-    if params.colour != dem::Colour::Grey {
-        s.push(
-            "colour",
-            format!(
-                "{:?} ({} channels, chroma weight {})",
-                params.colour,
-                params.colour.channels(&params),
-                params.chroma_weight
-            ),
-        );
-    }
-    if let Some(c) = search {
-        let band = c
-            .band
-            .map_or("every group".to_string(), |b| format!("band {b} px"));
-        s.push(
-            "search",
-            format!(
-                "coarse to fine, {} coarse levels, windows ±{}, {band}",
-                c.levels, c.radius
-            ),
-        );
-    }
-    if let Some(p) = opts.readout.preset {
-        s.push("preset", p.options());
-    }
+    s.push(
+        "search",
+        format!(
+            "coarse to fine, {} coarse levels, windows ±{}, {}, finest level {}{}",
+            e.coarse,
+            e.radius,
+            e.band
+                .map_or("every group".to_string(), |b| format!("band {b} px")),
+            e.finest,
+            if e.phase.is_some() {
+                ", phase refinement"
+            } else {
+                ""
+            }
+        ),
+    );
+    s.push(
+        "aggregation",
+        format!("SGM, P1 {}, P2 {}, {} paths", e.p1, e.p2, e.paths),
+    );
+    s.push("left-right check", format!("{:?}", e.left_right));
     let n = (w * h) as f64;
     s.push("decoder ms", format!("{train_ms:.1}"));
     s.push("stereo ms", format!("{run_ms:.1}"));
-    let on = est.disparity.iter().filter(|d| d.is_some()).count();
+    let on = disparity.iter().filter(|d| d.is_some()).count();
     s.push("ON %", format!("{:.1}", 100.0 * on as f64 / n));
     s.push(
         "OFF texture/ambiguous/left-right %",
         format!(
             "{:.1} / {:.1} / {:.1}",
-            100.0 * est.off[0] as f64 / n,
-            100.0 * est.off[1] as f64 / n,
-            100.0 * est.off[2] as f64 / n
+            100.0 * off[0] as f64 / n,
+            100.0 * off[1] as f64 / n,
+            100.0 * off[2] as f64 / n
         ),
     );
-    if let Some((size, range)) = speckle {
-        s.push(
-            "speckle filter",
-            format!(
-                "islands of at most {size} px (joined within {range} px) OFF: {:.1} %",
-                100.0 * off_speckle as f64 / n
-            ),
-        );
-    }
     let max = f32::from(params.max_disp);
     let mut panels = vec![
         Panel::new("left", rgb_from(&lp, w, h)),
-        Panel::new("disparity", disparity_panel(&est.disparity, w, h, max)),
+        Panel::new("disparity", disparity_panel(&disparity, w, h, max)),
     ];
-    if let Some(raw) = &est.raw {
+    if let Some(raw) = &raw {
         panels.push(Panel::new("disparity_raw", disparity_panel(raw, w, h, max)));
     }
     let mut json = serde_json::json!({
         "left": opts.left.display().to_string(),
         "width": w, "height": h,
         "max_disp": params.max_disp,
-        "pool_radius": params.pool_radius,
-        "colour": format!("{:?}", params.colour).to_lowercase(),
-        "chroma_weight": params.chroma_weight,
+        "point": opts.point,
         "on_fraction": on as f64 / n,
-        "engine": est.engine.name(),
+        "engine": opts.engine.name(),
         "stereo_ms": run_ms,
     });
-    if let Some(p) = opts.readout.preset {
-        json["preset_options"] = serde_json::json!(p.options());
-    }
-    if let Some((size, range)) = speckle {
-        json["speckle"] = serde_json::json!({
-            "size": size, "range": range, "off_fraction": off_speckle as f64 / n,
-        });
-    }
-    if let Some(c) = search {
-        json["c2f"] = serde_json::json!({
-            "levels": c.levels, "radius": c.radius, "band": c.band,
-        });
-    }
-    let model_f32 = est.disparity.clone();
-    let mut final_f32 = est.disparity;
-    if complete {
+    let model_f32 = disparity.clone();
+    let mut final_f32 = disparity;
+    if opts.complete {
         let t = Instant::now();
         let edges = crate::stages::run_conspicuity(
             &protogist::conspicuity::LuvTables::new(),
@@ -665,7 +448,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
             &protogist::complete::CompleteParams::default(),
             &edges.edges,
             &edges.smoothed,
-            &est.cells,
+            &cells,
             w,
             h,
         )?;
@@ -689,15 +472,15 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         let gmax = gt.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
         s.push("GT max disparity px", format!("{gmax:.1}"));
         push_metrics(&mut s, "final", &m);
-        let raw = est.raw.as_ref().map(|r| metrics(r, &gt.data));
+        let raw = raw.as_ref().map(|r| metrics(r, &gt.data));
         if let Some(raw) = &raw {
-            push_metrics(&mut s, "raw argmax", raw);
+            push_metrics(&mut s, "raw argmin", raw);
         }
         panels.push(Panel::new("gt", disparity_panel(&gt.data, w, h, max)));
         panels.push(Panel::new("error", error_panel(&final_f32, &gt)));
         json["gt_max_disp"] = serde_json::json!(gmax);
         json["final"] = metrics_json(&m);
-        if complete {
+        if opts.complete {
             let before = metrics(&model_f32, &gt.data);
             push_metrics(&mut s, "model (before completion)", &before);
             json["model"] = metrics_json(&before);

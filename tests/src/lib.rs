@@ -110,8 +110,7 @@ pub fn motorcycle_files() -> Option<PairFiles> {
 }
 
 /// The options of `protogist stereo --left L --right R --gt GT --width W
-/// --max-disp D --refine 0 --json --out DIR`, every other option at its
-/// default.
+/// --max-disp D --json --out DIR`, every other option at its default.
 pub fn stereo_options(
     files: PairFiles,
     width: u32,
@@ -120,23 +119,11 @@ pub fn stereo_options(
 ) -> protogist_host::stereo_cmd::StereoOptions {
     let (left, right, gt) = files;
     protogist_host::stereo_cmd::StereoOptions {
-        left,
-        right,
         gt: Some(gt),
-        gt_scale: 1.0,
         width,
         max_disp,
-        pool: None,
-        levels: None,
-        table: None,
-        refine: Some(0),
-        colour: None,
-        chroma_weight: None,
-        complete: false,
-        readout: protogist_host::stereo_cmd::ReadoutOptions::default(),
         json: true,
-        time_at_least: 0,
-        out: out.to_path_buf(),
+        ..protogist_host::stereo_cmd::StereoOptions::new(left, right, out.to_path_buf())
     }
 }
 
@@ -436,3 +423,11 @@ pub fn aloe_160_rgb() -> Option<(Vec<Rgb8>, Vec<Rgb8>, usize, usize)> {
         h as usize,
     ))
 }
+
+/// SGM penalty for a 1 px step of the reference's read-out tests, in
+/// units of a pixel's mean cost gap.
+pub const SGM_P1: f32 = 0.25;
+/// SGM penalty for a larger step of the reference's read-out tests.
+pub const SGM_P2: f32 = 16.0;
+/// SGM paths of the reference's read-out tests (one top-to-bottom pass).
+pub const SGM_PATHS: u8 = 5;

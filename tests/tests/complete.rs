@@ -240,7 +240,7 @@ fn bad_input_is_a_typed_error_or_a_reported_skip() {
 fn the_stereo_command_scores_the_completed_map_and_the_model() {
     use protogist::image::Rgb8;
     use protogist::synth::{render_disparity, render_left, render_right, SceneSpec};
-    use protogist_host::stereo_cmd::{run_stereo, ReadoutOptions, StereoOptions};
+    use protogist_host::stereo_cmd::{run_stereo, StereoOptions};
     let (w, h) = (160usize, 120usize);
     let spec = SceneSpec::demo(w, h);
     let (mut l, mut r, mut d) = (
@@ -270,23 +270,11 @@ fn the_stereo_command_scores_the_completed_map_and_the_model() {
         .save(&gp)
         .unwrap();
     let s = run_stereo(&StereoOptions {
-        left: lp,
-        right: rp,
         gt: Some(gp),
-        gt_scale: 1.0,
-        width: 160,
         max_disp: 15,
-        pool: None,
-        levels: None,
-        table: None,
-        refine: None,
-        colour: Default::default(),
-        chroma_weight: None,
         complete: true,
-        readout: ReadoutOptions::default(),
         json: true,
-        time_at_least: 0,
-        out: dir.path().join("out"),
+        ..StereoOptions::new(lp, rp, dir.path().join("out"))
     })
     .unwrap();
     let v: serde_json::Value = serde_json::from_str(s.raw.as_deref().unwrap()).unwrap();

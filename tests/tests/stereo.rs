@@ -7,9 +7,8 @@ use protogist_host::error::HostError;
 use protogist_host::reference::stereo::table::{DemTable, DEFAULT_TABLE};
 use protogist_host::reference::stereo::train::random_dot_pair;
 use protogist_host::reference::stereo::{self as dem, DemParams, StereoError};
-use protogist_host::stereo_cmd::{
-    run_stereo, ReadoutOptions, StereoOptions, SGM_P1, SGM_P2, SGM_PATHS,
-};
+use protogist_host::stereo_cmd::{run_stereo, StereoOptions};
+use protogist_tests::{SGM_P1, SGM_P2, SGM_PATHS};
 use std::path::Path;
 
 fn default_decoder() -> dem::Decoder {
@@ -184,35 +183,22 @@ fn the_command_rejects_bad_files_with_one_line_errors() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let rgb = |w, h| image::DynamicImage::ImageRgb8(image::RgbImage::new(w, h));
-    let left = write_png(d, "l.png", rgb(64, 48));
-    let right = write_png(d, "r.png", rgb(64, 48));
-    let small = write_png(d, "s.png", rgb(60, 48));
+    // Large enough for the engine's coarsest level (a quarter of the size).
+    let left = write_png(d, "l.png", rgb(128, 96));
+    let right = write_png(d, "r.png", rgb(128, 96));
+    let small = write_png(d, "s.png", rgb(120, 96));
     let gt_small = write_png(
         d,
         "g.png",
         image::DynamicImage::ImageLuma8(image::GrayImage::new(10, 10)),
     );
-    let gt_rgb = write_png(d, "grgb.png", rgb(64, 48));
+    let gt_rgb = write_png(d, "grgb.png", rgb(128, 96));
     let junk = d.join("junk.pfm");
-    std::fs::write(&junk, b"Pf\n64 48\n-1\n\x00\x00").unwrap();
+    std::fs::write(&junk, b"Pf\n128 96\n-1\n\x00\x00").unwrap();
     let opts = |right: &Path, gt: Option<&Path>, max_disp| StereoOptions {
-        left: left.clone(),
-        right: right.to_path_buf(),
         gt: gt.map(Path::to_path_buf),
-        gt_scale: 1.0,
-        width: 160,
         max_disp,
-        pool: None,
-        levels: None,
-        refine: None,
-        table: None,
-        colour: Default::default(),
-        chroma_weight: None,
-        complete: false,
-        readout: ReadoutOptions::default(),
-        json: false,
-        time_at_least: 0,
-        out: d.join("out"),
+        ..StereoOptions::new(left.clone(), right.to_path_buf(), d.join("out"))
     };
     let err = |o: StereoOptions| run_stereo(&o).unwrap_err();
     assert!(matches!(
@@ -232,7 +218,7 @@ fn the_command_rejects_bad_files_with_one_line_errors() {
         HostError::BadGroundTruth { .. }
     ));
     assert!(matches!(
-        err(opts(&right, None, 64)),
+        err(opts(&right, None, 200)),
         HostError::Stereo(StereoError::MaxDispTooLarge { .. })
     ));
     for e in [
@@ -244,69 +230,4 @@ fn the_command_rejects_bad_files_with_one_line_errors() {
     // A flat pair is not an error: every pixel is OFF.
     let s = run_stereo(&opts(&right, None, 15)).unwrap();
     assert_eq!(s.get("ON %"), Some("0.0"));
-}
-
-/// Border refinement: a red object (d = 10) left of a blue background
-/// (d = 2). Estimates are wrong in a band across the border and OFF in
-/// patches; afterwards every pixel near the border, and every OFF pixel with
-/// enough trusted neighbours, carries its own side's disparity.
-#[test]
-fn border_refinement_gives_each_side_its_own_disparity() {
-    use protogist::disparity::DisparityCell;
-    use protogist_host::reference::stereo::refine::refine_borders;
-    let (w, h) = (40usize, 30usize);
-    let red = |x: usize| x < 20;
-    let px: Vec<Rgb8> = (0..w * h)
-        .map(|i| {
-            if red(i % w) {
-                Rgb8::new(200, 40, 30)
-            } else {
-                Rgb8::new(30, 60, 200)
-            }
-        })
-        .collect();
-    let truth = |x: usize| if red(x) { 10.0f32 } else { 2.0 };
-    let mut d: Vec<Option<f32>> = (0..w * h).map(|i| Some(truth(i % w))).collect();
-    for (i, v) in d.iter_mut().enumerate() {
-        let (x, y) = (i % w, i / w);
-        if (17..=22).contains(&x) {
-            *v = Some(10.0); // the nearer surface spills across the border
-        }
-        if (y % 7 == 3 && x % 5 == 1) || (x == 21 && y % 3 == 0) {
-            *v = None; // OFF patches, some at the border
-        }
-    }
-    let mut maps = dem::DisparityMapsF {
-        width: w,
-        height: h,
-        disparity: vec![DisparityCell::OFF; w * h],
-        disparity_f32: d,
-        left_raw: vec![None; w * h],
-        right_raw: vec![None; w * h],
-        off_texture: 0,
-        off_ambiguous: 0,
-        off_inconsistent: 0,
-        why_off: vec![None; w * h],
-    };
-    let params = DemParams {
-        refine_radius: 1,
-        ..DemParams::default()
-    };
-    let rep = refine_borders(&params, &ImageView::packed(&px, w, h).unwrap(), &mut maps);
-    assert!(rep.borders > 0 && rep.filled > 0, "{rep:?}");
-    for (i, v) in maps.disparity_f32.iter().enumerate() {
-        let x = i % w;
-        if (18..=21).contains(&x) || maps.disparity[i].is_on() {
-            assert_eq!(*v, Some(truth(x)), "({x}, {})", i / w);
-        }
-    }
-    // Without refinement nothing changes.
-    let mut off = maps.clone();
-    off.disparity_f32[0] = None;
-    let r0 = refine_borders(
-        &DemParams::default(),
-        &ImageView::packed(&px, w, h).unwrap(),
-        &mut off,
-    );
-    assert_eq!((r0.borders, r0.filled), (0, 0));
 }

@@ -1,7 +1,7 @@
-//! Coarse-to-fine search of the DEM f32 reference (an opt-in experiment,
-//! docs/STEREO.md "Coarse-to-fine with SGM (experiment)"): the search
-//! windows, their effect on the decision and on the SGM costs, the
-//! random-dot anchor through two levels, and Aloe (needs `cargo xtask
+//! Coarse-to-fine search of the DEM f32 reference (the reference of core's
+//! engine, docs/STEREO.md): the search windows, their effect on the
+//! decision and on the SGM costs, the random-dot anchor through two
+//! levels, and the command's size check on Aloe (needs `cargo xtask
 //! fetch-data`).
 
 use protogist::image::{ImageView, Rgb8};
@@ -16,8 +16,8 @@ use protogist_host::reference::stereo::train::random_dot_pair;
 use protogist_host::reference::stereo::{
     self as dem, stereo_planes, stereo_planes_in, DemParams, DisparityMapsF, Windows,
 };
-use protogist_host::stereo_cmd::{decoder_for, ReadoutOptions, SGM_P1, SGM_P2, SGM_PATHS};
-use protogist_tests::{aloe_files, stereo_bad2, stereo_options};
+use protogist_host::stereo_cmd::decoder_for;
+use protogist_tests::{aloe_files, stereo_options, SGM_P1, SGM_P2, SGM_PATHS};
 
 fn default_decoder() -> dem::Decoder {
     DemTable::parse(DEFAULT_TABLE).unwrap().to_decoder()
@@ -226,36 +226,6 @@ fn random_dots_bad1_below_5_percent_coarse_to_fine() {
     }
 }
 
-/// On Aloe, coarse to fine with SGM and CIELUV channels (docs/STEREO.md)
-/// stays below OpenCV SGBM's bad-2 over all GT pixels under the same
-/// protocol (33.5 % at 160 px, 32.9 % at 320 px), searching 5 candidates at the
-/// fine levels from the groups within 2 px of the window's centre.
-#[test]
-fn aloe_coarse_to_fine_sgm_beats_sgbm_over_all_pixels() {
-    let dir = tempfile::tempdir().unwrap();
-    for (width, max_disp, sgbm) in [(160, 32, 33.5), (320, 64, 32.9)] {
-        let Some(files) = aloe_files() else {
-            return;
-        };
-        let mut opts = stereo_options(files, width, max_disp, dir.path());
-        opts.pool = Some(1);
-        opts.levels = Some(1);
-        opts.colour = Some(dem::Colour::Luv);
-        opts.chroma_weight = Some(2.0);
-        opts.readout = ReadoutOptions {
-            sgm: true,
-            paths: Some(5),
-            c2f: Some(2),
-            c2f_radius: Some(2),
-            c2f_band: Some(2),
-            ..ReadoutOptions::default()
-        };
-        let (_, all) = stereo_bad2(&opts);
-        println!("{width} px: bad-2 all {all}");
-        assert!(all < sgbm, "{width}: {all} vs {sgbm}");
-    }
-}
-
 /// A pixel with a window is decoded from the groups whose shift is within
 /// `band` px of the window's centre: window 6..=10 (centre 8), band 2,
 /// shifts 6, 8, 10 of 3 carriers = 9 groups; a pixel without a window
@@ -343,8 +313,8 @@ fn coarse_to_fine_bad_input_is_a_typed_error() {
     ));
 }
 
-/// `protogist stereo --c2f K` refuses a pair whose coarsest level cannot
-/// hold the filters before it trains any decoder: a typed error.
+/// `protogist stereo` refuses a pair whose coarsest level cannot hold the
+/// filters before it trains any decoder: a typed error.
 #[test]
 fn the_command_checks_the_coarsest_level_first() {
     use protogist_host::error::HostError;
@@ -353,8 +323,7 @@ fn the_command_checks_the_coarsest_level_first() {
     let Some(files) = aloe_files() else {
         return;
     };
-    let mut opts = stereo_options(files, 64, 8, dir.path());
-    opts.readout.c2f = Some(2);
+    let opts = stereo_options(files, 64, 8, dir.path());
     let e = protogist_host::stereo_cmd::run_stereo(&opts).unwrap_err();
     assert!(
         matches!(
@@ -363,8 +332,6 @@ fn the_command_checks_the_coarsest_level_first() {
         ),
         "{e}"
     );
-    opts.readout.c2f = None;
-    assert!(protogist_host::stereo_cmd::run_stereo(&opts).is_ok());
 }
 
 /// `spread`: a level-1 map over a 5x3 frame, each pixel over its 2x2 block

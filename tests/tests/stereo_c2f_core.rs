@@ -1,12 +1,13 @@
 //! The coarse-to-fine engine of core (`protogist::stereo::c2f`) against the
-//! f32 reference `stereo_c2f` with the same settings (`--levels 1 --pool 0
-//! --sgm --paths 5 --c2f K --c2f-radius R --c2f-band B`): agreement on
-//! random-dot stereograms and on Aloe, flat input, scratch, bad input.
+//! f32 reference `stereo_c2f` with the same settings (one level per c2f
+//! level, no pooling, SGM, the same windows, band, paths, left-right check
+//! and finest level): agreement on random-dot stereograms and on Aloe,
+//! flat input, scratch, bad input.
 
 use proptest::prelude::*;
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
-use protogist::stereo::c2f::{self, C2f, C2fParams};
+use protogist::stereo::c2f::{self, C2f, C2fParams, LeftRight};
 use protogist::stereo::{self as qs, StereoError, StereoReport};
 use protogist_host::reference::stereo::c2f::{level_params, stereo_c2f_from};
 use protogist_host::reference::stereo::table::DemTable as HostTable;
@@ -16,29 +17,10 @@ use protogist_tests::{aloe_160_rgb, rds_rgb, stereo_agreement};
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
-/// The reference's parameters for `p`.
+/// The reference's parameters for `p` (what `protogist stereo --engine
+/// reference` runs).
 fn host_params(p: &C2fParams) -> dem::DemParams {
-    let d = &p.dem;
-    dem::DemParams {
-        max_disp: d.max_disp,
-        carriers: d.carriers,
-        levels: d.levels,
-        wavelength: d.wavelength,
-        sigma_per_wavelength: d.sigma_per_wavelength,
-        radius: d.radius,
-        shift_step: d.shift_step,
-        pool_radius: d.pool_radius,
-        min_energy: d.min_energy,
-        min_margin: d.min_margin,
-        lr_tolerance: d.lr_tolerance,
-        lr_from_left: p.lr_from_left,
-        aggregation: dem::Aggregation::Sgm {
-            p1: p.p1,
-            p2: p.p2,
-            paths: p.paths,
-        },
-        ..dem::DemParams::default()
-    }
+    protogist_host::stereo_cmd::engine::reference_of(p).0
 }
 
 /// The decoder tables of every level of `p` (trained once per layout).
@@ -113,9 +95,9 @@ fn params(max_disp: u8) -> C2fParams {
     C2fParams {
         dem: qs::DemParams {
             max_disp,
-            ..C2fParams::DEFAULT.dem
+            ..C2fParams::FULL.dem
         },
-        ..C2fParams::DEFAULT
+        ..C2fParams::FULL
     }
 }
 
@@ -130,12 +112,16 @@ proptest! {
         seed: u64,
         d in 0usize..=15,
         band in prop::option::of(1u8..=3),
-        lr_from_left: bool,
+        left_right in prop_oneof![
+            Just(LeftRight::Off),
+            Just(LeftRight::Read),
+            Just(LeftRight::Derived)
+        ],
         paths in prop_oneof![Just(3u8), Just(5u8)],
         finest in 0u8..=1,
     ) {
         let (w, h) = (96, 64);
-        let p = C2fParams { band, lr_from_left, paths, finest, ..params(15) };
+        let p = C2fParams { band, left_right, paths, finest, ..params(15) };
         let ts = tables(&p);
         let (l, r) = rds_rgb(w, h, d, seed);
         let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
@@ -214,9 +200,16 @@ fn aloe_160_d32_agrees() {
     let Some((l, r, w, h)) = aloe_160_rgb() else {
         return;
     };
-    for (lr_from_left, paths, finest) in [(false, 5, 0), (true, 5, 0), (true, 3, 0), (true, 3, 1)] {
+    use LeftRight::{Derived, Off, Read};
+    for (left_right, paths, finest) in [
+        (Read, 5, 0),
+        (Off, 5, 0),
+        (Derived, 5, 0),
+        (Derived, 3, 0),
+        (Derived, 3, 1),
+    ] {
         let p = C2fParams {
-            lr_from_left,
+            left_right,
             paths,
             finest,
             band: if finest > 0 { Some(1) } else { Some(2) },
@@ -226,17 +219,19 @@ fn aloe_160_d32_agrees() {
         let (core, rep) = run_core(&p, &ts, &l, &r, w, h).unwrap();
         let float = run_float(&p, &ts, &l, &r, w, h);
         let (close, agree, both) = stereo_agreement(&core, &float);
-        println!("aloe 160 c2f (lr from left {lr_from_left}, {paths} paths, finest {finest}): {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
+        println!("aloe 160 c2f (left-right {left_right:?}, {paths} paths, finest {finest}): {close:.2} % within 0.25 px, {agree:.2} % OFF agreement, {both} ON in both, {rep:?}");
         assert!(both > w * h / 2, "{both}");
         assert!(close >= 99.0, "{close}");
         assert!(agree >= 99.0, "{agree}");
     }
 }
 
-/// The right map derived from the left sums: the right eye's cells are
-/// not evaluated (exactly the left eye's half of the count), and the map
-/// differs from the read-out one's only through the left-right check:
-/// every pixel ON in both has the same disparity.
+/// The right map derived from the left sums, and no left-right check at
+/// all: the right eye's cells are not evaluated (exactly the left eye's
+/// half of the count), and the map differs from the read-out one's only
+/// through the left-right check: every pixel ON in both has the same
+/// disparity; without the check no pixel is inconsistent and every pixel
+/// ON with it is ON without it.
 #[test]
 fn the_derived_right_map_skips_the_right_eye() {
     let (w, h) = (96, 64);
@@ -246,7 +241,11 @@ fn the_derived_right_map_skips_the_right_eye() {
         ..params(15)
     };
     let derived = C2fParams {
-        lr_from_left: true,
+        left_right: LeftRight::Derived,
+        ..read
+    };
+    let off = C2fParams {
+        left_right: LeftRight::Off,
         ..read
     };
     let ts = tables(&read);
@@ -264,6 +263,16 @@ fn the_derived_right_map_skips_the_right_eye() {
     assert!(both > w * h / 2, "{both}");
     assert_eq!(rep_a.off_texture, rep_b.off_texture);
     assert_eq!(rep_a.off_ambiguous, rep_b.off_ambiguous);
+    let (c, rep_c) = run_core(&off, &ts, &l, &r, w, h).unwrap();
+    assert_eq!(rep_c.cells, rep_b.cells);
+    assert_eq!(rep_c.off_inconsistent, 0);
+    assert!(rep_a.off_inconsistent > 0, "{rep_a:?}");
+    assert_eq!(rep_c.on, rep_a.on + rep_a.off_inconsistent);
+    for (x, y) in a.iter().zip(&c) {
+        if x.is_on() {
+            assert_eq!(x, y);
+        }
+    }
 }
 
 /// The 2x2 rounded means of an RGB frame (the engine's level step).
@@ -293,7 +302,7 @@ fn the_finest_level_is_the_half_size_run_spread() {
         let (l, r) = rds_rgb(w, h, 6, 5);
         let full = C2fParams {
             finest: 1,
-            lr_from_left: true,
+            left_right: LeftRight::Derived,
             ..params(15)
         };
         let half = C2fParams {
@@ -387,20 +396,14 @@ fn the_cell_count_is_every_shift_inside_the_row() {
 /// the 96 KB.
 #[test]
 fn scratch_at_160x120() {
-    let b = c2f::scratch_bytes(160, 120, &C2fParams::DEFAULT);
+    let b = c2f::scratch_bytes(160, 120, &C2fParams::FULL);
     println!("c2f scratch 160x120 D32: {b} bytes");
     assert!(b <= 96 * 1024, "{b}");
-    // The firmware's r2b1l3p: the half-size map refined by phase, whose
-    // buffers come on top of the engine's.
+    // The point `fast`: the half-size map refined by phase, whose buffers
+    // come on top of the engine's.
     let phase = protogist::stereo::phase::PhaseParams::DEFAULT;
-    let p3 = C2fParams {
-        band: Some(1),
-        lr_from_left: true,
-        paths: 3,
-        finest: 1,
-        phase: Some(phase),
-        ..C2fParams::DEFAULT
-    };
+    let p3 = C2fParams::FAST;
+    assert_eq!(p3.phase, Some(phase));
     let bp = c2f::scratch_bytes(160, 120, &p3);
     let own = protogist::stereo::phase::scratch_bytes(160, &phase, p3.dem.max_disp);
     println!("c2f scratch 160x120 D32 with phase: {bp} bytes ({own} the refinement's)");
@@ -542,7 +545,7 @@ fn firmware_tables_are_reproduced_by_training() {
         include_bytes!("../../firmware-sim/data/dem_c2f_l1.bin"),
         include_bytes!("../../firmware-sim/data/dem_c2f_l2.bin"),
     ];
-    let trained = tables(&C2fParams::DEFAULT);
+    let trained = tables(&C2fParams::FULL);
     assert_eq!(trained.len(), 3);
     for (k, (t, s)) in trained.iter().zip(shipped).enumerate() {
         assert!(
@@ -553,8 +556,8 @@ fn firmware_tables_are_reproduced_by_training() {
 }
 
 /// A phase kernel that marks every cell it is given (the refined count is
-/// the row's length), to show that `C2f::run_with` hands the phase step to
-/// the kernel it names and `C2f::run` to the portable one.
+/// the row's length), to show that `C2f::<K>::with_kernel` hands the phase
+/// step to the kernel it names and `C2f::new` to the portable one.
 struct Marking;
 
 const MARK: u16 = 7;
@@ -590,20 +593,30 @@ fn the_engine_runs_the_phase_step_of_the_kernel_it_is_given() {
         ImageView::packed(&l, w, h).unwrap(),
         ImageView::packed(&r, w, h).unwrap(),
     );
-    let e = C2f::new(&p).unwrap();
-    let run = |marking: bool| {
-        let mut st = C2fStorage::new(w, h, &p);
+    fn marked<K: protogist::stereo::phase::PhaseKernel>(
+        e: &C2f<K>,
+        parsed: &[qs::DemTable<'_>],
+        (lv, rv): (&ImageView<'_, Rgb8>, &ImageView<'_, Rgb8>),
+        p: &C2fParams,
+    ) -> usize {
+        let (w, h) = lv.size();
+        let mut st = C2fStorage::new(w, h, p);
         let mut marked = 0;
         let mut sink = |_: usize, _: usize, c: DisparityCell| {
             marked += usize::from(c.raw().to_bits() == MARK);
         };
-        if marking {
-            e.run_with::<_, Marking>(&parsed, &lv, &rv, &mut st.buffers(), &mut sink, &mut ())
-        } else {
-            e.run(&parsed, &lv, &rv, &mut st.buffers(), &mut sink, &mut ())
-        }
-        .unwrap();
+        e.run(parsed, lv, rv, &mut st.buffers(), &mut sink, &mut ())
+            .unwrap();
         marked
+    }
+    let marking = C2f::<Marking>::with_kernel(&p).unwrap();
+    let portable = C2f::new(&p).unwrap();
+    let run = |marking_kernel: bool| {
+        if marking_kernel {
+            marked(&marking, &parsed, (&lv, &rv), &p)
+        } else {
+            marked(&portable, &parsed, (&lv, &rv), &p)
+        }
     };
     assert_eq!(run(true), w * h);
     assert!(run(false) < w * h / 10, "{}", run(false));

@@ -1,7 +1,7 @@
 //! `protogist stereo --engine core` (core's fixed-point coarse-to-fine
-//! engine) against `--engine reference` (the f32 `stereo_c2f`) with the same
-//! settings, through the command: the same metrics on Aloe, and a typed
-//! error for every option the engine does not run.
+//! engine) against `--engine reference` (the f32 `stereo_c2f`) at the same
+//! named point, through the command: the same metrics on Aloe, and a typed
+//! error for an unknown point.
 //!
 //! **Why the two engines' bad-2 agree within 0.5 point.** A GT pixel counts
 //! differently in bad-2 (over all GT pixels) only if its status flips: its
@@ -12,7 +12,7 @@
 //! (`stereo_c2f_core::aloe_160_d32_agrees`, same engine and tables) requires
 //! at least 99 % of the pixels ON in both within 0.25 px and 99 % of the
 //! OFF decisions to agree, which alone allows about 2 points; on Aloe 160
-//! px D32 with `--c2f 2 --c2f-band 2` it measures 99.79 % within 0.25 px
+//! px D32 at the point `full` it measures 99.79 % within 0.25 px
 //! and 99.29 % OFF agreement, and 77 of the 21,532 GT pixels flip (0.36
 //! point; the difference itself is 0.19 point, flips going both ways:
 //! measured 2026-11-21 on the 2-core build machine with both maps,
@@ -24,8 +24,8 @@
 //! margin, the left-right tolerance, the window or the band given to one
 //! engine and not the other) moves far more pixels than the near ties: it
 //! fails this test: checked by hand, P2 given P1's value moved bad-2 (est)
-//! by 1.4 points, a left-right tolerance kept at 1 (the `mapped` setting
-//! asks 2) by 1.3 points. bad-2 over estimated pixels changes in the
+//! by 1.4 points, a left-right tolerance of 2 given to one engine only by
+//! 1.3 points. bad-2 over estimated pixels changes in the
 //! same way, over the estimated pixels (density 80 %), so the same bound
 //! holds with those flips; it is checked at 0.5 point too.
 //!
@@ -34,12 +34,9 @@
 //! most `1 · N / N_gt` points, derived here from the run's own counts.
 
 use protogist_host::error::HostError;
-use protogist_host::stereo_cmd::{run_stereo, Engine, StereoOptions};
+use protogist_host::stereo_cmd::{run_stereo, Engine, Lr, StereoOptions};
 use protogist_tests::{aloe_files, stereo_options};
 use std::path::Path;
-
-/// A change of the options.
-type Setting = fn(&mut StereoOptions);
 
 /// The final metrics and `engine` of the command's JSON.
 fn run_json(opts: &StereoOptions) -> serde_json::Value {
@@ -47,50 +44,30 @@ fn run_json(opts: &StereoOptions) -> serde_json::Value {
     serde_json::from_str(s.raw.as_deref().unwrap()).unwrap()
 }
 
-/// The settings the engine runs, given explicitly to the reference:
-/// `--levels 1 --pool 0 --sgm --paths 5` plus `setting`.
-fn with_engine(mut opts: StereoOptions, engine: Engine, setting: Setting) -> StereoOptions {
-    opts.readout.engine = engine;
-    if engine == Engine::Reference {
-        opts.levels = Some(1);
-        opts.pool = Some(0);
-        opts.readout.sgm = true;
-        opts.readout.paths = Some(5);
-    }
-    setting(&mut opts);
-    opts
-}
-
-/// `--c2f 2 --c2f-band 2 --p2 4`: the firmware's setting.
-fn firmware(o: &mut StereoOptions) {
-    o.readout.c2f = Some(2);
-    o.readout.c2f_band = Some(2);
-    o.readout.p2 = Some(4.0);
-}
-
-/// Every mapped option away from its default: `--c2f 1 --c2f-radius 3 --p1
-/// 0.5 --p2 8 --min-margin 0.5 --lr 2`.
-fn mapped(o: &mut StereoOptions) {
-    o.readout.c2f = Some(1);
-    o.readout.c2f_radius = Some(3);
-    o.readout.p1 = Some(0.5);
-    o.readout.p2 = Some(8.0);
-    o.readout.min_margin = Some(0.5);
-    o.readout.lr = Some(2.0);
-}
-
 #[test]
 fn core_and_reference_agree_on_aloe_160() {
     let dir = tempfile::tempdir().unwrap();
-    let settings: [(&str, Setting); 2] = [
-        ("--c2f 2 --c2f-band 2 --p2 4", firmware),
-        ("mapped options", mapped),
-    ];
-    for (name, setting) in settings {
+    for (point, lr) in [
+        ("full", None),
+        ("fast", None),
+        ("half", None),
+        ("full", Some(Lr::Off)),
+    ] {
         let Some(files) = aloe_files() else { return };
-        let base = stereo_options(files, 160, 32, dir.path());
-        let core = run_json(&with_engine(base.clone(), Engine::Core, setting));
-        let reference = run_json(&with_engine(base, Engine::Reference, setting));
+        let base = StereoOptions {
+            point: point.into(),
+            lr,
+            ..stereo_options(files, 160, 32, dir.path())
+        };
+        let core = run_json(&StereoOptions {
+            engine: Engine::Core,
+            ..base.clone()
+        });
+        let reference = run_json(&StereoOptions {
+            engine: Engine::Reference,
+            ..base
+        });
+        let name = format!("{point} {lr:?}");
         assert_eq!(core["engine"], "core");
         assert_eq!(reference["engine"], "reference");
         let (c, r) = (&core["final"], &reference["final"]);
@@ -145,43 +122,29 @@ fn rds_files(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
 }
 
 #[test]
-fn options_the_engine_does_not_run_are_typed_errors() {
+fn every_point_runs_and_an_unknown_point_is_a_typed_error() {
     let dir = tempfile::tempdir().unwrap();
     let (l, r) = rds_files(dir.path());
     let mut base = stereo_options((l, r, dir.path().join("none")), 96, 15, dir.path());
     base.gt = None;
-    base.readout.engine = Engine::Core;
-    // `--engine core --c2f 2` alone runs and finds the shift.
-    let mut ok = base.clone();
-    ok.readout.c2f = Some(2);
-    let v = run_json(&ok);
-    assert_eq!(v["engine"], "core");
-    assert!(v["on_fraction"].as_f64().unwrap() > 0.5, "{v}");
-    let cases: [(&str, Setting); 10] = [
-        ("c2f", |_| {}),
-        ("c2f", |o| o.readout.c2f = Some(4)),
-        ("levels", |o| o.levels = Some(2)),
-        ("pool", |o| o.pool = Some(1)),
-        ("colour", |o| {
-            o.colour = Some(protogist_host::reference::stereo::Colour::Luv);
-        }),
-        ("paths", |o| o.readout.paths = Some(8)),
-        ("refine", |o| o.refine = Some(1)),
-        ("complete", |o| o.complete = true),
-        ("table", |o| o.table = Some("t.bin".into())),
-        ("preset", |o| {
-            o.readout.preset = Some(protogist_host::stereo_cmd::Preset::HeldOut);
-        }),
-    ];
-    for (name, break_it) in cases {
-        let mut o = base.clone();
-        if name != "c2f" {
-            o.readout.c2f = Some(2);
+    // Every named point finds the shift on most pixels, both engines.
+    for (point, _) in protogist::stereo::c2f::C2fParams::NAMED {
+        for engine in [Engine::Core, Engine::Reference] {
+            let v = run_json(&StereoOptions {
+                point: point.into(),
+                engine,
+                ..base.clone()
+            });
+            assert_eq!(v["engine"], engine.name());
+            assert!(v["on_fraction"].as_f64().unwrap() > 0.5, "{point}: {v}");
         }
-        break_it(&mut o);
-        match run_stereo(&o) {
-            Err(HostError::InvalidArgument { name: got, .. }) => assert_eq!(got, name),
-            other => panic!("{name}: {other:?}"),
-        }
+    }
+    let bad = StereoOptions {
+        point: "r2b1l3p".into(),
+        ..base
+    };
+    match run_stereo(&bad) {
+        Err(HostError::InvalidArgument { name, .. }) => assert_eq!(name, "point"),
+        other => panic!("{other:?}"),
     }
 }

@@ -30,8 +30,8 @@ pub fn run() -> Result<()> {
         host_criterion(),
         scratch(&qemu.stdout),
         segmentation_iou(),
-        dem_aloe(),
-        dem_motorcycle(),
+        stereo_aloe(&qemu.stdout),
+        stereo_motorcycle(&qemu.stdout),
         mlp_qemu(&qemu.stdout),
         mlp_host(),
     ];
@@ -158,10 +158,10 @@ fn qemu_ipp(stdout: &str) -> Section {
 /// per step, and its scratch, from the firmware's `stereo` lines.
 fn stereo_m4(stdout: &str) -> Section {
     let mut body = String::from(
-        "The coarse-to-fine engine `protogist::stereo::c2f` in the firmware \
-         (`firmware-sim/src/stereo_run.rs`): the demo scene's 160x120 pair, 32 disparities \
-         (`C2fParams::DEFAULT`: `max_disp` 31, one pyramid level per c2f level, 2 coarse levels, \
-         windows of 5 candidates, band 2, 5-path SGM, no pooling; tables \
+        "The stereo engine `protogist::stereo::c2f` in the firmware \
+         (`firmware-sim/src/stereo_run.rs`) at the point `full`: the demo scene's 160x120 pair, \
+         32 disparities (`C2fParams::FULL`: `max_disp` 31, one pyramid level per c2f level, 2 \
+         coarse levels, windows of 5 candidates, band 2, 5-path SGM, no pooling; tables \
          `firmware-sim/data/dem_c2f_l{0,1,2}.bin`), RGB rows rendered by the simulated camera as \
          the engine asks for them and the map folded into the checksum row by row. Same QEMU \
          setup as above. The `levels` step includes the camera's rendering (every level reads \
@@ -231,12 +231,12 @@ fn stereo_m4(stdout: &str) -> Section {
         )
     };
     body.push_str(&format!(
-        "\n**Targets** (issue 3 §4): 1,500 instructions/px or fewer: by the default **{}, \
-         {total:.0}** ({:.1}x the target); operating points within it (next section): \
+        "\n**Targets** (issue 3 §4): 1,500 instructions/px or fewer: by `full` **{}, \
+         {total:.0}** ({:.1}x the target); named points within it (next section): \
          **{within}**; scratch ≤ 96 KB (98,304 bytes) beyond the two frames: **{scratch} bytes \
-         ({:.1} KB), {}** (`c2f::scratch_bytes(160, 120, &C2fParams::DEFAULT)`).{phase_scratch} The \
-         full-search engine took 101,581 instructions/px (`git checkout 05f3e88 && cargo xtask \
-         firmware`); see docs/STEREO.md, The coarse-to-fine engine in core.\n",
+         ({:.1} KB), {}** (`c2f::scratch_bytes(160, 120, &C2fParams::FULL)`).{phase_scratch} \
+         The full-search engine, removed, took 101,581 instructions/px (docs/STEREO.md, What \
+         was tried).\n",
         if total <= 1500.0 {
             "reached"
         } else {
@@ -262,7 +262,7 @@ struct Point<'a> {
     name: &'a str,
     radius: &'a str,
     band: &'a str,
-    /// The left-right check's right map: `read` or `derived`.
+    /// The left-right check's right map: `off`, `read` or `derived`.
     lr: &'a str,
     /// SGM paths.
     paths: &'a str,
@@ -308,9 +308,9 @@ fn points(stdout: &str) -> Vec<Point<'_>> {
         .collect()
 }
 
-/// The engine at cheaper operating points (issue 3 §4): the firmware's
-/// `point stereo` lines beside `protogist stereo --engine core` at the
-/// same window and band on Aloe and Motorcycle, 160 px, D = 32.
+/// The named operating points (issue 19 §5): the firmware's `point stereo`
+/// lines (M4 instructions per pixel) beside `protogist stereo --point NAME`
+/// on Aloe and Motorcycle, 160 px, D = 32.
 fn stereo_points(stdout: &str) -> Section {
     let title = "Stereo operating points: instructions against accuracy";
     let pts = points(stdout);
@@ -321,39 +321,23 @@ fn stereo_points(stdout: &str) -> Section {
         };
     }
     let mut body = String::from(
-        "The same engine and tables with a smaller window (half width R: 2R + 1 candidates \
-         at the finer levels) or band (the cell groups within b px of the window's centre), \
-         everything else as `C2fParams::DEFAULT` (R 2, band 2); LR `derived`: the left-right \
-         check's right map from the left map's path sums as in OpenCV SGBM (`lr_from_left`: no \
-         right eye; `--lr-from-left`), `read`: the right eye read out; paths: the SGM paths (3: without \
-         the two diagonals, `--paths 3`); finest: the finest level run (1: the map of the \
-         half-size pair, each cell over its 2x2 block with its disparity doubled, \
-         `--c2f-finest 1`; docs/STEREO.md, section Finest level); phase: the map refined to \
-         the frame's resolution by the phase of full-size Gabor responses (`--c2f-phase`, its \
-         cost inside costs + picks; docs/STEREO.md, section Phase refinement). Instructions per pixel on the \
-         M4 from the firmware's `point stereo` lines (`firmware-sim/src/stereo_run.rs`, \
-         `POINTS`; same QEMU run as above; the camera is excluded as in the previous \
-         section). Accuracy from `cargo run --release -- stereo --engine core --c2f 2 \
-         --c2f-radius R --c2f-band b --p2 4 [--lr-from-left] [--paths 3] [--c2f-finest 1] [--c2f-phase] --width 160 --max-disp 32 --refine 0 --json` on \
-         Aloe and on the held-out Motorcycle: bad-2 % over estimated pixels / over all GT \
-         pixels. docs/STEREO.md, section Operating points, reads this table.\n\n\
+        "The named points of the engine (`C2fParams::NAMED`, docs/STEREO.md, section \
+         Operating points), the same tables: R the window half width (2R + 1 candidates at the \
+         finer levels), band the cell groups within b px of the window's centre, LR the \
+         left-right check's right map (`read`: the right eye read out; `derived`: from the left \
+         map's path sums as in OpenCV SGBM, no right eye; `off`: no check), paths the SGM paths \
+         (3: without the two diagonals), finest the finest level run (1: the half-size map, each \
+         cell over its 2x2 block), phase the refinement to the frame's resolution by phase (its \
+         cost inside costs + picks). Instructions per pixel on the M4 from the firmware's \
+         `point stereo` lines (same QEMU run as above; the camera excluded as in the previous \
+         section). Accuracy from `cargo run --release -- stereo --point NAME --width 160 \
+         --max-disp 32 --json` on Aloe and on the held-out Motorcycle: bad-2 % over estimated \
+         pixels / over all GT pixels; OpenCV on the same pairs in the next two sections.\n\n\
          | point | R | band | LR | paths | finest | phase | cells / px | votes | SGM | \
          costs + picks | filters | **engine** | Aloe est / all | Motorcycle est / all |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
-    let data = data_root();
-    let pairs = [
-        (
-            data.join("aloe/aloeL.jpg"),
-            data.join("aloe/aloeR.jpg"),
-            data.join("aloe/aloeGT.png"),
-        ),
-        (
-            data.join("motorcycle/motorcycle_left.png"),
-            data.join("motorcycle/motorcycle_right.png"),
-            data.join("motorcycle/motorcycle_disp.npz"),
-        ),
-    ];
+    let pairs = [aloe_files(), motorcycle_files()];
     for p in &pts {
         let cells = p
             .get("cells")
@@ -374,8 +358,8 @@ fn stereo_points(stdout: &str) -> Section {
             p.get("filters"),
             p.get("engine"),
         );
-        for (l, r, gt) in &pairs {
-            row.push_str(&format!(" {} |", point_accuracy([l, r, gt], p)));
+        for [l, r, gt] in &pairs {
+            row.push_str(&format!(" {} |", point_accuracy([l, r, gt], p.name)));
         }
         body.push_str(&row);
         body.push('\n');
@@ -389,23 +373,31 @@ fn stereo_points(stdout: &str) -> Section {
     Section { title, body }
 }
 
-/// `est / all` bad-2 % of `--engine core` at point `p`'s window, band,
-/// left-right check and paths on `files` (160 px, D 32), or "not yet
-/// measured".
-fn point_accuracy(files: [&Path; 3], p: &Point<'_>) -> String {
-    let (radius, band) = (p.radius, p.band);
-    let [l, r, gt] = files;
-    if !gt.is_file() {
-        return format!("{NOT_YET} (`cargo xtask fetch-data`)");
-    }
-    let out_dir = root().join("target/bench-points");
-    let (l, r, gt, out) = (
-        l.to_string_lossy(),
-        r.to_string_lossy(),
-        gt.to_string_lossy(),
-        out_dir.to_string_lossy(),
-    );
-    let mut args = vec![
+/// Aloe's left, right and GT paths under the data root.
+fn aloe_files() -> [PathBuf; 3] {
+    let dir = data_root().join("aloe");
+    [
+        dir.join("aloeL.jpg"),
+        dir.join("aloeR.jpg"),
+        dir.join("aloeGT.png"),
+    ]
+}
+
+/// Motorcycle's left, right and GT paths under the data root.
+fn motorcycle_files() -> [PathBuf; 3] {
+    let dir = data_root().join("motorcycle");
+    [
+        dir.join("motorcycle_left.png"),
+        dir.join("motorcycle_right.png"),
+        dir.join("motorcycle_disp.npz"),
+    ]
+}
+
+/// The arguments of `protogist stereo` at the named `point` on `files`
+/// (left, right, GT) at width `w` and max disparity `d`, JSON into `out`.
+fn point_args(files: [&Path; 3], point: &str, w: &str, d: &str, out: &Path) -> Vec<String> {
+    let [l, r, gt] = files.map(|f| f.to_string_lossy().into_owned());
+    [
         "stereo",
         "--left",
         &l,
@@ -413,39 +405,34 @@ fn point_accuracy(files: [&Path; 3], p: &Point<'_>) -> String {
         &r,
         "--gt",
         &gt,
+        "--point",
+        point,
         "--width",
-        "160",
+        w,
         "--max-disp",
-        "32",
-        "--refine",
-        "0",
+        d,
         "--json",
         "--out",
-        &out,
-        "--engine",
-        "core",
-        "--c2f",
-        "2",
-        "--c2f-radius",
-        radius,
-        "--p2",
-        "4",
-    ];
-    if band != "-" {
-        args.extend_from_slice(&["--c2f-band", band]);
+        &out.to_string_lossy(),
+    ]
+    .map(str::to_string)
+    .to_vec()
+}
+
+/// `est / all` bad-2 % of the named `point` on `files` (160 px, D 32), or
+/// "not yet measured".
+fn point_accuracy(files: [&Path; 3], point: &str) -> String {
+    if !files[2].is_file() {
+        return format!("{NOT_YET} (`cargo xtask fetch-data`)");
     }
-    if p.lr == "derived" {
-        args.push("--lr-from-left");
-    }
-    if p.paths != "5" {
-        args.extend_from_slice(&["--paths", p.paths]);
-    }
-    if p.phase == "1" {
-        args.push("--c2f-phase");
-    }
-    if p.finest != "0" {
-        args.extend_from_slice(&["--c2f-finest", p.finest]);
-    }
+    let args = point_args(
+        files,
+        point,
+        "160",
+        "32",
+        &root().join("target/bench-points"),
+    );
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     protogist_json(&args)
         .and_then(|v| {
             let f = v.get("final")?;
@@ -637,257 +624,86 @@ fn segmentation_iou() -> Section {
     Section { title, body }
 }
 
-/// The engine stopped at level 1 (`--c2f-finest 1`: the half-size map
-/// spread over 2x2 blocks) at the setting chosen on Motorcycle among the
-/// points within 1,500 instructions/px (`stereo_grid.py --grid half`):
-/// r2b2l3h in the operating points above.
-const ENGINE_CORE_HALF: [&str; 13] = [
-    "--engine",
-    "core",
-    "--c2f",
-    "2",
-    "--c2f-band",
-    "2",
-    "--p2",
-    "4",
-    "--lr-from-left",
-    "--paths",
-    "3",
-    "--c2f-finest",
-    "1",
-];
-
-/// The cheapest measured full-size point of the core engine: band 1, the
-/// right map derived from the left sums (no right eye), 3 SGM paths
-/// (r2b1l3 in the operating points above).
-const ENGINE_CORE_FAST: [&str; 11] = [
-    "--engine",
-    "core",
-    "--c2f",
-    "2",
-    "--c2f-band",
-    "1",
-    "--p2",
-    "4",
-    "--lr-from-left",
-    "--paths",
-    "3",
-];
-
-/// r2b1l3p in the operating points above: [`ENGINE_CORE_FAST`] stopped at
-/// level 1 and refined to the frame's resolution by phase (docs/STEREO.md,
-/// section Phase refinement).
-fn engine_core_phase() -> Vec<&'static str> {
-    [&ENGINE_CORE_FAST[..], &["--c2f-finest", "1", "--c2f-phase"]].concat()
+fn stereo_aloe(stdout: &str) -> Section {
+    let files = aloe_files();
+    let body = format!(
+        "`cargo run --release -- stereo --left aloeL.jpg --right aloeR.jpg --gt aloeGT.png \
+         --point NAME --width W --max-disp D --json --out DIR`: core's engine at each named \
+         point, ms its run alone, the best of at least 15 runs over at least 1 s, single \
+         thread. bad-k: % of pixels off by more than k px, over pixels with an estimate, and \
+         over all GT pixels with a missing estimate counted as an error.\n\n{}",
+        point_rows(stdout, &files)
+    );
+    stereo_pair("Stereo on Middlebury Aloe", body, &files, "aloe")
 }
 
-fn dem_aloe() -> Section {
-    let title = "Disparity energy model on Middlebury Aloe (f32 reference)";
-    let dir = data_root().join("aloe");
-    let (l, r, gt) = (
-        dir.join("aloeL.jpg"),
-        dir.join("aloeR.jpg"),
-        dir.join("aloeGT.png"),
+fn stereo_motorcycle(stdout: &str) -> Section {
+    let files = motorcycle_files();
+    let body = format!(
+        "scikit-image 0.26.0's copy of Motorcycle (741x500, GT float32 px in an npz), fetched \
+         by `cargo xtask fetch-data`; the pair P2 was chosen on. `cargo run --release -- stereo \
+         --left motorcycle_left.png --right motorcycle_right.png --gt motorcycle_disp.npz \
+         --point NAME --width W --max-disp D --json --out DIR`; metrics as in the Aloe \
+         section.\n\n{}",
+        point_rows(stdout, &files)
     );
-    if !gt.is_file() {
+    stereo_pair(
+        "Stereo on Middlebury 2014 Motorcycle",
+        body,
+        &files,
+        "motorcycle",
+    )
+}
+
+/// The section of one pair: `body` (the point rows) and OpenCV's rows, or
+/// "not yet measured" without the data.
+fn stereo_pair(title: &'static str, body: String, files: &[PathBuf; 3], pair: &str) -> Section {
+    if !files[2].is_file() {
         return Section {
             title,
             body: format!("{NOT_YET}: run `cargo xtask fetch-data`.\n"),
         };
     }
-    let mut body = format!(
-        "`cargo run --release -- stereo --left aloeL.jpg --right aloeR.jpg --gt aloeGT.png \
-         --width W --max-disp D --json --out DIR`, default `DemParams` (3 orientations, 2 scales, \
-         5x5 pooling, left-right check). bad-k: % of pixels off by more than k px, over pixels \
-         with an estimate, and over all GT pixels with a missing estimate counted as an error.\n\n\
-         The `--refine 1` rows add the colour-guided border refinement (docs/STEREO.md); the \
-         `--complete` rows score the map after the pipeline's completion over conspicuity \
-         regions (`protogist::complete`, docs/SEGMENT.md), ms without it. The `--sgm` rows \
-         follow the box pooling with semi-global aggregation of the normalised Poisson costs \
-         (5 one-pass paths, P1 0.25, P2 16, f32 reference: docs/STEREO.md, section \
-         Semi-global aggregation; core runs SGM only in its coarse-to-fine engine, the \
-         `--engine core` rows). The `--colour luv` rows add colour \
-         channels, 8 paths and the settings named, chosen on Aloe itself (no held-out pair): \
-         docs/STEREO.md, section SGM with colour channels. The `--c2f` row searches coarse to \
-         fine (5 candidates from the groups near them at the fine levels; the ms still score \
-         every candidate): docs/STEREO.md, section Coarse-to-fine with SGM. The \
-         `--preset held-out` rows are the setting chosen on the held-out Motorcycle pair (next \
-         section; coarse to fine, colour, 8 paths, and islands of at most 100 px set OFF by the \
-         speckle filter), run here once with no change; `--speckle 0` is the same without the \
-         filter (the second round's choice). The `--engine core` rows run core's \
-         fixed-point coarse-to-fine engine (`protogist::stereo::c2f`, the firmware's stage: \
-         grey, one level, no pooling, 5 SGM paths, windows ±2, band 2, P2 4 chosen on Motorcycle), ms its run alone, \
-         the best of at least 15 runs over at least 1 s, single thread (the row with `--c2f-band 1 --lr-from-left --paths 3` is the \
-         engine's cheapest full-size point, r2b1l3 in the operating points above; the row \
-         with `--c2f-finest 1` is r2b2l3h, the map of the half-size pair spread over 2x2 \
-         blocks, at the setting chosen on Motorcycle among the points within 1,500 \
-         instructions/px, docs/STEREO.md, section Finest level; the row with `--c2f-phase` is \
-         r2b1l3p, that of r2b1l3h refined to the frame's resolution by phase, section Phase \
-         refinement); the `--engine reference` rows \
-         beside them are the same settings in the f32 reference.\n\n{STEREO_TABLE_HEAD}",
-    );
-    // (width, D, extra options); every row runs with `--refine 0` unless it
-    // names another radius.
-    // The combined rows: SGM with colour channels (settings chosen on Aloe
-    // itself, docs/STEREO.md "SGM with colour channels").
-    const COMBINED: [&str; 9] = [
-        "--levels",
-        "1",
-        "--sgm",
-        "--colour",
-        "luv",
-        "--paths",
-        "8",
-        "--chroma-weight",
-        "2",
-    ];
-    let c160: Vec<&str> = COMBINED
-        .iter()
-        .copied()
-        .chain(["--pool", "0", "--p2", "4"])
-        .collect();
-    let c320: Vec<&str> = COMBINED.iter().copied().chain(["--pool", "1"]).collect();
-    // Coarse to fine with SGM (docs/STEREO.md "Coarse-to-fine with SGM").
-    const C2F: [&str; 15] = [
-        "--levels",
-        "1",
-        "--sgm",
-        "--colour",
-        "luv",
-        "--chroma-weight",
-        "2",
-        "--paths",
-        "5",
-        "--pool",
-        "1",
-        "--c2f",
-        "2",
-        "--c2f-band",
-        "2",
-    ];
-    let held_out: &[&str] = &["--preset", "held-out"];
-    // The preset without its speckle filter: the second round's choice.
-    let held_out_no_speckle: &[&str] = &["--preset", "held-out", "--speckle", "0"];
-    // The same coarse-to-fine setting through core's fixed-point engine
-    // and through the f32 reference (`--engine core` runs `--levels 1
-    // --pool 0 --sgm --paths 5`, grey, by default).
-    const ENGINE_CORE: [&str; 8] = [
-        "--engine",
-        "core",
-        "--c2f",
-        "2",
-        "--c2f-band",
-        "2",
-        "--p2",
-        "4",
-    ];
-    let engine_core_phase = engine_core_phase();
-    const ENGINE_REF: [&str; 15] = [
-        "--engine",
-        "reference",
-        "--levels",
-        "1",
-        "--pool",
-        "0",
-        "--sgm",
-        "--paths",
-        "5",
-        "--c2f",
-        "2",
-        "--c2f-band",
-        "2",
-        "--p2",
-        "4",
-    ];
-    let rows: [(&str, &str, &[&str]); 30] = [
-        ("160", "32", &[]),
-        ("160", "32", &["--refine", "1"]),
-        ("160", "32", &["--complete"]),
-        ("160", "32", &["--levels", "1", "--sgm"]),
-        ("160", "32", &["--levels", "1", "--sgm", "--complete"]),
-        ("160", "32", &c160),
-        ("160", "32", &c320),
-        ("160", "32", &C2F),
-        ("160", "32", held_out_no_speckle),
-        ("160", "32", held_out),
-        ("160", "32", &ENGINE_CORE),
-        ("160", "32", &ENGINE_CORE_FAST),
-        ("160", "32", &ENGINE_CORE_HALF),
-        ("160", "32", &engine_core_phase),
-        ("160", "32", &ENGINE_REF),
-        ("320", "64", &[]),
-        ("320", "64", &["--refine", "1"]),
-        ("320", "64", &["--complete"]),
-        ("320", "64", &["--levels", "1", "--sgm"]),
-        ("320", "64", &["--levels", "1", "--sgm", "--complete"]),
-        ("320", "64", &c320),
-        ("320", "64", &c160),
-        ("320", "64", &C2F),
-        ("320", "64", held_out_no_speckle),
-        ("320", "64", held_out),
-        ("320", "64", &ENGINE_CORE),
-        ("320", "64", &ENGINE_CORE_FAST),
-        ("320", "64", &ENGINE_CORE_HALF),
-        ("320", "64", &engine_core_phase),
-        ("320", "64", &ENGINE_REF),
-    ];
-    for (w, d, extra) in rows {
-        body.push_str(&stereo_row([&l, &r, &gt], w, d, extra));
+    let dir = files[2].parent().unwrap_or(Path::new("."));
+    Section {
+        title,
+        body: format!("{body}{}", opencv_rows(dir, pair)),
     }
-    body.push_str(&opencv_rows(&dir, "aloe"));
-    Section { title, body }
 }
 
-/// One table row: `protogist stereo` on `files` (left, right, GT) at width
-/// `w` and max disparity `d` with `extra` options (`--refine 0` unless they
-/// name a radius), or "not yet measured".
-fn stereo_row(files: [&Path; 3], w: &str, d: &str, extra: &[&str]) -> String {
+/// The table of the named points (their names from the firmware's `point
+/// stereo` lines) on `files` at 160 px D 32 and 320 px D 64.
+fn point_rows(stdout: &str, files: &[PathBuf; 3]) -> String {
     let [l, r, gt] = files;
+    let mut out = String::from(STEREO_TABLE_HEAD);
+    for (w, d) in [("160", "32"), ("320", "64")] {
+        for p in points(stdout) {
+            out.push_str(&stereo_row([l, r, gt], p.name, w, d));
+        }
+    }
+    out
+}
+
+/// One table row: `protogist stereo` at the named `point` on `files`
+/// (left, right, GT) at width `w` and max disparity `d`, or "not yet
+/// measured".
+fn stereo_row(files: [&Path; 3], point: &str, w: &str, d: &str) -> String {
     let out_dir = root().join("target/bench-stereo");
-    let opts = if extra.is_empty() {
-        "-".to_string()
-    } else {
-        format!("`{}`", extra.join(" "))
-    };
-    let refine = if extra.contains(&"--refine") {
-        &[][..]
-    } else {
-        &["--refine", "0"][..]
-    };
-    let args = [
-        "stereo",
-        "--left",
-        &l.to_string_lossy(),
-        "--right",
-        &r.to_string_lossy(),
-        "--gt",
-        &gt.to_string_lossy(),
-        "--width",
-        w,
-        "--max-disp",
-        d,
-        "--json",
-        "--time-at-least",
-        &TIMED_MS.to_string(),
-        "--out",
-        &out_dir.to_string_lossy(),
-    ]
-    .map(|a| a.to_string());
-    let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
-    args.extend_from_slice(refine);
-    args.extend_from_slice(extra);
+    let mut args = point_args(files, point, w, d, &out_dir);
+    args.extend(["--time-at-least".to_string(), TIMED_MS.to_string()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     protogist_json(&args)
         .and_then(|v| {
             let f = v.get("final")?;
             let g = |k: &str| f.get(k).and_then(serde_json::Value::as_f64);
             Some(format!(
-                "| {w} | {d} | {opts} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {} |\n",
+                "| {point} | {w} | {d} | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} | {:.2} | {:.1} % | {} |\n",
                 g("bad1_estimated")?, g("bad2_estimated")?, g("bad4_estimated")?,
                 g("bad1_all")?, g("bad2_all")?, g("bad4_all")?,
                 g("mae")?, g("density")?, ms(v.get("stereo_ms")?.as_f64()?)
             ))
         })
-        .unwrap_or_else(|| format!("| {w} | {d} | {opts} | {NOT_YET} | | | | |\n"))
+        .unwrap_or_else(|| format!("| {point} | {w} | {d} | {NOT_YET} | | | | |\n"))
 }
 
 /// Milliseconds as printed: one decimal below 100 ms (the fast engines sit
@@ -900,54 +716,9 @@ fn ms(v: f64) -> String {
     }
 }
 
-/// The same table header as the Aloe section's.
-const STEREO_TABLE_HEAD: &str = "| width | D | options | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
+/// The header of the point tables.
+const STEREO_TABLE_HEAD: &str = "| point | width | D | bad-1 / 2 / 4 (estimated) | bad-1 / 2 / 4 (all GT) | MAE px | density | ms |\n\
      |---|---|---|---|---|---|---|---|\n";
-
-fn dem_motorcycle() -> Section {
-    let title = "Disparity energy model on Middlebury 2014 Motorcycle (held-out pair)";
-    let dir = data_root().join("motorcycle");
-    let (l, r, gt) = (
-        dir.join("motorcycle_left.png"),
-        dir.join("motorcycle_right.png"),
-        dir.join("motorcycle_disp.npz"),
-    );
-    if !gt.is_file() {
-        return Section {
-            title,
-            body: format!("{NOT_YET}: run `cargo xtask fetch-data`.\n"),
-        };
-    }
-    let mut body = format!(
-        "scikit-image 0.26.0's copy of Motorcycle (741x500, GT float32 px in an npz), fetched \
-         by `cargo xtask fetch-data`. `cargo run --release -- stereo --left \
-         motorcycle_left.png --right motorcycle_right.png --gt motorcycle_disp.npz --width W \
-         --max-disp D --refine 0 --json --out DIR OPTIONS`; metrics as in the Aloe section. \
-         `--preset held-out` is the setting chosen on this pair for both sizes, `--speckle 0` \
-         the same without its speckle filter; the `--engine core` rows are core's fixed-point \
-         engine at r2b2l3h (the operating points above; chosen on this pair, docs/STEREO.md, \
-         section Finest level) and at r2b1l3p (`--c2f-phase`: r2b1l3h refined to the frame's \
-         resolution, section Phase refinement), ms its run alone, the best of at least 15 runs over at least 1 s, \
-         single thread \
-         (`host/src/stereo_cmd/preset.rs`; docs/STEREO.md, section Settings chosen on a \
-         held-out pair).\n\n{STEREO_TABLE_HEAD}"
-    );
-    let engine_core_phase = engine_core_phase();
-    for (w, d) in [("160", "32"), ("320", "64")] {
-        for extra in [
-            &[][..],
-            &["--levels", "1", "--sgm"],
-            &["--preset", "held-out", "--speckle", "0"],
-            &["--preset", "held-out"],
-            &ENGINE_CORE_HALF,
-            &engine_core_phase,
-        ] {
-            body.push_str(&stereo_row([&l, &r, &gt], w, d, extra));
-        }
-    }
-    body.push_str(&opencv_rows(&dir, "motorcycle"));
-    Section { title, body }
-}
 
 /// Each host stereo time (ours with `--engine core`, and OpenCV's) is the
 /// best of at least 15 runs made over at least this many ms: with 15 runs
@@ -1024,8 +795,7 @@ fn opencv_rows(data: &Path, pair: &str) -> String {
         "\nIssue 3 quotes, for OpenCV 5.0, SGBM bad-2 over all GT pixels 33.6 % at 160 px and \
          33.5 % at 320 px (BM 53.0 % and 46.3 %). With numDisparities = D the table above is \
          within 0.6 point of its SGBM figures; an earlier version of the script searched D + 1 \
-         rounded up to a multiple of 16 and got 42.4 % and 37.7 % (docs/STEREO.md, Where it \
-         stands).\n",
+         rounded up to a multiple of 16 and got 42.4 % and 37.7 %.\n",
     );
     out
 }
@@ -1195,7 +965,28 @@ fn mlp_host() -> Section {
 
 #[cfg(test)]
 mod stereo_tests {
-    use super::{points, stereo_m4};
+    use super::{point_args, points, stereo_m4};
+    use std::path::Path;
+
+    #[test]
+    fn a_point_row_runs_the_named_point_on_the_pair() {
+        let (l, r, gt) = (Path::new("l.png"), Path::new("r.png"), Path::new("gt.png"));
+        let a = point_args([l, r, gt], "fast", "160", "32", Path::new("out"));
+        let at = |flag: &str| {
+            let i = a.iter().position(|x| x == flag).unwrap();
+            a[i + 1].as_str()
+        };
+        assert_eq!(a[0], "stereo");
+        assert_eq!(
+            (at("--point"), at("--width"), at("--max-disp")),
+            ("fast", "160", "32")
+        );
+        assert_eq!(
+            (at("--left"), at("--right"), at("--gt")),
+            ("l.png", "r.png", "gt.png")
+        );
+        assert!(a.iter().any(|x| x == "--json"));
+    }
 
     #[test]
     fn point_lines_are_read_field_by_field() {
@@ -1232,7 +1023,7 @@ mod stereo_tests {
         assert!(s.body.contains("| readout | 62886.3 |"));
         assert!(s.body.contains("| total, with the camera | 108554.7 |"));
         assert!(s.body.contains("**1400.2**"));
-        assert!(s.body.contains("default **reached, 1400**"), "{}", s.body);
+        assert!(s.body.contains("by `full` **reached, 1400**"), "{}", s.body);
         assert!(
             s.body.contains("within it (next section): **none**"),
             "{}",

@@ -52,7 +52,6 @@ use crate::segment::{
 };
 use crate::shape::{Centroid, ShapeElem, ShapeError, SHAPE_LEN};
 use crate::stereo::c2f::{C2f, C2fParams, MAX_COARSE};
-use crate::stereo::phase::PhaseParams;
 use crate::stereo::{DemTable, StereoError, TableError};
 use core::fmt;
 
@@ -93,17 +92,10 @@ pub struct PipelineParams {
     pub model: ModelCapacity,
 }
 
-/// The stereo point the pipeline runs by default: the half-size search
-/// (band 1, 3 SGM paths, the left-right check from the left sums) refined
-/// to the frame's resolution by phase.
-pub const STEREO_DEFAULT: C2fParams = C2fParams {
-    band: Some(1),
-    lr_from_left: true,
-    paths: 3,
-    finest: 1,
-    phase: Some(PhaseParams::DEFAULT),
-    ..C2fParams::DEFAULT
-};
+/// The stereo point the pipeline runs by default, [`C2fParams::FAST`]:
+/// the half-size search refined to the frame's resolution by phase
+/// (docs/PIPELINE.md, "The stereo point").
+pub const STEREO_DEFAULT: C2fParams = C2fParams::FAST;
 
 impl PipelineParams {
     /// The defaults: [`STEREO_DEFAULT`] with 32 disparities, the paper's

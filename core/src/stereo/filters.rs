@@ -1,4 +1,4 @@
-//! The monocular front end in fixed point: grey, the ↓2 binomial pyramid and
+//! The monocular front end in fixed point: grey and
 //! the separable complex Gabor bank with zero-DC correction.
 //!
 //! | quantity | format | range |
@@ -48,57 +48,6 @@ pub fn grey_row(rgb: &[Rgb8], out: &mut [u16]) {
     for (o, &p) in out.iter_mut().zip(rgb) {
         *o = grey(p);
     }
-}
-
-/// One row of the ↓2 pyramid step: binomial `[1 4 6 4 1]` in x (at the
-/// kept columns `2i`) and y, over five source rows (already clamped to the
-/// image: rows `2j − 2 ..= 2j + 2`), normalised by 256. Exact sums,
-/// rounded once to `U8F8`.
-///
-/// Separable and running: the vertical sums `v(x)` (≤ 16·65535) of the
-/// columns `2i + 1`, `2i + 2` are computed once and the three before them
-/// carried over, so each output is `v(2i − 2) + 4v(2i − 1) + 6v(2i) +
-/// 4v(2i + 1) + v(2i + 2)` (≤ 256·65535 < 2^24), the same integer as the
-/// 25-tap sum. The columns are clamped to the row only at the two ends.
-pub fn pyramid_row(rows: [&[u16]; 5], out: &mut [u16]) {
-    let [r0, r1, r2, r3, r4] = rows;
-    let last = r0.len().saturating_sub(1);
-    let vert = |a: u16, b: u16, c: u16, d: u16, e: u16| {
-        u32::from(a) + 4 * (u32::from(b) + u32::from(d)) + 6 * u32::from(c) + u32::from(e)
-    };
-    let at = |r: &[u16], x: usize| r.get(x.min(last)).copied().unwrap_or(0);
-    let v = |x: usize| vert(at(r0, x), at(r1, x), at(r2, x), at(r3, x), at(r4, x));
-    let round = |acc: u32| ((acc + 128) >> 8) as u16;
-    // Vertical sums at 2i − 2, 2i − 1, 2i.
-    let mut p = [v(0); 3];
-    // Interior: 2i + 2 ≤ last, the pairs (2i + 1, 2i + 2) of each row.
-    fn pairs(r: &[u16]) -> impl Iterator<Item = [u16; 2]> + '_ {
-        let pairs = r.get(1..).unwrap_or(&[]).chunks_exact(2);
-        pairs.filter_map(|p| <[u16; 2]>::try_from(p).ok())
-    }
-    let interior = pairs(r0)
-        .zip(pairs(r1))
-        .zip(pairs(r2))
-        .zip(pairs(r3))
-        .zip(pairs(r4));
-    let mut done = 0;
-    for (o, ((((a, b), c), d), e)) in out.iter_mut().zip(interior) {
-        let n1 = vert(a[0], b[0], c[0], d[0], e[0]);
-        let n2 = vert(a[1], b[1], c[1], d[1], e[1]);
-        *o = round(p[0] + 4 * (p[1] + n1) + 6 * p[2] + n2);
-        p = [p[2], n1, n2];
-        done += 1;
-    }
-    for (i, o) in out.iter_mut().enumerate().skip(done) {
-        let (n1, n2) = (v(2 * i + 1), v(2 * i + 2));
-        *o = round(p[0] + 4 * (p[1] + n1) + 6 * p[2] + n2);
-        p = [p[2], n1, n2];
-    }
-}
-
-/// Size of a pyramid level: `ceil(n / 2^level)`.
-pub const fn level_size(n: usize, level: usize) -> usize {
-    n.div_ceil(1 << level)
 }
 
 /// Carrier direction `k` of `n`, degrees from horizontal: evenly spread
@@ -904,45 +853,6 @@ mod tests {
                 e: Some(1)
             }]
         );
-    }
-
-    /// The pyramid row as the direct 25-tap sum with a clamp per tap.
-    fn pyramid_direct(rows: [&[u16]; 5], out: &mut [u16]) {
-        const B: [u32; 5] = [1, 4, 6, 4, 1];
-        let w = rows[0].len();
-        for (i, o) in out.iter_mut().enumerate() {
-            let mut acc = 0u32;
-            for (row, by) in rows.iter().zip(B) {
-                for (t, bx) in B.iter().enumerate() {
-                    let x = (2 * i + t).saturating_sub(2).min(w.saturating_sub(1));
-                    acc += by * bx * u32::from(row.get(x).copied().unwrap_or(0));
-                }
-            }
-            *o = ((acc + 128) >> 8) as u16;
-        }
-    }
-
-    #[test]
-    fn the_running_pyramid_is_the_direct_sum() {
-        let mut rng = SplitMix64::new(9);
-        for w in 0..=W {
-            for _ in 0..20 {
-                let mut grey = [[0u16; W]; 5];
-                for v in grey.iter_mut().flatten() {
-                    *v = if rng.below(3) == 0 {
-                        65535
-                    } else {
-                        rng.below(65536) as u16
-                    };
-                }
-                let rows: [&[u16]; 5] = core::array::from_fn(|t| &grey[t][..w]);
-                let (mut a, mut b) = ([1u16; W], [2u16; W]);
-                let lw = level_size(w, 1);
-                pyramid_row(rows, &mut a[..lw]);
-                pyramid_direct(rows, &mut b[..lw]);
-                assert_eq!(a[..lw], b[..lw], "width {w}");
-            }
-        }
     }
 
     #[test]

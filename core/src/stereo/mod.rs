@@ -1,39 +1,28 @@
 //! Stereo (paper section 3.1): the disparity energy model (DEM) with a
-//! trained decoding population, in fixed point, row-streamed.
+//! trained decoding population, in fixed point, row-streamed, searched
+//! coarse to fine with semi-global aggregation ([`c2f`], the one engine).
 //!
 //! ```text
-//! left, right RGB ─► grey (U8F8) ─► ↓2 pyramid ─► complex Gabor bank
-//!   (I10F6, per eye, once) ─► energies A, X per (level, carrier, shift)
-//!   ─► Poisson log-likelihood per candidate (integer table) ─► 5x5 pool
-//!   ─► argmax + parabola ─► OFF tests (texture, ambiguity, left-right)
+//! left, right RGB ─► levels (2x2 means) ─► grey (U8F8) ─► complex Gabor
+//!   bank (I10F6) ─► binocular cells A, X per (carrier, shift) in a window
+//!   ─► votes with the integer decoder table ─► normalised costs ─► SGM
+//!   ─► argmin + parabola ─► OFF tests (texture, ambiguity, left-right)
+//!   ─► [phase refinement]
 //! ```
 //!
 //! The f32 reference of every step is `protogist_host::reference::stereo`
-//! (same names). Disparity is left-referenced, `d = x_L − x_R ≥ 0`.
-//!
-//! **Row streaming.** Level 0 keeps a ring of `2r + 1` grey rows per eye;
-//! the coarser pyramid levels (a quarter of the pixels and less) are whole
-//! planes; each level keeps a ring of the response rows that the vertical
-//! pooling window needs. Pooling is linear, so the vertical half of the
-//! box is applied to the energies of each group (exactly what pooling the
-//! scores gives) and the horizontal half to the scores, in a ring of
-//! `2·pool + 1` pixels (left-referenced) and `2·pool + max_shift + 1`
-//! pixels (right-referenced). [`scratch_bytes`] states the total.
-//!
-//! **Candidates.** The read-out scores a window `lo..=hi` of candidates per
-//! pixel ([`readout::pick`]); the current read-out uses `0..=max_disp`
-//! (clipped to the image), so a coarse-to-fine search can narrow the window
-//! without touching the rest.
+//! (same names). Disparity is left-referenced, `d = x_L − x_R ≥ 0`. The
+//! operating points a user chooses between are named constants of
+//! [`c2f::C2fParams`] (`FULL`, `FAST`, `HALF`); docs/STEREO.md explains
+//! the engine and the points.
 
 pub mod c2f;
 pub mod filters;
 pub mod phase;
-pub mod readout;
 pub mod sgm;
 pub mod table;
 
-use crate::disparity::DisparityCell;
-use crate::image::{ImageError, ImageView, ImageViewMut, Rgb8};
+use crate::image::ImageError;
 use core::fmt;
 pub use filters::{Gabor, Z};
 pub use table::{DemLayout, DemTable, TableError};
@@ -44,9 +33,6 @@ pub const MAX_CARRIERS: usize = 6;
 pub const MAX_POOL_RADIUS: u8 = 7;
 /// Largest number of pyramid levels.
 pub const MAX_LEVELS: usize = 4;
-/// Pixels per chunk of the energy stage (the energies of a chunk's pixels
-/// for every group are computed before their votes).
-pub const CHUNK: usize = 8;
 
 /// Every parameter of the model, with the reference's defaults
 /// (`protogist_host::reference::stereo::DemParams`; training parameters
@@ -281,116 +267,6 @@ impl From<TableError> for StereoError {
     }
 }
 
-/// Rows of level-`level` responses the vertical pooling window of radius
-/// `pool` needs (bilinear upsampling reads one more row above level 0).
-pub const fn z_ring_rows(pool: usize, level: usize) -> usize {
-    if level == 0 {
-        2 * pool + 1
-    } else {
-        ((2 * pool) >> level) + 2
-    }
-}
-
-/// `u16` elements of grey scratch: the level-0 ring of `max(2r + 1, 5)` rows per
-/// eye and the planes of levels 1.. per eye.
-pub const fn grey_len(w: usize, h: usize, p: &DemParams) -> usize {
-    let mut n = readout::grey_ring_rows(p.radius as usize) * w;
-    let mut l = 1;
-    while l < p.levels as usize {
-        n += filters::level_size(w, l) * filters::level_size(h, l);
-        l += 1;
-    }
-    2 * n
-}
-
-/// Response ([`Z`]) elements: per eye, level and carrier, a ring of
-/// [`z_ring_rows`] rows.
-pub const fn z_len(w: usize, p: &DemParams) -> usize {
-    let mut n = 0;
-    let mut l = 0;
-    while l < p.levels as usize {
-        n += z_ring_rows(p.pool_radius as usize, l) * filters::level_size(w, l);
-        l += 1;
-    }
-    2 * p.carriers as usize * n
-}
-
-/// `[i32; 3]` elements of the y-pass row.
-pub const fn col_len(w: usize) -> usize {
-    w
-}
-
-/// `i32` elements of the energy chunk: `[A, X_r, X_i]` per group for
-/// [`CHUNK`] pixels.
-pub const fn energy_len(p: &DemParams) -> usize {
-    3 * CHUNK * layout_const(p).groups()
-}
-
-/// `i64` elements of the score rings: `max_disp + 2` per slot (scores and
-/// the total), for `2·pool + 1` left and `2·pool + max_shift + 1` right
-/// slots, plus one pooled slot.
-pub const fn score_len(p: &DemParams) -> usize {
-    let pr = p.pool_radius as usize;
-    let slots = (2 * pr + 1) + (2 * pr + layout_const(p).max_shift() + 1) + 1;
-    slots * (p.max_disp as usize + 2)
-}
-
-/// `i32` elements of the per-row picks (left and right).
-pub const fn pick_len(w: usize) -> usize {
-    2 * w
-}
-
-/// The integer part of the layout (for the `const fn` sizes).
-const fn layout_const(p: &DemParams) -> DemLayout {
-    DemLayout {
-        max_disp: p.max_disp,
-        levels: p.levels,
-        carriers: p.carriers,
-        shift_step: p.shift_step,
-        radius: p.radius,
-        wavelength_q8: 0,
-        sigma_q12: 0,
-    }
-}
-
-/// Scratch bytes of the stage for `params` at `w` x `h`, beyond the two
-/// input frames and the output map.
-pub const fn scratch_bytes_for(w: usize, h: usize, p: &DemParams) -> usize {
-    2 * grey_len(w, h, p)
-        + 4 * z_len(w, p)
-        + 12 * col_len(w)
-        + 4 * energy_len(p)
-        + 8 * score_len(p)
-        + 4 * pick_len(w)
-}
-
-/// Scratch bytes for the default parameters with `max_disp` (e.g. 31 for
-/// 32 disparities) at `w` x `h`.
-pub const fn scratch_bytes(w: usize, h: usize, max_disp: u8) -> usize {
-    let p = DemParams {
-        max_disp,
-        ..DemParams::DEFAULT
-    };
-    scratch_bytes_for(w, h, &p)
-}
-
-/// Caller-provided scratch, sized by [`grey_len`], [`z_len`], [`col_len`],
-/// [`energy_len`], [`score_len`] and [`pick_len`].
-pub struct StereoBuffers<'a> {
-    /// Grey rings and planes.
-    pub grey: &'a mut [u16],
-    /// Response rings.
-    pub z: &'a mut [Z],
-    /// y-pass row.
-    pub col: &'a mut [[i32; 3]],
-    /// Energy chunk.
-    pub energy: &'a mut [i32],
-    /// Score rings.
-    pub scores: &'a mut [i64],
-    /// Per-row picks.
-    pub picks: &'a mut [i32],
-}
-
 /// The set-up stage: checked parameters, kernels and integer thresholds.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Dem {
@@ -448,39 +324,6 @@ impl Dem {
             .get(c)
             .filter(|_| c < usize::from(self.params.carriers))
     }
-
-    /// Checks the sizes of a run.
-    ///
-    /// # Errors
-    /// [`StereoError`] for mismatched or too small images, `max_disp` not
-    /// below the width, or a table of another layout.
-    pub fn check(
-        &self,
-        table: &DemTable<'_>,
-        left: (usize, usize),
-        right: (usize, usize),
-    ) -> Result<(), StereoError> {
-        if left != right {
-            return Err(StereoError::SizeMismatch { left, right });
-        }
-        if table.layout != self.layout {
-            return Err(StereoError::DecoderMismatch {
-                got: table.layout,
-                expected: self.layout,
-            });
-        }
-        let min = self.params.min_size();
-        if left.0 < min || left.1 < min {
-            return Err(StereoError::TooSmall { min, got: left });
-        }
-        if usize::from(self.params.max_disp) >= left.0 {
-            return Err(StereoError::MaxDispTooLarge {
-                max_disp: self.params.max_disp,
-                width: left.0,
-            });
-        }
-        Ok(())
-    }
 }
 
 /// What a run found.
@@ -495,9 +338,8 @@ pub struct StereoReport {
     /// Pixels OFF by the left-right check.
     pub off_inconsistent: usize,
     /// Binocular complex cells evaluated (one per carrier and cell
-    /// position; every level and eye): the coarse-to-fine engine's
-    /// measure of its decoding work ([`c2f`]); 0 for the full-search
-    /// engines, which evaluate every cell.
+    /// position; every level and eye): the engine's measure of its
+    /// decoding work ([`c2f`]).
     pub cells: usize,
 }
 
@@ -524,89 +366,4 @@ pub trait Probe {
 
 impl Probe for () {
     fn enter(&mut self, _: Step) {}
-}
-
-/// Runs the stage on an RGB pair into `out` (left-referenced, `U8F8` px or
-/// OFF).
-///
-/// # Errors
-/// [`StereoError`] for mismatched or too small images, `max_disp` not
-/// below the width, a table of another layout, or short buffers. Nothing
-/// is written to `out` on error.
-pub fn stereo(
-    dem: &Dem,
-    table: &DemTable<'_>,
-    left: &ImageView<'_, Rgb8>,
-    right: &ImageView<'_, Rgb8>,
-    bufs: &mut StereoBuffers<'_>,
-    out: &mut ImageViewMut<'_, DisparityCell>,
-) -> Result<StereoReport, StereoError> {
-    stereo_probed(dem, table, left, right, bufs, out, &mut ())
-}
-
-/// [`stereo`], telling `probe` when each step starts.
-///
-/// # Errors
-/// As [`stereo`].
-pub fn stereo_probed(
-    dem: &Dem,
-    table: &DemTable<'_>,
-    left: &ImageView<'_, Rgb8>,
-    right: &ImageView<'_, Rgb8>,
-    bufs: &mut StereoBuffers<'_>,
-    out: &mut ImageViewMut<'_, DisparityCell>,
-    probe: &mut impl Probe,
-) -> Result<StereoReport, StereoError> {
-    dem.check(table, left.size(), right.size())?;
-    if out.size() != left.size() {
-        return Err(StereoError::Image(ImageError::SizeMismatch {
-            expected: left.size(),
-            got: out.size(),
-        }));
-    }
-    let mut sink = |x: usize, y: usize, c: DisparityCell| {
-        out.set(x, y, c);
-    };
-    readout::run(dem, table, [left, right], bufs, &mut sink, probe)
-}
-
-/// Grey rows of an input frame, on demand: a whole frame in memory, or a
-/// camera (or renderer) that produces rows as the stage asks for them.
-pub trait GreyRows {
-    /// `(width, height)`.
-    fn size(&self) -> (usize, usize);
-    /// Row `y` (`y < height`) as [`filters::grey`] (`U8F8`) into `out`
-    /// (`width` long).
-    fn grey_row(&self, y: usize, out: &mut [u16]);
-}
-
-impl GreyRows for ImageView<'_, Rgb8> {
-    fn size(&self) -> (usize, usize) {
-        ImageView::size(self)
-    }
-
-    fn grey_row(&self, y: usize, out: &mut [u16]) {
-        if let Some(row) = self.row(y) {
-            filters::grey_row(row, out);
-        }
-    }
-}
-
-/// The streaming form of [`stereo`]: rows come from `left` and `right` as
-/// needed and every output cell goes to `sink(x, y, cell)`, row by row, so
-/// neither the frames nor the map need to be in memory.
-///
-/// # Errors
-/// As [`stereo`] (before any cell is produced).
-pub fn stereo_streamed<S: GreyRows>(
-    dem: &Dem,
-    table: &DemTable<'_>,
-    left: &S,
-    right: &S,
-    bufs: &mut StereoBuffers<'_>,
-    sink: &mut impl FnMut(usize, usize, DisparityCell),
-    probe: &mut impl Probe,
-) -> Result<StereoReport, StereoError> {
-    dem.check(table, left.size(), right.size())?;
-    readout::run(dem, table, [left, right], bufs, sink, probe)
 }

@@ -5,8 +5,8 @@
 //! finer scale"). It turns the half-size map of the coarse-to-fine engine
 //! ([`super::c2f::C2fParams::finest`] 1) into a map of the frame's own
 //! resolution for about 160 instructions per pixel on the M4 with the
-//! firmware's assembly phase step ([`PhaseKernel`]; the points `r2b1l3p`
-//! against `r2b1l3h`, docs/STEREO.md, "Phase refinement").
+//! firmware's assembly phase step ([`PhaseKernel`]; the named points
+//! `fast` against `half`, docs/STEREO.md, "Operating points").
 //!
 //! For each ON pixel with disparity `d`, the position shift is `s =
 //! min(round(d), max_disp)` and, with the 0° complex Gabor responses `z_L`,
@@ -55,11 +55,12 @@
 //! 2^-15. Pixels with a strong pooled response are within a few
 //! hundredths of a pixel; only weak ones (|P| near |ΔP|) can differ more.
 
-use super::c2f::RgbRows;
 use super::{param, StereoError};
 use crate::disparity::DisparityCell;
 use crate::fixed::U8F8;
+use crate::image::RgbRows;
 use crate::image::{ImageViewMut, Rgb8};
+use core::marker::PhantomData;
 
 /// Largest kernel radius.
 pub const MAX_RADIUS: usize = 5;
@@ -91,7 +92,7 @@ pub struct PhaseParams {
 
 impl PhaseParams {
     /// λ 4, σ/λ 0.4, radius 2, pool 1: chosen on the held-out Motorcycle
-    /// pair (docs/STEREO.md, "Phase refinement").
+    /// pair (docs/STEREO.md, "How the parameters were chosen").
     pub const DEFAULT: Self = Self {
         wavelength: 4.0,
         sigma_per_wavelength: 0.4,
@@ -250,8 +251,10 @@ fn take<'b, T>(buf: &'b mut [T], n: usize, what: &'static str) -> Result<&'b mut
 }
 
 /// The refinement of a map row by row (rows in any order: each reads its
-/// own frame row of both eyes).
-pub struct Refiner<'p, 'b, S: RgbRows> {
+/// own frame row of both eyes), the phase step by kernel `K`
+/// ([`PhaseKernel`]; [`Refiner::new`] gives the portable [`SafePhase`],
+/// [`Refiner::with_kernel`] a target's own).
+pub struct Refiner<'p, 'b, S: RgbRows, K = SafePhase> {
     phase: &'p Phase,
     eyes: [&'p S; 2],
     w: usize,
@@ -262,15 +265,31 @@ pub struct Refiner<'p, 'b, S: RgbRows> {
     row: &'b mut [DisparityCell],
     /// Pixels refined so far.
     refined: usize,
+    kernel: PhantomData<fn() -> K>,
 }
 
 impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
-    /// Checks sizes and buffers.
+    /// Checks sizes and buffers; the phase step is [`SafePhase`].
     ///
     /// # Errors
     /// [`StereoError::SizeMismatch`], [`StereoError::TooSmall`] for an
     /// empty frame, [`StereoError::Buffer`] for short buffers.
     pub fn new(
+        phase: &'p Phase,
+        left: &'p S,
+        right: &'p S,
+        bufs: PhaseBuffers<'b>,
+    ) -> Result<Self, StereoError> {
+        Self::with_kernel(phase, left, right, bufs)
+    }
+}
+
+impl<'p, 'b, S: RgbRows, K: PhaseKernel> Refiner<'p, 'b, S, K> {
+    /// [`Refiner::new`] with the phase step of kernel `K`.
+    ///
+    /// # Errors
+    /// As [`Refiner::new`].
+    pub fn with_kernel(
         phase: &'p Phase,
         left: &'p S,
         right: &'p S,
@@ -295,6 +314,7 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
             z: take(bufs.z, z_len(w, p, phase.max_disp), "phase z")?,
             row: take(bufs.row, w, "phase row")?,
             refined: 0,
+            kernel: PhantomData,
         })
     }
 
@@ -314,22 +334,11 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
         cell: DisparityCell,
         sink: &mut impl FnMut(usize, usize, DisparityCell),
     ) {
-        self.push_with::<SafePhase>(x, y, cell, sink);
-    }
-
-    /// [`Refiner::push`] with the phase step of kernel `K`.
-    pub fn push_with<K: PhaseKernel>(
-        &mut self,
-        x: usize,
-        y: usize,
-        cell: DisparityCell,
-        sink: &mut impl FnMut(usize, usize, DisparityCell),
-    ) {
         if let Some(c) = self.row.get_mut(x) {
             *c = cell;
         }
         if x + 1 == self.w {
-            self.flush_with::<K>(y, sink);
+            self.flush(y, sink);
         }
     }
 
@@ -342,17 +351,8 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
     /// Refines the row of [`Refiner::row_mut`] as map row `y` and passes
     /// its cells on to `sink`.
     pub fn flush(&mut self, y: usize, sink: &mut impl FnMut(usize, usize, DisparityCell)) {
-        self.flush_with::<SafePhase>(y, sink);
-    }
-
-    /// [`Refiner::flush`] with the phase step of kernel `K`.
-    pub fn flush_with<K: PhaseKernel>(
-        &mut self,
-        y: usize,
-        sink: &mut impl FnMut(usize, usize, DisparityCell),
-    ) {
         let row = core::mem::take(&mut self.row);
-        self.refine_row_with::<K>(y, row);
+        self.refine_row(y, row);
         for (x, &c) in row.iter().enumerate() {
             sink(x, y, c);
         }
@@ -361,25 +361,20 @@ impl<'p, 'b, S: RgbRows> Refiner<'p, 'b, S> {
 
     /// Refines map row `y` (`cells`, at least `w` long) in place.
     pub fn refine_row(&mut self, y: usize, cells: &mut [DisparityCell]) {
-        self.refine_row_with::<SafePhase>(y, cells);
-    }
-
-    /// [`Refiner::refine_row`] with the phase step of kernel `K`.
-    pub fn refine_row_with<K: PhaseKernel>(&mut self, y: usize, cells: &mut [DisparityCell]) {
         if y >= self.h {
             return;
         }
         match self.phase.params.taps() {
-            3 => self.row_n::<K, 3>(y, cells),
-            5 => self.row_n::<K, 5>(y, cells),
-            7 => self.row_n::<K, 7>(y, cells),
-            9 => self.row_n::<K, 9>(y, cells),
-            _ => self.row_n::<K, 11>(y, cells),
+            3 => self.row_n::<3>(y, cells),
+            5 => self.row_n::<5>(y, cells),
+            7 => self.row_n::<7>(y, cells),
+            9 => self.row_n::<9>(y, cells),
+            _ => self.row_n::<11>(y, cells),
         }
     }
 
     /// [`Refiner::refine_row`] with `N = 2r + 1` taps known.
-    fn row_n<K: PhaseKernel, const N: usize>(&mut self, y: usize, cells: &mut [DisparityCell]) {
+    fn row_n<const N: usize>(&mut self, y: usize, cells: &mut [DisparityCell]) {
         let w = self.w;
         let r = N / 2;
         let pool = usize::from(self.phase.params.pool);
@@ -449,7 +444,7 @@ pub trait PhaseKernel {
 }
 
 /// The portable phase step.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SafePhase;
 
 impl PhaseKernel for SafePhase {}

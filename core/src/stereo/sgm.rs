@@ -1,6 +1,6 @@
 //! Windowed, row-streamed semi-global aggregation (SGM) in integers: the
-//! building block of the coarse-to-fine engine (docs/STEREO.md, "Coarse-to-fine
-//! with SGM"), bit-exact against the f32 reference
+//! building block of the coarse-to-fine engine (docs/STEREO.md, "What the
+//! engine computes"), bit-exact against the f32 reference
 //! `protogist_host::reference::stereo::sgm::aggregate` with 5 paths.
 //!
 //! **Windows.** Pixel `x` of a row has `n` candidates `lo[x]..lo[x] + n`

@@ -18,7 +18,6 @@ const H: usize = 64;
 const N: usize = W * H;
 const LUV: usize = conspicuity::luv_len(W, H);
 const ROWS: usize = conspicuity::row_scratch_len(W);
-const DEM: stereo::DemParams = stereo::c2f::C2fParams::DEFAULT.level_params(0);
 const C2F: stereo::c2f::C2fParams = firmware_sim::probe::C2F;
 const LABELS: usize = segment::label_capacity(W, H);
 const REGIONS: usize = complete::region_table_len(W, H);
@@ -30,12 +29,6 @@ const INPUT: usize = mlp::input_len(720);
 mod len {
     use super::*;
     use firmware_sim::pg::stereo::c2f as c;
-    pub const S_GREY: usize = stereo::grey_len(W, H, &DEM);
-    pub const S_Z: usize = stereo::z_len(W, &DEM);
-    pub const S_COL: usize = stereo::col_len(W);
-    pub const S_ENERGY: usize = stereo::energy_len(&DEM);
-    pub const S_SCORES: usize = stereo::score_len(&DEM);
-    pub const S_PICKS: usize = stereo::pick_len(W);
     pub const C_GREY: usize = c::grey_len(W, &C2F);
     pub const C_RGB: usize = c::rgb_len(W, &C2F);
     pub const C_Z: usize = c::z_len(W, &C2F);
@@ -76,14 +69,6 @@ macro_rules! buffers {
             ],
             edges: $alloc!(conspicuity::EdgeCell, LUV, conspicuity::EdgeCell::OFF),
             disparity: $alloc!(disparity::DisparityCell, N, disparity::DisparityCell::OFF),
-            stereo: stereo::StereoBuffers {
-                grey: $alloc!(u16, len::S_GREY, 0u16),
-                z: $alloc!([i16; 2], len::S_Z, [0i16; 2]),
-                col: $alloc!([i32; 3], len::S_COL, [0i32; 3]),
-                energy: $alloc!(i32, len::S_ENERGY, 0i32),
-                scores: $alloc!(i64, len::S_SCORES, 0i64),
-                picks: $alloc!(i32, len::S_PICKS, 0i32),
-            },
             c2f: stereo::c2f::C2fBuffers {
                 grey: $alloc!(u16, len::C_GREY, 0u16),
                 rgb: $alloc!(

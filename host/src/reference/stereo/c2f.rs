@@ -1,5 +1,5 @@
-//! Coarse-to-fine search (an opt-in experiment of the f32 reference,
-//! docs/STEREO.md "Coarse-to-fine with SGM (experiment)").
+//! Coarse-to-fine search: the f32 reference of core's engine
+//! (`protogist::stereo::c2f`, docs/STEREO.md).
 //!
 //! The pair is halved `k` times (2x2 box means of the RGB pixels). The
 //! coarsest level searches every candidate `0..=⌈D / 2^k⌉`; each finer level
@@ -17,8 +17,8 @@
 //! not speed.
 
 use super::{
-    check, colour, refine, stereo_planes_in, Decoder, DemParams, DisparityMapsF, OffReason,
-    StereoError, Windows,
+    check, filters, stereo_planes_in, Decoder, DemParams, DisparityMapsF, OffReason, StereoError,
+    Windows,
 };
 use protogist::disparity::{DisparityCell, U8F8};
 use protogist::image::{ImageView, Rgb8};
@@ -150,8 +150,7 @@ pub fn stereo_c2f(
 /// [`stereo_c2f`] run down to level `finest` only (core's
 /// `C2fParams::finest`): the levels below it are not run, and level
 /// `finest`'s maps are spread over the frame by [`spread`] (each cell over
-/// its `2^finest` block, disparities times `2^finest`) before the border
-/// refinement.
+/// its `2^finest` block, disparities times `2^finest`).
 ///
 /// # Errors
 /// As [`stereo_c2f`], and [`StereoError::BadParams`] for `finest` above the
@@ -195,8 +194,8 @@ pub fn stereo_c2f_from(
         let maps = stereo_planes_in(
             &p,
             decoder,
-            colour::planes(&p, &lv),
-            colour::planes(&p, &rv),
+            vec![filters::grey(&lv)],
+            vec![filters::grey(&rv)],
             windows.as_ref(),
         );
         prior = Some(maps);
@@ -205,7 +204,6 @@ pub fn stereo_c2f_from(
     if finest > 0 {
         maps = spread(&maps, finest, left.size());
     }
-    refine::refine_borders(params, left, &mut maps);
     Ok(maps)
 }
 

@@ -153,8 +153,8 @@ pub fn mul(a: Complex, b: Complex) -> Complex {
     [a[0] * b[0] - a[1] * b[1], a[0] * b[1] + a[1] * b[0]]
 }
 
-/// A complex response map of one or more input channels (see
-/// [`super::colour`]).
+/// A complex response map of one or more input channels (one, grey, in
+/// every path of the product).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Response {
     /// Width.

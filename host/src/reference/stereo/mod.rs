@@ -3,7 +3,6 @@
 //!
 //! ```text
 //! left, right ─► grey ─► ↓2 pyramid ─► complex Gabor bank (per eye, once)
-//!   (or RGB / CIELUV channels, `colour`, summed in the energies)
 //!   ─► binocular energies A, X per (level, carrier, shift) ─► Poisson
 //!   log-likelihood per disparity (trained templates) ─► box pooling
 //!   [─► semi-global aggregation, opt-in, `sgm`] ─► argmax + parabola
@@ -11,24 +10,21 @@
 //! ```
 //!
 //! Names and argument order are what the fixed-point `protogist::stereo`
-//! will use. Disparity is left-referenced, `d = x_L − x_R ≥ 0`, in pixels.
+//! uses; core's engine is the coarse-to-fine search with SGM ([`c2f`],
+//! `levels` 1, `pool_radius` 0). Disparity is left-referenced, `d = x_L − x_R ≥ 0`, in pixels.
 
 pub mod c2f;
-pub mod colour;
 pub mod filters;
 pub mod phase;
 pub mod population;
 pub mod readout;
-pub mod refine;
 pub mod sgm;
-pub mod speckle;
 pub mod table;
 pub mod train;
 
 use protogist::disparity::{Disparity, DisparityCell};
 use protogist::image::{ImageView, Rgb8};
 
-pub use colour::Colour;
 pub use sgm::Aggregation;
 pub use train::{train, Decoder};
 
@@ -64,27 +60,12 @@ pub struct DemParams {
     /// px; negative disables the check. Default 1.
     pub lr_tolerance: f32,
     /// Left-right check against the right map derived from the left map's
-    /// SGM sums (SGBM's), not the right-referenced read-out (an experiment;
-    /// needs SGM). Default false.
+    /// SGM sums (SGBM's; core's `LeftRight::Derived`), not the
+    /// right-referenced read-out (needs SGM). Default false.
     pub lr_from_left: bool,
-    /// Border refinement: pixels within this many px of a colour edge (and
-    /// OFF pixels) take the disparity of the colour-nearest trusted
-    /// neighbours (see `refine`); 0 disables it. Default 0.
-    pub refine_radius: u8,
-    /// Border refinement: search window radius, px. Default 8.
-    pub refine_window: u8,
-    /// Border refinement: colour-nearest neighbours whose median is taken.
-    /// Default 5.
-    pub refine_k: u8,
     /// Spatial aggregation of the scores: box pooling only (default) or
-    /// followed by semi-global aggregation (an experiment, see `sgm`).
+    /// followed by semi-global aggregation (see `sgm`; core's engine).
     pub aggregation: Aggregation,
-    /// Input channels (experiment, host only; see [`colour`]): grey, or
-    /// the energies summed over RGB or CIELUV channels. Default grey.
-    pub colour: Colour,
-    /// Weight of the u* and v* channels against L* in [`Colour::Luv`]
-    /// (0: L* only). Default 1.
-    pub chroma_weight: f32,
     /// Training: seed of the random-dot stereograms.
     pub train_seed: u64,
     /// Training: images per disparity. Default 4.
@@ -110,12 +91,7 @@ impl Default for DemParams {
             min_margin: 0.0,
             lr_tolerance: 1.0,
             lr_from_left: false,
-            refine_radius: 0,
-            refine_window: 8,
-            refine_k: 5,
             aggregation: Aggregation::Box,
-            colour: Colour::Grey,
-            chroma_weight: 1.0,
             train_seed: 0x0de1_5eed,
             train_images: 4,
             train_width: 64,
@@ -156,20 +132,13 @@ impl DemParams {
         bad(self.radius >= 1, "radius must be at least 1")?;
         bad(self.shift_step >= 1, "shift_step must be at least 1")?;
         bad(self.min_energy >= 0.0, "min_energy must be >= 0")?;
-        bad(
-            self.chroma_weight >= 0.0 && self.chroma_weight.is_finite(),
-            "chroma_weight must be finite and >= 0",
-        )?;
         bad(self.train_images >= 1, "train_images must be at least 1")?;
         if let Aggregation::Sgm { p1, p2, paths } = self.aggregation {
             bad(
                 p1 >= 0.0 && p2 >= p1 && p2.is_finite(),
                 "SGM penalties must satisfy 0 <= p1 <= p2 < inf",
             )?;
-            bad(
-                sgm::directions(paths).is_some(),
-                "SGM paths must be 3, 4, 5 or 8",
-            )?;
+            bad(sgm::directions(paths).is_some(), "SGM paths must be 3 or 5")?;
         } else {
             bad(!self.lr_from_left, "lr_from_left needs SGM aggregation")?;
         }
@@ -263,7 +232,7 @@ pub struct DisparityMapsF {
     pub off_inconsistent: usize,
     /// Which of the read-out's OFF tests each pixel failed (`None`: it
     /// passed them all; like the counts, not changed by later steps such as
-    /// the border refinement or the speckle filter).
+    /// the phase refinement).
     pub why_off: Vec<Option<OffReason>>,
 }
 
@@ -310,8 +279,7 @@ fn check(
     Ok(())
 }
 
-/// Runs the stage on an RGB pair (converted to grey, or to the channels
-/// of `params.colour`).
+/// Runs the stage on an RGB pair (converted to grey).
 ///
 /// # Errors
 /// [`StereoError`] for mismatched sizes, too small images, `max_disp` not
@@ -323,14 +291,12 @@ pub fn stereo(
     right: &ImageView<'_, Rgb8>,
 ) -> Result<DisparityMapsF, StereoError> {
     check(params, decoder, left.size(), right.size())?;
-    let mut maps = stereo_planes(
+    Ok(stereo_grey(
         params,
         decoder,
-        colour::planes(params, left),
-        colour::planes(params, right),
-    );
-    refine::refine_borders(params, left, &mut maps);
-    Ok(maps)
+        filters::grey(left),
+        filters::grey(right),
+    ))
 }
 
 /// Runs the stage on grey planes of equal size (sizes checked by the
@@ -345,8 +311,7 @@ pub fn stereo_grey(
 }
 
 /// Runs the stage on one or more channel planes per eye, all of one size
-/// (checked by the caller), energies summed over channels
-/// ([`colour`]); `params.colour` is not read here.
+/// (checked by the caller), energies summed over channels.
 pub fn stereo_planes(
     params: &DemParams,
     decoder: &Decoder,

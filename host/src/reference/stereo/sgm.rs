@@ -1,5 +1,5 @@
-//! Semi-global aggregation of the read-out's scores (an opt-in experiment,
-//! docs/STEREO.md "Semi-global aggregation (experiment)").
+//! Semi-global aggregation of the read-out's scores (core's engine runs
+//! it, `protogist::stereo::sgm`; docs/STEREO.md).
 //!
 //! The cost of candidate `d` at a pixel is its normalised log-likelihood
 //! below the pixel's best one,
@@ -31,36 +31,22 @@ pub enum Aggregation {
         p1: f32,
         /// Penalty for a larger step (`>= p1`).
         p2: f32,
-        /// Path set, see [`directions`]: 3, 4, 5 or 8.
+        /// Path set, see [`directions`]: 3 or 5.
         paths: u8,
     },
 }
 
 /// The path directions `(dx, dy)` (each path comes from `p − r`):
 /// - 3: left→right, right→left, top→bottom;
-/// - 4: the classic four, left→right, right→left, top→bottom, bottom→top;
 /// - 5: the 3 plus the two diagonals from above, every path a row-streaming
-///   reader can run in one top-to-bottom pass;
-/// - 8: the 4 plus all four diagonals.
+///   reader can run in one top-to-bottom pass.
 ///
 /// `None` for any other count.
 pub fn directions(paths: u8) -> Option<&'static [(isize, isize)]> {
-    const ALL: [(isize, isize); 8] = [
-        (1, 0),
-        (-1, 0),
-        (0, 1),
-        (1, 1),
-        (-1, 1),
-        (0, -1),
-        (1, -1),
-        (-1, -1),
-    ];
-    const FOUR: [(isize, isize); 4] = [(1, 0), (-1, 0), (0, 1), (0, -1)];
+    const ALL: [(isize, isize); 5] = [(1, 0), (-1, 0), (0, 1), (1, 1), (-1, 1)];
     match paths {
         3 => Some(&ALL[..3]),
-        4 => Some(&FOUR),
         5 => Some(&ALL[..5]),
-        8 => Some(&ALL),
         _ => None,
     }
 }

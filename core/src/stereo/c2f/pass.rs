@@ -1,0 +1,382 @@
+//! One level's run: grey rows, filters, cells and votes, costs, SGM,
+//! decisions, and the windows of the next finer level or the output.
+
+use super::buffers::{level_len, take, Work};
+use super::decision::Verdict;
+use super::rows::{level_row, Cells};
+use super::votes::costs_of;
+use super::{C2f, LeftRight, PATHS};
+use crate::image::RgbRows;
+use crate::stereo::filters::{grey_row, Bank, MAX_TAPS};
+use crate::stereo::sgm::{self, Sgm};
+use crate::stereo::{DemTable, Probe, Step, StereoError, StereoReport};
+
+/// Where a level's result goes.
+pub(super) enum Output<'o, F> {
+    /// A coarse level: the windows of the next finer level.
+    Map(&'o mut [u8]),
+    /// The finest level run: the OFF tests, then the sink (at level 0
+    /// pixel by pixel, else each row's verdicts spread over their blocks).
+    Sink(&'o mut F, &'o mut StereoReport),
+}
+
+/// One level's run.
+pub(super) struct Pass<'e, K> {
+    pub(super) e: &'e C2f<K>,
+    pub(super) k: usize,
+    pub(super) w: usize,
+    pub(super) h: usize,
+    /// Frame size.
+    pub(super) full: (usize, usize),
+    /// Candidates per pixel.
+    pub(super) n: usize,
+    pub(super) shifts: usize,
+    pub(super) step: usize,
+    /// Whether the band applies (a windowed level with a band).
+    pub(super) band: Option<usize>,
+    /// [`Pass::shift_range`] of every window `lo` (a `u8`), worked out
+    /// once: no division per pixel.
+    pub(super) ranges: [[u16; 2]; 256],
+}
+
+impl<'e, K> Pass<'e, K> {
+    pub(super) fn new(e: &'e C2f<K>, k: usize, full: (usize, usize)) -> Self {
+        let p = &e.params;
+        let layout = p.level_params(k).layout();
+        let windowed = k < usize::from(p.coarse);
+        let mut pass = Self {
+            e,
+            k,
+            w: level_len(full.0, k),
+            h: level_len(full.1, k),
+            full,
+            n: p.candidates(k),
+            shifts: layout.shifts(0),
+            step: usize::from(layout.shift_step.max(1)),
+            band: p.band.filter(|_| windowed).map(usize::from),
+            ranges: [[0; 2]; 256],
+        };
+        // Shifts are at most 256 (`max_disp` is a `u8`), so `u16` holds them.
+        let mut ranges = [[0u16; 2]; 256];
+        for (lo, r) in (0u16..).zip(ranges.iter_mut()) {
+            let x = pass.shift_range_of(lo);
+            *r = [x.start, x.end].map(|v| u16::try_from(v).unwrap_or(u16::MAX));
+        }
+        pass.ranges = ranges;
+        pass
+    }
+
+    /// The shift indices whose votes a pixel with window `lo` takes: those
+    /// with `|s − centre| <= band` (centre `lo + (n − 1)/2`), or all.
+    pub(super) fn shift_range(&self, lo: u16) -> core::ops::Range<usize> {
+        match self.ranges.get(usize::from(lo)) {
+            Some(&[a, b]) => usize::from(a)..usize::from(b),
+            None => self.shift_range_of(lo),
+        }
+    }
+
+    /// [`Pass::shift_range`] worked out.
+    fn shift_range_of(&self, lo: u16) -> core::ops::Range<usize> {
+        let Some(b) = self.band else {
+            return 0..self.shifts;
+        };
+        let centre2 = 2 * usize::from(lo) + self.n - 1;
+        // 2s in [centre2 − 2b, centre2 + 2b], s = ks·step.
+        let (lo2, hi2) = (centre2.saturating_sub(2 * b), centre2 + 2 * b);
+        // Never 0 (`step >= 1`); `max` shows the compiler (no panic path).
+        let step2 = (2 * self.step).max(1);
+        let first = lo2.div_ceil(step2);
+        let last = (hi2 / step2 + 1).min(self.shifts);
+        first.min(last)..last
+    }
+
+    #[allow(clippy::too_many_lines)]
+    pub(super) fn run<S: RgbRows, F: Cells>(
+        &self,
+        table: &DemTable<'_>,
+        src: [&S; 2],
+        bufs: &mut Work<'_, '_>,
+        parent: Option<&[u8]>,
+        mut out: Output<'_, F>,
+        probe: &mut impl Probe,
+    ) -> Result<usize, StereoError> {
+        // `n` is at least 1 (every level has a candidate); `max` shows the
+        // compiler, so that the chunk loops below have no panic path.
+        let (w, h, n) = (self.w, self.h, self.n.max(1));
+        let dem = &self.e.dem;
+        let carriers = usize::from(dem.params.carriers);
+        let taps = 2 * usize::from(dem.params.radius) + 1;
+        let r = taps / 2;
+        let bank = Bank::new(dem.kernels.get(..carriers).unwrap_or(&[]));
+        // Split the scratch.
+        let mut grey = &mut **bufs.grey;
+        let rings = [
+            take(&mut grey, taps * w, "grey")?,
+            take(&mut grey, taps * w, "grey")?,
+        ];
+        let mut rgb = &mut **bufs.rgb;
+        let rgb_out = take(&mut rgb, w, "rgb")?;
+        let rgb_scratch = rgb;
+        let mut z = &mut **bufs.z;
+        let zs = [
+            take(&mut z, carriers * w, "z")?,
+            take(&mut z, carriers * w, "z")?,
+        ];
+        let mut col = &mut **bufs.col;
+        let col = take(&mut col, w, "col")?;
+        let stride = n.saturating_add(1);
+        let mut sc = &mut **bufs.scores;
+        let (sl, sr) = (
+            take(&mut sc, w * stride, "scores")?,
+            take(&mut sc, w * stride, "scores")?,
+        );
+        let mut cs = &mut **bufs.costs;
+        let costs = [
+            take(&mut cs, w * n, "costs")?,
+            take(&mut cs, w * n, "costs")?,
+        ];
+        let los = [take(&mut cs, w, "costs")?, take(&mut cs, w, "costs")?];
+        let voters = [take(&mut cs, w, "costs")?, take(&mut cs, w, "costs")?];
+        let state = sgm::scratch_len(w, n);
+        let sgm_err = |_| StereoError::BadParams("SGM state");
+        let sgms = [
+            Sgm::new(
+                w,
+                n,
+                self.e.p1_q8,
+                self.e.p2_q8,
+                take(&mut cs, state, "costs")?,
+            )
+            .map_err(sgm_err)?,
+            Sgm::new(
+                w,
+                n,
+                self.e.p1_q8,
+                self.e.p2_q8,
+                take(&mut cs, state, "costs")?,
+            )
+            .map_err(sgm_err)?,
+        ];
+        let mut su = &mut **bufs.sums;
+        let sums = [take(&mut su, w * n, "sums")?, take(&mut su, w * n, "sums")?];
+        let picks = &mut **bufs.picks;
+        let (lp, rp) = picks.split_at_mut(w.min(picks.len()));
+        let [costs_l, costs_r] = costs;
+        let [lo_l, lo_r] = los;
+        let [vo_l, vo_r] = voters;
+        let [sum_l, sum_r] = sums;
+        let [ring_l, ring_r] = rings;
+        let [z_l, z_r] = zs;
+        let [mut sgm_l, mut sgm_r] = if u32::from(self.e.params.paths) == PATHS {
+            sgms
+        } else {
+            sgms.map(Sgm::without_diagonals)
+        };
+        let groups = (carriers * self.shifts) as u64;
+        let (wc, hc) = (
+            level_len(self.full.0, self.k + 1),
+            level_len(self.full.1, self.k + 1),
+        );
+        let lr = self.e.params.left_right;
+        let eyes = if lr.reads_right() { 2 } else { 1 };
+        let mut next = 0;
+        let mut cells = 0;
+        for y in 0..h {
+            // Grey rows up to y + r, both eyes.
+            probe.enter(Step::Pyramid);
+            while next <= (y + r).min(h - 1) {
+                let slot = next % taps;
+                for (ring, s) in [&mut *ring_l, &mut *ring_r].into_iter().zip(src) {
+                    level_row(s, self.k, next, rgb_out, rgb_scratch);
+                    if let Some(dst) = ring.get_mut(slot * w..(slot + 1) * w) {
+                        grey_row(rgb_out, dst);
+                    }
+                }
+                next += 1;
+            }
+            probe.enter(Step::Filters);
+            for (ring, zrow) in [(&*ring_l, &mut *z_l), (&*ring_r, &mut *z_r)] {
+                let mut rows: [&[u16]; MAX_TAPS] = [&[]; MAX_TAPS];
+                for (t, dst) in rows.iter_mut().enumerate().take(taps) {
+                    let j = (y + t).saturating_sub(r).min(h - 1) % taps;
+                    *dst = ring.get(j * w..(j + 1) * w).unwrap_or(&[]);
+                }
+                bank.row(rows.get(..taps).unwrap_or(&[]), col, zrow);
+            }
+            // Windows of this row.
+            probe.enter(Step::Energies);
+            for (eye, lo) in [&mut *lo_l, &mut *lo_r].into_iter().enumerate() {
+                let row = parent.and_then(|m| {
+                    let yc = (y / 2).min(hc.saturating_sub(1));
+                    let base = eye * wc * hc + yc * wc;
+                    m.get(base..base + wc)
+                });
+                for (x, v) in lo.iter_mut().enumerate() {
+                    *v = row
+                        .and_then(|m| m.get((x / 2).min(wc.saturating_sub(1))))
+                        .map_or(0, |&b| u16::from(b));
+                }
+            }
+            // Cells and votes: each pixel of each eye takes the votes of the
+            // shifts in its band (the cell of left x and right x − s).
+            let (z2, lo2) = ([&*z_l, &*z_r], [&*lo_l, &*lo_r]);
+            let (sc2, vo2) = ([&mut *sl, &mut *sr], [&mut *vo_l, &mut *vo_r]);
+            cells += self.votes(table, z2, lo2, sc2, vo2, col, lr.reads_right());
+            // Costs, aggregation, decisions.
+            probe.enter(Step::Readout);
+            let need = |total: i64, voters: u16| -> bool {
+                let cells = if self.band.is_some() {
+                    u64::from(voters)
+                } else {
+                    groups
+                };
+                total > 0 && (total as u64) >= dem.min_energy_q8 * 4 * cells
+            };
+            for (eye, (sc, cost)) in [(&mut *sl, &mut *costs_l), (&mut *sr, &mut *costs_r)]
+                .into_iter()
+                .enumerate()
+                .take(eyes)
+            {
+                let (lo, vo) = if eye == 0 {
+                    (&*lo_l, &*vo_l)
+                } else {
+                    (&*lo_r, &*vo_r)
+                };
+                for (x, (raw, ((&lo, &v), dst))) in sc
+                    .chunks_exact_mut(stride)
+                    .zip(lo.iter().zip(vo).zip(cost.chunks_exact_mut(n)))
+                    .enumerate()
+                {
+                    let top = if eye == 0 { x } else { w - 1 - x };
+                    let lo = usize::from(lo);
+                    let total = raw.get(n).copied().unwrap_or(0);
+                    if !need(total, v) || lo > top {
+                        dst.fill(0);
+                        continue;
+                    }
+                    let valid = (top - lo + 1).min(n);
+                    match (valid, n) {
+                        (5, 5) => costs_of::<5>(raw, total, table, lo, valid, dst),
+                        (3, 3) => costs_of::<3>(raw, total, table, lo, valid, dst),
+                        _ => costs_of::<0>(raw, total, table, lo, valid, dst),
+                    }
+                }
+            }
+            probe.enter(Step::Sgm);
+            sgm_l.push_row(costs_l, lo_l, sum_l).map_err(sgm_err)?;
+            if lr.reads_right() {
+                sgm_r.push_row(costs_r, lo_r, sum_r).map_err(sgm_err)?;
+            }
+            probe.enter(Step::Readout);
+            // Right-referenced decisions first: the left-right check reads
+            // them.
+            match lr {
+                LeftRight::Derived => self.right_from_left(sl, lo_l, sum_l, sum_r, rp),
+                // The coarse levels' windows still read `rp`: none.
+                LeftRight::Off => rp.fill(-1),
+                LeftRight::Read => {
+                    for (x, ((pk, raw), (&lo, s))) in rp
+                        .iter_mut()
+                        .zip(sr.chunks_exact(stride))
+                        .zip(lo_r.iter().zip(sum_r.chunks_exact(n)))
+                        .enumerate()
+                    {
+                        *pk = self
+                            .decision(raw, lo, s, w - 1 - x)
+                            .map_or(-1, |d| d.disparity);
+                    }
+                }
+            }
+            for (x, ((pk, raw), ((&lo, s), &v))) in lp
+                .iter_mut()
+                .zip(sl.chunks_exact(stride))
+                .zip(lo_l.iter().zip(sum_l.chunks_exact(n)).zip(vo_l.iter()))
+                .enumerate()
+            {
+                let d = self.decision(raw, lo, s, x);
+                *pk = d.map_or(-1, |d| d.disparity);
+                if let Output::Sink(sink, report) = &mut out {
+                    let total = raw.get(n).copied().unwrap_or(0);
+                    let verdict = self.off_tests(x, d, need(total, v), rp);
+                    if self.k == 0 {
+                        sink.cell(x, y, verdict.count(report));
+                    } else if let Some(c) = col.get_mut(x) {
+                        // The row's votes are done, so `col` is free.
+                        c[0] = verdict.code();
+                    }
+                }
+            }
+            match &mut out {
+                Output::Map(map) => self.windows_below(y, [&*lp, &*rp], map),
+                Output::Sink(sink, report) if self.k > 0 => {
+                    self.spread(y, col, &mut **sink, report);
+                }
+                Output::Sink(..) => {}
+            }
+        }
+        Ok(cells)
+    }
+
+    /// The output rows of level row `y` at a finest level `k > 0`: frame
+    /// rows `y·2^k ..` (to the frame's last row after the level's last
+    /// row), each level pixel's verdict in `col` (its disparity times
+    /// `2^k`) over frame columns `x·2^k ..` (to the frame's last column
+    /// after the level's last pixel).
+    fn spread(&self, y: usize, col: &[[i32; 3]], sink: &mut impl Cells, report: &mut StereoReport) {
+        let (fw, fh) = self.full;
+        let first = y << self.k;
+        let end = if y + 1 >= self.h {
+            fh
+        } else {
+            first + (1 << self.k)
+        };
+        for fy in first..end {
+            // Each level pixel's cell, counted once for its columns.
+            let mut cells = col.iter().take(self.w).enumerate().map(|(x, c)| {
+                let cols = if x + 1 == self.w {
+                    (x << self.k)..fw
+                } else {
+                    (x << self.k)..(x + 1) << self.k
+                };
+                let verdict = Verdict::from_code(c[0]).scaled(self.k);
+                (verdict.count_n(report, cols.len()), cols)
+            });
+            if let Some(row) = sink.row() {
+                for (cell, cols) in &mut cells {
+                    row.get_mut(cols)
+                        .into_iter()
+                        .flatten()
+                        .for_each(|c| *c = cell);
+                }
+                sink.row_done(fy);
+            } else {
+                for (cell, cols) in cells {
+                    for fx in cols {
+                        sink.cell(fx, fy, cell);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Stores the next finer level's window `lo` for row `y` of both eyes'
+    /// decisions `picks` (`U8F8` bits, negative: none).
+    fn windows_below(&self, y: usize, picks: [&[i32]; 2], map: &mut [u8]) {
+        let p = &self.e.params;
+        let k = self.k.saturating_sub(1);
+        let (all_f, n_f) = (usize::from(p.level_max_disp(k)) + 1, p.candidates(k));
+        let radius = usize::from(p.radius);
+        for (eye, picks) in picks.into_iter().enumerate() {
+            let base = eye * self.w * self.h + y * self.w;
+            let Some(dst) = map.get_mut(base..base + self.w) else {
+                continue;
+            };
+            for (m, &d) in dst.iter_mut().zip(picks) {
+                let lo = usize::try_from((d + 64) >> 7).map_or(0, |c| {
+                    c.saturating_sub(radius).min(all_f.saturating_sub(n_f))
+                });
+                *m = lo.min(255) as u8;
+            }
+        }
+    }
+}

@@ -1,0 +1,85 @@
+//! Rows in and out of the engine: the levels' RGB rows from the frames,
+//! and the sinks the finest level's cells go to.
+
+use crate::disparity::DisparityCell;
+use crate::image::{Rgb8, RgbRows};
+use crate::stereo::phase::{PhaseKernel, Refiner};
+
+/// Where the finest level's cells go, in row-major order.
+pub(super) trait Cells {
+    /// Cell `(x, y)`.
+    fn cell(&mut self, x: usize, y: usize, c: DisparityCell);
+    /// A frame row to fill before [`Cells::row_done`], for a consumer that
+    /// works on rows (the spread of a level `k > 0` then fills it instead
+    /// of calling [`Cells::cell`]).
+    fn row(&mut self) -> Option<&mut [DisparityCell]> {
+        None
+    }
+    /// Frame row `y` of [`Cells::row`] is filled.
+    fn row_done(&mut self, _y: usize) {}
+}
+
+/// A sink of cells.
+pub(super) struct Plain<'f, F>(pub(super) &'f mut F);
+
+impl<F: FnMut(usize, usize, DisparityCell)> Cells for Plain<'_, F> {
+    #[inline(always)]
+    fn cell(&mut self, x: usize, y: usize, c: DisparityCell) {
+        (self.0)(x, y, c);
+    }
+}
+
+/// A sink behind the phase refinement (phase step of kernel `K`): each
+/// output row is refined, then passed on cell by cell.
+pub(super) struct Refined<'r, 'p, 'b, S: RgbRows, F, K> {
+    pub(super) refiner: &'r mut Refiner<'p, 'b, S, K>,
+    pub(super) sink: &'r mut F,
+}
+
+impl<S: RgbRows, F: FnMut(usize, usize, DisparityCell), K: PhaseKernel> Cells
+    for Refined<'_, '_, '_, S, F, K>
+{
+    #[inline(always)]
+    fn cell(&mut self, x: usize, y: usize, c: DisparityCell) {
+        self.refiner.push(x, y, c, self.sink);
+    }
+    fn row(&mut self) -> Option<&mut [DisparityCell]> {
+        Some(self.refiner.row_mut())
+    }
+    fn row_done(&mut self, y: usize) {
+        self.refiner.flush(y, self.sink);
+    }
+}
+
+/// Level-`k` RGB row `j` of `src` (rounded 2x2 means, `k` times) into
+/// `out` (`⌊w/2^k⌋` long), with `scratch` for the finer rows.
+pub(super) fn level_row<S: RgbRows>(
+    src: &S,
+    k: usize,
+    j: usize,
+    out: &mut [Rgb8],
+    scratch: &mut [Rgb8],
+) {
+    if k == 0 {
+        src.rgb_row(j, out);
+        return;
+    }
+    let fw = 2 * out.len();
+    let (a, rest) = scratch.split_at_mut(fw.min(scratch.len()));
+    let (b, rest) = rest.split_at_mut(fw.min(rest.len()));
+    level_row(src, k - 1, 2 * j, a, rest);
+    level_row(src, k - 1, 2 * j + 1, b, rest);
+    let mean = |p: [u8; 4]| {
+        let s: u16 = p.iter().map(|&v| u16::from(v)).sum();
+        ((s + 2) / 4) as u8
+    };
+    for ((o, a), b) in out.iter_mut().zip(a.chunks_exact(2)).zip(b.chunks_exact(2)) {
+        if let ([a0, a1], [b0, b1]) = (a, b) {
+            *o = Rgb8::new(
+                mean([a0.r, a1.r, b0.r, b1.r]),
+                mean([a0.g, a1.g, b0.g, b1.g]),
+                mean([a0.b, a1.b, b0.b, b1.b]),
+            );
+        }
+    }
+}

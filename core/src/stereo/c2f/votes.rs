@@ -1,0 +1,350 @@
+//! The cells and votes of a row, and each pixel's normalised costs.
+
+use super::pass::Pass;
+use crate::stereo::filters::Z;
+use crate::stereo::DemTable;
+
+/// The cells of one pixel and carrier into `out` (`[A, Xre, Xim]` in `Q8`
+/// each, as many as `others` and `out` both have): the pixel's response
+/// `own` paired with each of `others` as `pair(own, other) = (left,
+/// right)`. Returns the sum of the cells' `A`.
+#[inline(always)]
+fn cells<'z>(
+    out: &mut [[i32; 3]],
+    own: Z,
+    others: impl Iterator<Item = &'z Z>,
+    pair: impl Fn(Z, Z) -> (Z, Z),
+) -> i64 {
+    let mut sum = 0i64;
+    for (cell, &other) in out.iter_mut().zip(others) {
+        let (l, r) = pair(own, other);
+        let (lr, li) = (i32::from(l[0]), i32::from(l[1]));
+        let (rr, ri) = (i32::from(r[0]), i32::from(r[1]));
+        // Exact in i32: |z| components below 2^14.01, so A < 2^30.1
+        // (`filters`), then Q12 → Q8.
+        let q8 = |v: i32| (v + 8) >> 4;
+        let a = q8(lr * lr + li * li + rr * rr + ri * ri);
+        *cell = [a, q8(lr * rr + li * ri), q8(li * rr - lr * ri)];
+        sum += i64::from(a);
+    }
+    sum
+}
+
+/// Adds one cell's votes to a window's scores `win`: `a·wa + xre·wb +
+/// xim·wc` per candidate, from the candidates' weight bytes `wts` (6 per
+/// candidate: `wa, wb, wc`, little-endian `i16`).
+#[inline(always)]
+fn vote(win: &mut [i64], wts: &[u8], [a, xre, xim]: [i32; 3]) {
+    for (d, c6) in win.iter_mut().zip(wts.chunks_exact(6)) {
+        if let [a0, a1, b0, b1, c0, c1] = *c6 {
+            let w = |lo: u8, hi: u8| i32::from(i16::from_le_bytes([lo, hi]));
+            *d += i64::from(a) * i64::from(w(a0, a1))
+                + i64::from(xre) * i64::from(w(b0, b1))
+                + i64::from(xim) * i64::from(w(c0, c1));
+        }
+    }
+}
+
+/// The normalised `Q8` costs of one pixel (module docs) from its scores
+/// `raw` (window candidates, overwritten with the scores `n(d)`) and
+/// `total`: `valid` candidates from `lo`, the rest of the window the worst
+/// valid cost.
+pub(super) fn costs_of<const N: usize>(
+    raw: &mut [i64],
+    total: i64,
+    table: &DemTable<'_>,
+    lo: usize,
+    valid: usize,
+    out: &mut [u16],
+) {
+    // `N > 0`: the caller's `valid` is `N`, known here, so the loops unroll.
+    let valid = if N > 0 { N } else { valid };
+    let sh = (64 - total.leading_zeros()).saturating_sub(30);
+    // Below 2^30 for the callers' `total > 0`, so `i32`.
+    let t = i64::from(i32::try_from(total >> sh).unwrap_or(i32::MAX));
+    // `n(d) = 2^m·u(d)`, `m = min(wf, bf)`: `u(d) = (raw(d) >> sh)·2^(bf −
+    // m) − bias(d)·t·2^(wf − m)`. Exact, and far from overflow (so the
+    // reference's saturation never acts): `|raw| <= 2^14·total + 2^27`
+    // (`|X| <= A/2` per cell, `|w| <= 2^15`), so `|raw >> sh| < 2^44.01`,
+    // `|bias·t| < 2^45`, and with `wf, bf <= 15` (`DemTable::parse`)
+    // `|n(d)| < 2^61`. The window's bias slice is read directly (the
+    // `bias_at` path, 0 beyond the table, only serves a window past it):
+    // a shorter chained iterator cost 240 instructions/px on the M4.
+    let (wf, bf) = (u32::from(table.weight_frac), u32::from(table.bias_frac));
+    let m = wf.min(bf);
+    let (pb, pw) = (i64::from(1u32 << (bf - m)), i64::from(1u32 << (wf - m)));
+    let scores = raw.get_mut(..valid).unwrap_or(&mut []);
+    if sh > 0 {
+        for r in scores.iter_mut() {
+            *r >>= sh;
+        }
+    }
+    let (mut best, mut worst) = (i64::MIN, i64::MAX);
+    let mut fold = |r: &mut i64, bias: i16| {
+        *r = r
+            .wrapping_mul(pb)
+            .wrapping_sub((i64::from(bias) * t).wrapping_mul(pw));
+        best = best.max(*r);
+        worst = worst.min(*r);
+    };
+    match table.bias_bytes().get(2 * lo..2 * (lo + valid)) {
+        Some(bias) => {
+            for (r, b) in scores.iter_mut().zip(bias.chunks_exact(2)) {
+                if let [b0, b1] = *b {
+                    fold(r, i16::from_le_bytes([b0, b1]));
+                }
+            }
+        }
+        None => {
+            for (d, r) in (lo..).zip(scores.iter_mut()) {
+                fold(r, table.bias_at(d));
+            }
+        }
+    }
+    // Gaps `best − n(d) = 2^m·(best − u(d))` truncated to 15 significant
+    // bits (so they fit `out` until they become costs).
+    let span = best.abs_diff(worst);
+    let bits = if span == 0 {
+        0
+    } else {
+        64 - span.leading_zeros() + m
+    };
+    let sh2 = bits.saturating_sub(15);
+    let mut total_gap = 0u32;
+    for (o, &v) in out.iter_mut().zip(scores.iter()) {
+        // `best >= v`, both within ±2^61: the difference is exact.
+        let du = best.wrapping_sub(v) as u64;
+        let gap = if sh2 >= m {
+            du >> (sh2 - m)
+        } else {
+            du << (m - sh2)
+        } as u16;
+        *o = gap;
+        total_gap += u32::from(gap);
+    }
+    // At most 2^15 · 256 · 256 = 2^31: no overflow.
+    let scale = 256 * valid as u32;
+    let mut hi = 0u16;
+    for o in out.iter_mut().take(valid) {
+        let c = (u32::from(*o) * scale + total_gap / 2)
+            .checked_div(total_gap)
+            .unwrap_or(0);
+        *o = c.min(u32::from(u16::MAX)) as u16;
+        hi = hi.max(*o);
+    }
+    for o in out.iter_mut().skip(valid) {
+        *o = hi;
+    }
+}
+
+impl<K> Pass<'_, K> {
+    /// The cells and votes of one row: for each pixel of each eye (left,
+    /// right), its window's scores and total (`n + 1` per pixel, in
+    /// `scores`) from the cells of the shifts [`Pass::shift_range`] of its
+    /// window `lo` (the cell of left `x` and right `x − s`), and with a
+    /// band the number of groups voting (`voters`); `cells` is scratch for
+    /// one pixel's cells (`w` long); `right`: the right eye's too (else
+    /// only the left's). Returns the number of cells evaluated.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn votes(
+        &self,
+        table: &DemTable<'_>,
+        z: [&[Z]; 2],
+        lo: [&[u16]; 2],
+        scores: [&mut [i64]; 2],
+        voters: [&mut [u16]; 2],
+        cells: &mut [[i32; 3]],
+        right: bool,
+    ) -> usize {
+        let [lo_l, lo_r] = lo;
+        let [sc_l, sc_r] = scores;
+        let [vo_l, vo_r] = voters;
+        // Windows of the radii 2 and 1, and the coarsest level of 32
+        // disparities (9 candidates), as constants: unrolled votes.
+        let left = match self.n {
+            5 => self.votes_eye::<true, 5>(table, z, lo_l, sc_l, vo_l, cells),
+            3 => self.votes_eye::<true, 3>(table, z, lo_l, sc_l, vo_l, cells),
+            9 => self.votes_eye::<true, 9>(table, z, lo_l, sc_l, vo_l, cells),
+            _ => self.votes_eye::<true, 0>(table, z, lo_l, sc_l, vo_l, cells),
+        };
+        if !right {
+            return left;
+        }
+        left + match self.n {
+            5 => self.votes_eye::<false, 5>(table, z, lo_r, sc_r, vo_r, cells),
+            3 => self.votes_eye::<false, 3>(table, z, lo_r, sc_r, vo_r, cells),
+            9 => self.votes_eye::<false, 9>(table, z, lo_r, sc_r, vo_r, cells),
+            _ => self.votes_eye::<false, 0>(table, z, lo_r, sc_r, vo_r, cells),
+        }
+    }
+
+    /// [`Pass::votes`] of one eye (`LEFT`: left-referenced), pixel by
+    /// pixel, then carrier by carrier: first the cells, then their votes.
+    /// `N` is the window length `self.n` where the caller knows it as a
+    /// constant, 0 otherwise.
+    fn votes_eye<const LEFT: bool, const N: usize>(
+        &self,
+        table: &DemTable<'_>,
+        [z_l, z_r]: [&[Z]; 2],
+        lo: &[u16],
+        scores: &mut [i64],
+        voters: &mut [u16],
+        cells_buf: &mut [[i32; 3]],
+    ) -> usize {
+        // None of `n`, `w`, `step` is 0 (`Pass::new`); `max` shows the
+        // compiler, so that the divisions and chunk loops have no panic path.
+        let n = if N == 0 { self.n.max(1) } else { N };
+        let (w, step) = (self.w.max(1), self.step.max(1));
+        let (step_pow2, step_log) = (step.is_power_of_two(), step.trailing_zeros());
+        let carriers = usize::from(self.e.dem.params.carriers);
+        let bytes = table.weight_bytes();
+        // Group `c·shifts + ks` starts at `6N·(c·shifts + ks)`.
+        let n6 = 6 * table.disparities();
+        let (own_z, other_z) = if LEFT { (z_l, z_r) } else { (z_r, z_l) };
+        let mut evaluated = 0;
+        scores.fill(0);
+        for (px, ((dst, &lo), v)) in scores
+            .chunks_exact_mut(n.saturating_add(1))
+            .zip(lo)
+            .zip(voters.iter_mut())
+            .enumerate()
+        {
+            let range = self.shift_range(lo);
+            // The shifts whose cell lies inside the row: `s <= x` (left),
+            // `x + s < w` (right).
+            let room = if LEFT { px } else { w - 1 - px };
+            let last = if step_pow2 {
+                room >> step_log
+            } else {
+                room / step
+            };
+            let count = (last + 1).min(range.end).saturating_sub(range.start);
+            // The groups voting: `carriers` per shift whose cell is inside
+            // (every shift of the range left-referenced).
+            *v = if self.band.is_some() {
+                let inside = if LEFT { range.len() } else { count };
+                (inside * carriers) as u16
+            } else {
+                0
+            };
+            evaluated += count * carriers;
+            let (win, total) = dst.split_at_mut(n);
+            let cells_px = cells_buf.get_mut(..count).unwrap_or(&mut []);
+            // The other eye's pixel of the first shift: `x − s` left, `x +
+            // s` right; `count` keeps the shifts' pixels inside the row, so
+            // `others` has at least `count` and every cell is made.
+            let first = range.start * step;
+            let mut sum = 0i64;
+            for (c, (own_plane, other_plane)) in own_z
+                .chunks_exact(w)
+                .zip(other_z.chunks_exact(w))
+                .take(carriers)
+                .enumerate()
+            {
+                let Some(&own) = own_plane.get(px) else {
+                    continue;
+                };
+                sum += if LEFT {
+                    let others = other_plane
+                        .get(..(px + 1).saturating_sub(first))
+                        .unwrap_or(&[])
+                        .iter()
+                        .rev()
+                        .step_by(step);
+                    cells(cells_px, own, others, |o, t| (o, t))
+                } else {
+                    let others = other_plane
+                        .get(px + first..)
+                        .unwrap_or(&[])
+                        .iter()
+                        .step_by(step);
+                    cells(cells_px, own, others, |o, t| (t, o))
+                };
+                // The shift's groups, `n6` apart from the first one.
+                let mut g = (c * self.shifts + range.start) * n6 + 6 * usize::from(lo);
+                for &cell in cells_px.iter() {
+                    let Some(wts) = bytes.get(g..g + 6 * n) else {
+                        break;
+                    };
+                    vote(win, wts, cell);
+                    g += n6;
+                }
+            }
+            // The total, `4A` per cell. Like the scores, exact integer sums
+            // (far from overflow), so their order does not matter.
+            if let Some(t) = total.first_mut() {
+                *t = 4 * sum;
+            }
+        }
+        evaluated
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::costs_of;
+    use crate::rng::SplitMix64;
+    use crate::stereo::DemTable;
+
+    /// The costs written plainly in `i128`: `n(d) = (raw >> sh)·2^bf −
+    /// bias(d)·(total >> sh)·2^wf`, gaps to the best truncated to 15
+    /// significant bits of the span, `C = round(256·m·g / Σ g)`, the rest
+    /// of the window the worst valid cost.
+    fn plain_costs(raw: &[i64], total: i64, t: &DemTable<'_>, lo: usize, valid: usize) -> [u16; 9] {
+        let sh = (64 - total.leading_zeros()).saturating_sub(30);
+        let (wf, bf) = (u32::from(t.weight_frac), u32::from(t.bias_frac));
+        let n: [i128; 9] = core::array::from_fn(|i| {
+            let r = i128::from(raw.get(i).copied().unwrap_or(0) >> sh);
+            (r << bf) - ((i128::from(t.bias_at(lo + i)) * i128::from(total >> sh)) << wf)
+        });
+        let n = &n[..valid];
+        let (best, worst) = (*n.iter().max().unwrap(), *n.iter().min().unwrap());
+        let bits = 128 - (best - worst).leading_zeros();
+        let sh2 = bits.saturating_sub(15);
+        let gaps: [u32; 9] =
+            core::array::from_fn(|i| n.get(i).map_or(0, |&v| ((best - v) >> sh2) as u32));
+        let total_gap: u32 = gaps.iter().sum();
+        let mut out = [0u16; 9];
+        for (o, &g) in out.iter_mut().zip(&gaps).take(valid) {
+            *o = (g * 256 * valid as u32 + total_gap / 2)
+                .checked_div(total_gap)
+                .map_or(0, |c| c as u16);
+        }
+        let hi = out.iter().take(valid).copied().max().unwrap_or(0);
+        for o in out.iter_mut().skip(valid) {
+            *o = hi;
+        }
+        out
+    }
+
+    #[test]
+    fn costs_equal_the_plain_rule_with_and_without_a_known_length() {
+        // The firmware's level-0 table (32 candidates).
+        let bytes = include_bytes!("../../../../firmware-sim/data/dem_c2f_l0.bin");
+        let table = DemTable::parse(bytes).unwrap();
+        let mut rng = SplitMix64::new(0xc057);
+        for case in 0..20_000u64 {
+            let total = 1 + rng.below(1 << (1 + case % 40)) as i64;
+            // |raw| <= 2^14·total + 2^27 (the engine's bound).
+            let bound = (total << 14) + (1 << 27);
+            let mut raw = [0i64; 9];
+            for r in &mut raw {
+                *r = rng.below(2 * bound as u64 + 1) as i64 - bound;
+            }
+            let (n, valid) = [(5, 5), (3, 3), (5, 2), (9, 9), (3, 1)][(case % 5) as usize];
+            let lo = rng.below(30 - n as u64) as usize;
+            let want = plain_costs(&raw, total, &table, lo, valid);
+            let mut out = [0u16; 9];
+            let mut r = raw;
+            match (valid, n) {
+                (5, 5) => costs_of::<5>(&mut r, total, &table, lo, valid, &mut out[..n]),
+                (3, 3) => costs_of::<3>(&mut r, total, &table, lo, valid, &mut out[..n]),
+                _ => costs_of::<0>(&mut r, total, &table, lo, valid, &mut out[..n]),
+            }
+            assert_eq!(out[..n], want[..n], "case {case}: total {total} lo {lo}");
+            let mut general = [0u16; 9];
+            costs_of::<0>(&mut raw, total, &table, lo, valid, &mut general[..n]);
+            assert_eq!(general[..n], want[..n], "case {case}, general path");
+        }
+    }
+}
