@@ -76,19 +76,20 @@ fn shape_marks(
     let (left, _) = chart.backend_coord(&(0.0, limit));
     let (right, bottom) = chart.backend_coord(&(bins, -limit));
     let mut marks = Vec::new();
-    for v in [limit, 0.0, -limit] {
+    // The limits' labels hang inside the plot's height, clear of the title
+    // row and the angle labels.
+    for (v, anchor) in [
+        (limit, VAnchor::Top),
+        (0.0, VAnchor::Middle),
+        (-limit, VAnchor::Bottom),
+    ] {
         let (_, y) = chart.backend_coord(&(0.0, v));
         let text = if v == 0.0 {
             "0".into()
         } else {
             format!("{v:.1}")
         };
-        marks.push(TextMark::new(
-            text,
-            (left - 3, y),
-            HAnchor::Right,
-            VAnchor::Middle,
-        ));
+        marks.push(TextMark::new(text, (left - 3, y), HAnchor::Right, anchor));
     }
     // Five angle ticks if they fit, else the ends and the middle.
     let degrees: &[i32] = if right - left >= 25 * cw {
