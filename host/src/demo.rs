@@ -196,6 +196,8 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
     // masks from the model's disparity and from ground-truth disparity.
     crate::classify::shipped::summarise_objects(&seg, "", &mut summary)?;
     crate::classify::shipped::summarise_objects(&seg_gt, ", GT disparity", &mut summary)?;
+    // The result as the board would draw it: boxes and categories.
+    out.push(crate::classify::shipped::objects_panel(&seg, &scene.left)?);
 
     finish(&opts.out, out, &mut summary, start)?;
     Ok(summary)

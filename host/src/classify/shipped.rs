@@ -105,3 +105,83 @@ pub fn summarise_objects(
     }
     Ok(())
 }
+
+/// A class name without its leading ordinal: `04_circle` reads `circle`.
+pub fn display_name(name: &str) -> &str {
+    match name.split_once('_') {
+        Some((n, rest)) if !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()) => rest,
+        _ => name,
+    }
+}
+
+/// The `objects` panel: `left` with each detected object's box and its
+/// category and score drawn by `protogist::draw` (dashed and magenta when
+/// the model says unknown, `?` when the mask has no shape).
+///
+/// # Errors
+/// As [`summarise_objects`].
+pub fn objects_panel(
+    seg: &crate::stages::SegmentResult,
+    left: &[protogist::image::Rgb8],
+) -> Result<crate::panels::Panel> {
+    let path = std::path::Path::new("host/data/shapes_model.bin");
+    let model = Model::parse(SHIPPED_MODEL)
+        .map_err(|e| super::model::bad_model(path, super::quant::model_error(e)))?;
+    let mut texts: Vec<(_, &str, _, _)> = Vec::new();
+    for (k, d) in seg.report.objects.iter().enumerate() {
+        let Some(b) = d.bbox.filter(|_| d.area > 0) else {
+            continue;
+        };
+        let c = categorise_mask(&model, &seg.mask_u8(k), seg.width, seg.height)?;
+        let best = c.as_ref().and_then(|c| c.ranked.first().copied());
+        let known = c
+            .as_ref()
+            .is_some_and(|c| matches!(c.identity, Identity::Known(_)));
+        let text = match c.as_ref().map(|c| c.identity) {
+            Some(Identity::Known(k)) => {
+                display_name(model.class_name(usize::from(k)).unwrap_or("?"))
+            }
+            Some(Identity::Unknown) => "unknown",
+            None => "?",
+        };
+        // Cosine in Q16 as a rounded percentage.
+        let score =
+            best.map(|r| u8::try_from((u64::from(r.score) * 100 + 32768) >> 16).unwrap_or(100));
+        texts.push((b, text, score, known));
+    }
+    let to_i = |v: usize| i32::try_from(v).unwrap_or(i32::MAX);
+    let to_u = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+    let labels: Vec<protogist::draw::ObjectLabel<'_>> = texts
+        .iter()
+        .map(|(b, text, score, known)| protogist::draw::ObjectLabel {
+            x: to_i(b.x),
+            y: to_i(b.y),
+            width: to_u(b.width),
+            height: to_u(b.height),
+            text,
+            score_percent: *score,
+            known: *known,
+        })
+        .collect();
+    let img = crate::panels::rgb_from(left, seg.width, seg.height);
+    Ok(crate::panels::Panel::new(
+        "objects",
+        crate::panels::labelled(&img, &labels),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn display_names_drop_the_ordinal_only() {
+        for (name, shown) in [
+            ("04_circle", "circle"),
+            ("10_crescent_moon", "crescent_moon"),
+            ("circle", "circle"),
+            ("_x", "_x"),
+            ("a1_b", "a1_b"),
+        ] {
+            assert_eq!(super::display_name(name), shown);
+        }
+    }
+}
