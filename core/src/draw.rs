@@ -2,8 +2,7 @@
 //! [`DrawTarget`] (feature `draw`).
 //!
 //! The same code draws the host's PNG panels (`Rgb888`) and a board's frame
-//! buffer or display (`Rgb565`, or any other
-//! [`PixelColor`](embedded_graphics::pixelcolor::PixelColor)): colours come
+//! buffer or display (`Rgb565`, or any other [`PixelColor`]): colours come
 //! from a style struct, text from the crate's built-in mono fonts, and
 //! nothing allocates.
 //!
