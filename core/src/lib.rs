@@ -19,6 +19,10 @@
 //! input, and has an f32 reference of the same name in `protogist-host`.
 //! Per-pixel work is integer-only ([`fixed`] names the formats); floats
 //! appear only in one-time setup such as [`conspicuity::LuvTables::new`].
+//!
+//! With the cargo feature `draw`, `protogist::draw` outlines objects and
+//! writes their categories and captions onto any `embedded-graphics`
+//! `DrawTarget`: a PNG on the desktop or a frame buffer on the board.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -37,6 +41,8 @@ pub mod checksum;
 pub mod complete;
 pub mod conspicuity;
 pub mod disparity;
+#[cfg(feature = "draw")]
+pub mod draw;
 pub mod fixed;
 pub mod image;
 pub mod mlp;

@@ -8,6 +8,7 @@
 
 pub mod app;
 pub mod camera;
+pub mod display;
 pub mod mlp_run;
 pub mod objects;
 pub mod probe;

@@ -192,6 +192,8 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
         format!("{:.3}", seg_gt.iou(0, &scene.mask)),
     );
     crate::classify::shipped::summarise_objects(&seg_gt, ", GT disparity", &mut summary)?;
+    // The result as the board would draw it: boxes and categories.
+    out.push(run.objects_panel(&scene.left));
 
     finish(&opts.out, out, &mut summary, start)?;
     Ok(summary)

@@ -13,6 +13,7 @@
 //! performance measures and plots of the paper's sections 4.1 and 5.1, and
 //! the development silhouettes of `protogist gen-shapes`.
 
+pub mod canvas;
 pub mod classify;
 pub mod cli;
 pub mod demo;

@@ -4,9 +4,12 @@
 //! [`luv_to_srgb`] is plain f32 and is not part of any stage.
 
 use crate::error::{HostError, Result};
+use embedded_graphics::prelude::*;
+use embedded_graphics::primitives::Rectangle;
 use image::{DynamicImage, GrayImage, Rgb, RgbImage};
 use protogist::conspicuity::{EdgeCell, Luv, SRGB_TO_XYZ, WHITE_U, WHITE_V};
 use protogist::disparity::DisparityCell;
+use protogist::draw::{caption, CaptionStyle};
 use protogist::image::Rgb8;
 
 /// One named output image; it is written as `{name}.png`.
@@ -27,6 +30,14 @@ impl Panel {
         }
     }
 
+    /// The caption the overview shows above the panel, from its name: a
+    /// leading letter (and digits) becomes the figure's panel letter, e.g.
+    /// `b_disparity` reads "(b) disparity", `b2_completed_disparity` reads
+    /// "(b2) completed disparity" and `gt_mask` reads "gt mask".
+    pub fn caption(&self) -> String {
+        caption_for(&self.name)
+    }
+
     /// The panel encoded as PNG bytes.
     ///
     /// # Errors
@@ -41,6 +52,36 @@ impl Panel {
             })?;
         Ok(bytes.into_inner())
     }
+}
+
+/// The caption of a panel named `name` (see [`Panel::caption`]).
+pub fn caption_for(name: &str) -> String {
+    let spaced = |s: &str| s.replace('_', " ");
+    match name.split_once('_') {
+        Some((tag, rest)) if is_panel_letter(tag) && !rest.is_empty() => {
+            format!("({tag}) {}", spaced(rest))
+        }
+        _ => spaced(name),
+    }
+}
+
+/// One lower-case letter, then digits only: `b`, `b2`.
+fn is_panel_letter(tag: &str) -> bool {
+    let mut chars = tag.chars();
+    chars.next().is_some_and(|c| c.is_ascii_lowercase()) && chars.all(|c| c.is_ascii_digit())
+}
+
+/// A copy of `img` with each object's box and label tab drawn on it by
+/// `protogist::draw`, as a board would draw them on its frame buffer.
+pub fn labelled(img: &RgbImage, labels: &[protogist::draw::ObjectLabel<'_>]) -> RgbImage {
+    let mut out = img.clone();
+    let style = protogist::draw::LabelStyle {
+        font: crate::canvas::font_for(img.width()),
+        ..protogist::draw::LabelStyle::default()
+    };
+    let Ok(()) =
+        protogist::draw::draw_objects(&mut crate::canvas::Canvas(&mut out), labels, &style);
+    out
 }
 
 fn dims(width: usize, height: usize) -> (u32, u32) {
@@ -189,29 +230,51 @@ pub const GAP: u32 = 4;
 /// Montage background.
 const BACKGROUND: Rgb<u8> = Rgb([32, 32, 32]);
 
+/// Height of the caption strip above each montage tile, px.
+pub const CAPTION: u32 = protogist::draw::CAPTION_HEIGHT;
+
 /// All panels tiled left to right, top to bottom, `columns` per row, with
-/// [`GAP`]-pixel gaps. Tiles in a row share the row's tallest height.
+/// [`GAP`]-pixel gaps, each under a [`CAPTION`]-pixel strip with its
+/// [`Panel::caption`] (drawn by `protogist::draw::caption`). Tiles in a row
+/// share the row's tallest height.
 pub fn montage(panels: &[Panel], columns: usize) -> RgbImage {
     let columns = columns.max(1);
     let rows: Vec<&[Panel]> = panels.chunks(columns).collect();
     let row_h: Vec<u32> = rows
         .iter()
-        .map(|r| r.iter().map(|p| p.image.height()).max().unwrap_or(0))
+        .map(|r| r.iter().map(|p| p.image.height()).max().unwrap_or(0) + CAPTION)
         .collect();
     let row_w = |r: &[Panel]| r.iter().map(|p| p.image.width() + GAP).sum::<u32>() + GAP;
     let width = rows.iter().map(|r| row_w(r)).max().unwrap_or(GAP).max(1);
     let height = row_h.iter().map(|h| h + GAP).sum::<u32>() + GAP;
     let mut out = RgbImage::from_pixel(width, height, BACKGROUND);
+    let style = CaptionStyle {
+        background: crate::canvas::rgb888(BACKGROUND),
+        text: crate::canvas::rgb888(CAPTION_TEXT),
+    };
     let mut y = GAP;
     for (row, h) in rows.iter().zip(&row_h) {
         let mut x = GAP;
         for p in row.iter() {
-            image::imageops::replace(&mut out, &p.image.to_rgb8(), x.into(), y.into());
+            let strip = Rectangle::new(
+                Point::new(coord(x), coord(y)),
+                Size::new(p.image.width(), CAPTION),
+            );
+            let mut canvas = crate::canvas::Canvas(&mut out);
+            let Ok(()) = caption(&mut canvas.cropped(&strip), &p.caption(), &style);
+            image::imageops::replace(&mut out, &p.image.to_rgb8(), x.into(), (y + CAPTION).into());
             x += p.image.width() + GAP;
         }
         y += h + GAP;
     }
     out
+}
+
+/// Caption text colour.
+const CAPTION_TEXT: Rgb<u8> = Rgb([235, 235, 235]);
+
+fn coord(v: u32) -> i32 {
+    i32::try_from(v).unwrap_or(i32::MAX)
 }
 
 #[cfg(test)]
@@ -238,13 +301,57 @@ mod tests {
     }
 
     #[test]
-    fn montage_holds_every_tile_with_gaps() {
-        let tile = |v| Panel::new("t", GrayImage::from_pixel(10, 5, image::Luma([v])));
-        let m = montage(&[tile(100), tile(200), tile(250)], 2);
-        assert_eq!(m.dimensions(), (4 + 2 * 14, 4 + 2 * 9));
-        assert_eq!(m.get_pixel(4, 4).0, [100; 3]);
-        assert_eq!(m.get_pixel(18, 4).0, [200; 3]);
-        assert_eq!(m.get_pixel(4, 13).0, [250; 3]);
+    fn montage_holds_every_tile_with_gaps_and_captions() {
+        let tile = |name, v| Panel::new(name, GrayImage::from_pixel(60, 5, image::Luma([v])));
+        let m = montage(&[tile("a_left", 100), tile("b", 200), tile("c_x", 250)], 2);
+        let c = CAPTION;
+        assert_eq!(m.dimensions(), (4 + 2 * 64, 4 + 2 * (9 + c)));
+        assert_eq!(m.get_pixel(4, 4 + c).0, [100; 3]);
+        assert_eq!(m.get_pixel(68, 4 + c).0, [200; 3]);
+        assert_eq!(m.get_pixel(4, 13 + 2 * c).0, [250; 3]);
         assert_eq!(m.get_pixel(2, 2).0, BACKGROUND.0);
+        // Caption text in each tile's strip, and only there.
+        let ink = |x0: u32, y0: u32| {
+            (y0..y0 + c)
+                .flat_map(|y| (x0..x0 + 60).map(move |x| (x, y)))
+                .filter(|&(x, y)| m.get_pixel(x, y).0 == CAPTION_TEXT.0)
+                .count()
+        };
+        assert!(ink(4, 4) > 20, "(a) left");
+        assert!(ink(68, 4) > 5, "b");
+        assert!(ink(4, 13 + c) > 10, "(c) x");
+        assert!(ink(4, 4) > ink(68, 4), "a longer caption, more ink");
+        assert_eq!(ink(68, 13 + c), 0, "no fourth tile");
+    }
+
+    #[test]
+    fn captions_read_as_panel_letters() {
+        for (name, caption) in [
+            ("b_disparity", "(b) disparity"),
+            ("b2_completed_disparity", "(b2) completed disparity"),
+            (
+                "g_object_region_conspicuity",
+                "(g) object region conspicuity",
+            ),
+            ("gt_mask", "gt mask"),
+            ("left", "left"),
+            ("shape_vector_0", "shape vector 0"),
+            ("a_", "a "),
+            ("B_x", "B x"),
+        ] {
+            assert_eq!(caption_for(name), caption, "{name}");
+        }
+    }
+
+    #[test]
+    fn labelled_draws_boxes_on_a_copy() {
+        let img = RgbImage::new(160, 120);
+        let boxes = [protogist::draw::ObjectLabel::new(
+            20, 40, 50, 30, "ball", true,
+        )];
+        let out = labelled(&img, &boxes);
+        assert_eq!(out.get_pixel(20, 69).0, [0, 255, 0]);
+        assert_eq!(out.get_pixel(69, 40).0, [0, 255, 0]);
+        assert_eq!(img.get_pixel(20, 69).0, [0, 0, 0]);
     }
 }

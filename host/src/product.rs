@@ -277,6 +277,27 @@ pub fn run_frame(
 }
 
 impl FrameRun {
+    /// The left view with each object's box, category and score, drawn by
+    /// `protogist::draw` (the code that draws them on a board's display).
+    pub fn objects_panel(&self, left: &[Rgb8]) -> Panel {
+        let names: Vec<&str> = self
+            .objects
+            .iter()
+            .map(|o| match (&o.category, o.top.first()) {
+                (Some(c), _) => crate::classify::shipped::display_name(c),
+                (None, _) => "unknown",
+            })
+            .collect();
+        let labels: Vec<_> = self
+            .objects
+            .iter()
+            .zip(&names)
+            .map(|(o, n)| o.object.label(n))
+            .collect();
+        let img = panels::rgb_from(left, self.width, self.height);
+        Panel::new("objects", panels::labelled(&img, &labels))
+    }
+
     /// The panels: left view, the engine's and the completed disparity, the
     /// edges, and per object its figure-ground maps, mask and segregated
     /// object (suffix `_k` for object `k`).

@@ -10,7 +10,7 @@ use std::process::Output;
 mod common;
 use common::{assert_one_line_error, protogist, text};
 
-const DEMO_PANELS: [&str; 9] = [
+const DEMO_PANELS: [&str; 10] = [
     "left",
     "right",
     "gt_disparity",
@@ -19,6 +19,7 @@ const DEMO_PANELS: [&str; 9] = [
     "smoothed",
     "conspicuity",
     "edges",
+    "objects",
     "overview",
 ];
 const IMAGE_PANELS: [&str; 6] = [
@@ -90,6 +91,14 @@ fn demo_writes_every_panel_and_a_summary() {
     }
     let left = image::open(out_dir.join("left.png")).unwrap();
     assert_eq!((left.width(), left.height()), (160, 120));
+    // The objects panel: the left view with the object's box and category
+    // tab in protogist::draw's green (known) or magenta (unknown).
+    let objects = image::open(out_dir.join("objects.png")).unwrap().to_rgb8();
+    let drawn = |c: [u8; 3]| objects.pixels().filter(|p| p.0 == c).count();
+    let (known, unknown) = (drawn([0, 255, 0]), drawn([255, 0, 255]));
+    assert!(known + unknown > 150, "no box: {known} {unknown}");
+    let black_text = objects.pixels().filter(|p| p.0 == [0, 0, 0]).count();
+    assert!(black_text > 20, "no category text: {black_text}");
 }
 
 #[test]

@@ -106,6 +106,7 @@ fn identity_network_baseline_on_generated_shapes() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = std::env::var_os("PROTOGIST_PLOT_DIR").map_or(tmp.path().to_path_buf(), Into::into);
     let curve = |points| Curve {
+        label: "shape".into(),
         points,
         colour: SHAPE_BLUE,
         dashed: true,

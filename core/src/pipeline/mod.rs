@@ -363,6 +363,26 @@ impl Object {
     pub fn top(&self) -> &[Ranked] {
         self.top.get(..usize::from(self.top_len)).unwrap_or(&[])
     }
+
+    /// The object as [`crate::draw::draw_objects`] draws it: its box, `name`
+    /// (e.g. the best class's), the best cosine in percent, and the verdict.
+    #[cfg(feature = "draw")]
+    pub fn label<'a>(&self, name: &'a str) -> crate::draw::ObjectLabel<'a> {
+        let c = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+        let i = |v: usize| i32::try_from(v).unwrap_or(i32::MAX);
+        crate::draw::ObjectLabel {
+            x: i(self.bbox.x),
+            y: i(self.bbox.y),
+            width: c(self.bbox.width),
+            height: c(self.bbox.height),
+            text: name,
+            score_percent: self
+                .top()
+                .first()
+                .map(|r| u8::try_from((u64::from(r.score) * 100 + 32768) >> 16).unwrap_or(100)),
+            known: matches!(self.identity, Identity::Known(_)),
+        }
+    }
 }
 
 /// What a run found; its maps live in the workspace.

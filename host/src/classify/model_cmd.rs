@@ -12,7 +12,7 @@ use super::dataset::{load_dataset, stratified_split, Dataset};
 use super::metrics::{cmc, Det};
 use super::mlp::{Mlp, GAMMA};
 use super::model::{bad_model, ModelFile, MODEL_FORMAT};
-use super::plots::{cmc_points, write_plot, Curve, PlotKind, MAGENTA, SHAPE_BLUE};
+use super::plots::{cmc_points, write_plot, Curve, PlotKind, ORANGE, SHAPE_BLUE};
 use super::quant::{int_outputs, int_scores, model_error, quantize, score_sets};
 use super::rules::{evaluate, ranked, Evaluation, Templates};
 use super::train::{train, TrainParams};
@@ -430,13 +430,15 @@ pub fn evaluate_model(opts: &EvalOptions) -> Result<(EvalReport, String)> {
     let curves = |f: Vec<(f64, f64)>, i: Vec<(f64, f64)>| {
         vec![
             Curve {
+                label: "float model".into(),
                 points: f,
                 colour: SHAPE_BLUE,
                 dashed: false,
             },
             Curve {
+                label: "int8 model".into(),
                 points: i,
-                colour: MAGENTA,
+                colour: ORANGE,
                 dashed: true,
             },
         ]

@@ -1,15 +1,16 @@
 //! CMC, DET and ROC plots like the paper's Fig. 8, drawn with `plotters`
-//! as PNG and SVG.
+//! as PNG and SVG, labelled with the built-in mono fonts of
+//! `embedded-graphics` (no font files needed).
 //!
-//! **No text.** The host builds `plotters` without a font backend, so the
-//! plots carry no axis labels or tick numbers (text would need fonts that
-//! may not be installed). The axes are instead fixed and documented, with
-//! light grey grid lines at known values:
+//! Every plot has a title, tick labels and a title on each axis, and a
+//! legend naming each curve ([`Curve::label`]) and the reference line. In
+//! the PNG the text is drawn onto the bitmap by [`crate::canvas`]; in the
+//! SVG it is `<text>` in a monospace font of the same size.
 //!
-//! * **CMC**: x = rank 1 to N (a grid line per rank up to 20 ranks, else
+//! * **CMC**: x = rank 1 to N (grid line per rank up to 20 ranks, else
 //!   every 5th), y = recognition rate 0 to 1 (grid every 0.1). The chance
 //!   rate `τ / N` is dashed magenta.
-//! * **DET**: x = probit(FAR), y = probit(FRR), both from 0.05 % to 95 %
+//! * **DET**: x = FAR, y = FRR, both on probit axes from 0.05 % to 95 %
 //!   (rates outside are clamped to the frame); grid lines at 0.1 %, 1 %,
 //!   5 %, 10 %, 20 %, 40 % and 80 %, the 1 % and 10 % ones darker. The
 //!   EER line FAR = FRR is dashed grey.
@@ -18,17 +19,23 @@
 //!
 //! Each curve is drawn solid or dashed in its colour, as in Fig. 8.
 
+use super::plot_text::{axis_marks, legend, Layout};
 use super::probit::probit;
+use crate::canvas::{draw_marks, TextMark};
+use crate::canvas::{HAnchor, VAnchor};
 use crate::error::{HostError, Result};
 use crate::io::{ensure_dir, write_atomic};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::{Path, PathBuf};
 
 /// One curve: points in the plot's data space (see [`PlotKind`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Curve {
+    /// Its name in the legend, e.g. `float model`.
+    pub label: String,
     /// (x, y) points.
     pub points: Vec<(f64, f64)>,
     /// Line colour.
@@ -53,16 +60,18 @@ pub enum PlotKind {
 
 /// The Fig. 8 colour of the shape modality.
 pub const SHAPE_BLUE: RGBColor = RGBColor(31, 90, 200);
+/// A second curve's colour, apart from the reference lines'.
+pub const ORANGE: RGBColor = RGBColor(230, 120, 0);
 /// Random-guess lines.
 pub const MAGENTA: RGBColor = RGBColor(220, 0, 220);
 const GRID: RGBColor = RGBColor(225, 225, 225);
-const GRID_DARK: RGBColor = RGBColor(180, 180, 180);
+pub(super) const GRID_DARK: RGBColor = RGBColor(180, 180, 180);
 
 /// DET axis limits (rates).
 pub const DET_RANGE: (f64, f64) = (0.0005, 0.95);
 const DET_GRID: [f64; 7] = [0.001, 0.01, 0.05, 0.1, 0.2, 0.4, 0.8];
 
-type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+pub(super) type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 fn line<DB: DrawingBackend>(c: &mut Chart<'_, DB>, pts: Vec<(f64, f64)>, style: ShapeStyle) {
     // Errors only leave a line out of the picture: ignore them.
@@ -73,9 +82,15 @@ fn dashed<DB: DrawingBackend>(c: &mut Chart<'_, DB>, pts: Vec<(f64, f64)>, style
     let _ = c.draw_series(DashedLineSeries::new(pts, 8, 5, style));
 }
 
-/// Draws one plot onto `root` (any backend).
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, kind: PlotKind, curves: &[Curve]) {
+/// Draws one plot onto `root` (any backend); returns the text to put on
+/// it, which the caller draws in its backend's way, and the layout.
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    kind: PlotKind,
+    curves: &[Curve],
+) -> (Vec<TextMark>, Layout) {
     let _ = root.fill(&WHITE);
+    let lay = Layout::new(kind, root.dim_in_pixel());
     let det_lo = probit(DET_RANGE.0);
     let det_hi = probit(DET_RANGE.1);
     let (xr, yr) = match kind {
@@ -83,8 +98,14 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, kind: PlotKind, curve
         PlotKind::Det => (det_lo..det_hi, det_lo..det_hi),
         PlotKind::Roc => (0.0..1.0, 0.0..1.0),
     };
-    let Ok(mut chart) = ChartBuilder::on(root).margin(6).build_cartesian_2d(xr, yr) else {
-        return;
+    let Ok(mut chart) = ChartBuilder::on(root)
+        .margin_top(lay.top)
+        .margin_bottom(lay.bottom)
+        .margin_left(lay.left)
+        .margin_right(lay.right)
+        .build_cartesian_2d(xr, yr)
+    else {
+        return (Vec::new(), lay);
     };
     let map: Box<dyn Fn(f64) -> f64> = match kind {
         PlotKind::Det => Box::new(move |r: f64| probit(r).clamp(det_lo, det_hi)),
@@ -139,6 +160,8 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, kind: PlotKind, curve
             line(&mut chart, pts, c.colour.stroke_width(2));
         }
     }
+    let mut marks = axis_marks(&chart, kind, &lay);
+    legend(root, &chart, kind, curves, &lay, &mut marks);
     let _ = root.draw(&Rectangle::new(
         [
             (0, 0),
@@ -150,16 +173,20 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, kind: PlotKind, curve
         BLACK,
     ));
     let _ = root.present();
+    (marks, lay)
 }
 
 /// The plot as an RGB image.
 pub fn render_png(kind: PlotKind, curves: &[Curve], size: (u32, u32)) -> image::RgbImage {
     let mut buf = vec![255u8; size.0 as usize * size.1 as usize * 3];
-    {
+    let (marks, lay) = {
         let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-        draw(&root, kind, curves);
-    }
-    image::RgbImage::from_raw(size.0, size.1, buf).unwrap_or_else(|| image::RgbImage::new(1, 1))
+        draw(&root, kind, curves)
+    };
+    let mut img = image::RgbImage::from_raw(size.0, size.1, buf)
+        .unwrap_or_else(|| image::RgbImage::new(1, 1));
+    draw_marks(&mut img, &marks, lay.font);
+    img
 }
 
 /// The plot as an SVG document.
@@ -167,7 +194,29 @@ pub fn render_svg(kind: PlotKind, curves: &[Curve], size: (u32, u32)) -> String 
     let mut s = String::new();
     {
         let root = SVGBackend::with_string(&mut s, size).into_drawing_area();
-        draw(&root, kind, curves);
+        let (marks, lay) = draw(&root, kind, curves);
+        // The SVG backend writes text as `<text>` without font files.
+        let px = f64::from(lay.font.character_size.height);
+        for m in &marks {
+            let [r, g, b] = m.colour.0;
+            let colour = RGBColor(r, g, b);
+            let style = TextStyle::from(("monospace", px * 1.24).into_font())
+                .color(&colour)
+                .pos(Pos::new(
+                    match m.h {
+                        HAnchor::Left => HPos::Left,
+                        HAnchor::Centre => HPos::Center,
+                        HAnchor::Right => HPos::Right,
+                    },
+                    match m.v {
+                        VAnchor::Top => VPos::Top,
+                        VAnchor::Middle => VPos::Center,
+                        VAnchor::Bottom => VPos::Bottom,
+                    },
+                ));
+            let _ = root.draw_text(&m.text, &style, (m.x, m.y));
+        }
+        let _ = root.present();
     }
     s
 }
@@ -211,6 +260,7 @@ pub fn cmc_points(cmc: &[f64]) -> Vec<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::classify::plot_text::Layout;
 
     fn count(img: &image::RgbImage, colour: RGBColor) -> usize {
         img.pixels()
@@ -224,6 +274,7 @@ mod tests {
     #[test]
     fn plots_draw_curves_and_reference_lines() {
         let cmc = Curve {
+            label: "shape".into(),
             points: cmc_points(&[0.5, 0.8, 1.0]),
             colour: SHAPE_BLUE,
             dashed: false,
@@ -235,6 +286,7 @@ mod tests {
         );
         assert!(count(&img, SHAPE_BLUE) > 100 && count(&img, MAGENTA) > 50);
         let det = Curve {
+            label: "shape".into(),
             points: vec![(0.5, 0.01), (0.1, 0.1), (0.01, 0.5)],
             colour: SHAPE_BLUE,
             dashed: true,
@@ -243,6 +295,100 @@ mod tests {
         assert!(count(&img, SHAPE_BLUE) > 50);
         let svg = render_svg(PlotKind::Roc, &[cmc], (150, 150));
         assert!(svg.starts_with("<svg") && svg.contains("polyline"));
+    }
+
+    /// Text pixels ([`crate::canvas::TEXT`]) in the inclusive rectangle.
+    fn ink(img: &image::RgbImage, (x0, y0): (u32, u32), (x1, y1): (u32, u32)) -> usize {
+        (y0..=y1)
+            .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
+            .filter(|&(x, y)| img.get_pixel(x, y).0 == crate::canvas::TEXT.0)
+            .count()
+    }
+
+    fn curve(label: &str) -> Curve {
+        Curve {
+            label: label.into(),
+            points: vec![(0.01, 0.3), (0.1, 0.8), (0.5, 0.95)],
+            colour: SHAPE_BLUE,
+            dashed: false,
+        }
+    }
+
+    #[test]
+    fn every_plot_has_text_in_its_label_areas() {
+        for kind in [PlotKind::Cmc { classes: 30 }, PlotKind::Det, PlotKind::Roc] {
+            for (w, h) in [(480, 360), (320, 240), (200, 150)] {
+                let img = render_png(kind, &[curve("c")], (w, h));
+                let lay = Layout::new(kind, (w, h));
+                let (top, bottom, left) = (lay.top, h - lay.bottom, lay.left);
+                // y tick labels left of the plotting area.
+                let y_ticks = ink(&img, (1, top), (left - 2, bottom));
+                // x tick labels and the x title below it.
+                let x_text = ink(&img, (left, bottom + 2), (w - 2, h - 2));
+                // The y title and the name above it.
+                let titles = ink(&img, (1, 1), (w - 2, top - 2));
+                let msg = format!("{kind:?} {w}x{h}: {y_ticks} {x_text} {titles}");
+                assert!(y_ticks > 40 && x_text > 80 && titles > 40, "{msg}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_legend_names_the_curves() {
+        let (w, h) = (480, 360);
+        for kind in [PlotKind::Cmc { classes: 10 }, PlotKind::Det, PlotKind::Roc] {
+            let lay = Layout::new(kind, (w, h));
+            let area = |img: &image::RgbImage| {
+                ink(
+                    img,
+                    (lay.left + 1, lay.top + 1),
+                    (w - lay.right - 1, h - lay.bottom - 1),
+                )
+            };
+            let short = area(&render_png(kind, &[curve("a")], (w, h)));
+            let long = area(&render_png(kind, &[curve("a longer name")], (w, h)));
+            let two = area(&render_png(kind, &[curve("a"), curve("b")], (w, h)));
+            // The reference line's entry alone has text too.
+            let none = area(&render_png(kind, &[], (w, h)));
+            assert!(none > 40, "{kind:?}: no reference entry");
+            assert!(
+                long > short + 40 && two > short + 5 && short > none,
+                "{kind:?}"
+            );
+        }
+        let svg = render_svg(
+            PlotKind::Cmc { classes: 10 },
+            &[curve("int8 model")],
+            (w, h),
+        );
+        for text in [
+            "int8 model",
+            "chance",
+            "rank",
+            "recognition rate",
+            "CMC",
+            "0.4",
+            "10",
+        ] {
+            assert!(
+                svg.contains(&format!(">\n{text}\n</text>")),
+                "SVG lacks {text}"
+            );
+        }
+        assert!(svg.contains("<text") && svg.contains("monospace"));
+    }
+
+    #[test]
+    fn many_ranks_are_thinned_to_fit() {
+        let img = render_png(PlotKind::Cmc { classes: 500 }, &[], (200, 150));
+        let svg = render_svg(PlotKind::Cmc { classes: 500 }, &[], (200, 150));
+        // Ranks 1, 50, 100, ... 500 at most: not 500 labels.
+        assert!(
+            svg.matches("<text").count() < 25,
+            "{}",
+            svg.matches("<text").count()
+        );
+        assert!(ink(&img, (1, 1), (199, 149)) > 100);
     }
 
     #[test]

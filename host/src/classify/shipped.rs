@@ -105,3 +105,27 @@ pub fn summarise_objects(
     }
     Ok(())
 }
+
+/// A class name without its leading ordinal: `04_circle` reads `circle`.
+pub fn display_name(name: &str) -> &str {
+    match name.split_once('_') {
+        Some((n, rest)) if !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()) => rest,
+        _ => name,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn display_names_drop_the_ordinal_only() {
+        for (name, shown) in [
+            ("04_circle", "circle"),
+            ("10_crescent_moon", "crescent_moon"),
+            ("circle", "circle"),
+            ("_x", "_x"),
+            ("a1_b", "a1_b"),
+        ] {
+            assert_eq!(super::display_name(name), shown);
+        }
+    }
+}
