@@ -7,8 +7,9 @@
 //! Inputs are loaded and checked in full (scenes against their truth, the
 //! model against the scenes' classes) before anything runs. Outputs:
 //! `OUT/overview.png`, then `OUT/report.json` last, each written
-//! atomically; a `report.json` from an earlier run is removed first, so a
-//! folder holds a `report.json` only when its run completed.
+//! atomically; a `report.json` from an earlier run is removed before the
+//! inputs are even read, so a folder holds a `report.json` only when the
+//! last run into it completed.
 
 pub mod detect;
 pub mod overview;
@@ -168,6 +169,11 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
             reason: format!("{} is outside 1..={MAX_OBJECTS}", opts.objects),
         });
     }
+    // This run's report replaces any earlier one, complete or not.
+    let report_path = opts.out.join("report.json");
+    if report_path.is_file() {
+        std::fs::remove_file(&report_path).map_err(|e| HostError::io(&report_path, e))?;
+    }
     let blob = load_model(&opts.model)?;
     let model = Model::parse(&blob)
         .map_err(|e| crate::classify::model::bad_model(&opts.model, format!("{e:?}")))?;
@@ -235,10 +241,6 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
     };
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| HostError::io(opts.out.join("report.json"), e.into()))?;
-    let report_path = opts.out.join("report.json");
-    if report_path.exists() {
-        std::fs::remove_file(&report_path).map_err(|e| HostError::io(&report_path, e))?;
-    }
     let png = crate::panels::Panel::new("overview", overview::overview(tiles)).encode_png()?;
     write_atomic(&opts.out.join("overview.png"), &png)?;
     write_atomic(&report_path, format!("{json}\n").as_bytes())?;

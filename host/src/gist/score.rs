@@ -190,3 +190,190 @@ impl Totals {
         t
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenes::{ObjectTruth, SceneTruth};
+
+    fn b(x: u32, y: u32, width: u32, height: u32) -> BoxPx {
+        BoxPx {
+            x,
+            y,
+            width,
+            height,
+        }
+    }
+
+    #[test]
+    fn matching_takes_iou_of_one_half_and_not_below() {
+        let gt = [b(0, 0, 10, 10)];
+        // Exactly 0.5 (a half-size box inside) matches.
+        assert_eq!(match_boxes(&[b(0, 0, 10, 5)], &gt).len(), 1);
+        // 45 / 100 does not.
+        assert!(match_boxes(&[b(0, 0, 9, 5)], &gt).is_empty());
+        assert!(match_boxes(&[], &gt).is_empty());
+        assert!(match_boxes(&gt, &[]).is_empty());
+    }
+
+    #[test]
+    fn matching_is_greedy_by_iou_one_to_one() {
+        // Detection 0 overlaps both objects; detection 1 fits object 1 best.
+        let gt = [b(0, 0, 10, 10), b(2, 0, 10, 10)];
+        let dets = [b(1, 0, 10, 10), b(2, 0, 10, 10)];
+        let m = match_boxes(&dets, &gt);
+        assert_eq!(m.len(), 2);
+        assert_eq!((m[0].detection, m[0].object, m[0].iou), (1, 1, 1.0));
+        assert_eq!((m[1].detection, m[1].object), (0, 0));
+        // Two detections of one object: only the better one matches.
+        let m = match_boxes(&[b(1, 0, 10, 10), b(0, 0, 10, 10)], &gt[..1]);
+        assert_eq!(m.len(), 1);
+        assert_eq!(m[0].detection, 1);
+        // Ties go to the lower index.
+        let m = match_boxes(&[b(0, 0, 10, 10), b(0, 0, 10, 10)], &gt[..1]);
+        assert_eq!(m[0].detection, 0);
+    }
+
+    #[test]
+    fn mask_iou_counts_pixels() {
+        assert_eq!(
+            mask_iou(&[true, true, false, false], &[255, 0, 255, 0]),
+            1.0 / 3.0
+        );
+        assert_eq!(mask_iou(&[false; 3], &[0; 3]), 0.0);
+    }
+
+    /// A 10x10 scene with objects `(class, box)` filling their boxes.
+    fn scene(objects: &[(&str, BoxPx)]) -> Scene {
+        let (w, h) = (10, 10);
+        let fill = |bx: &BoxPx| -> Vec<u8> {
+            (0..w * h)
+                .map(|i| {
+                    let (x, y) = ((i % w) as u32, (i / w) as u32);
+                    let inside = (bx.x..bx.x + bx.width).contains(&x)
+                        && (bx.y..bx.y + bx.height).contains(&y);
+                    u8::from(inside) * 255
+                })
+                .collect()
+        };
+        Scene {
+            dir: "scene_0007".into(),
+            width: w,
+            height: h,
+            left: vec![],
+            right: vec![],
+            disparity: vec![],
+            truth: SceneTruth {
+                format: String::new(),
+                width: 10,
+                height: 10,
+                objects: objects
+                    .iter()
+                    .map(|(c, bx)| ObjectTruth {
+                        class: (*c).into(),
+                        mask: String::new(),
+                        bbox: *bx,
+                        disparity: 1.0,
+                        area: 0,
+                        contrast: true,
+                    })
+                    .collect(),
+            },
+            masks: objects.iter().map(|(_, bx)| fill(bx)).collect(),
+        }
+    }
+
+    fn det(s: &Scene, k: usize, top: &[&str], known: bool) -> Detection {
+        Detection {
+            bbox: s.truth.objects[k].bbox,
+            mask: s.masks[k].iter().map(|&v| v != 0).collect(),
+            top5: top.iter().map(|c| ((*c).to_string(), 0.9)).collect(),
+            known,
+        }
+    }
+
+    #[test]
+    fn scene_scores_and_the_gist() {
+        let s = scene(&[("a", b(0, 0, 4, 4)), ("b", b(5, 5, 5, 5))]);
+        let right = [det(&s, 0, &["a", "c"], true), det(&s, 1, &["b"], true)];
+        let sc = score_scene(&s, &right, 2.0);
+        assert_eq!((sc.objects, sc.detections, sc.matched), (2, 2, 2));
+        assert_eq!((sc.top1, sc.top5, sc.mask_iou_sum), (2, 2, 2.0));
+        assert!(sc.gist);
+        assert_eq!(sc.scene, "scene_0007");
+
+        // Second best class: top-5 but not top-1, and the gist is wrong.
+        let second = [det(&s, 0, &["c", "a"], true), det(&s, 1, &["b"], true)];
+        let sc = score_scene(&s, &second, 0.0);
+        assert_eq!((sc.top1, sc.top5, sc.gist), (1, 2, false));
+
+        // Right class but unknown under Δ: top-1 counts, the gist does not.
+        let unknown = [det(&s, 0, &["a"], false), det(&s, 1, &["b"], true)];
+        let sc = score_scene(&s, &unknown, 0.0);
+        assert_eq!((sc.top1, sc.gist), (2, false));
+
+        // An extra detection: harmless when unknown, wrong when it claims.
+        let mut extra = right.to_vec();
+        extra.push(Detection {
+            bbox: b(0, 6, 3, 3),
+            mask: vec![false; 100],
+            top5: vec![("d".into(), 0.5)],
+            known: false,
+        });
+        let sc = score_scene(&s, &extra, 0.0);
+        assert_eq!((sc.detections, sc.matched, sc.gist), (3, 2, true));
+        extra[2].known = true;
+        assert!(!score_scene(&s, &extra, 0.0).gist);
+
+        // Nothing found.
+        let sc = score_scene(&s, &[], 0.0);
+        assert_eq!((sc.matched, sc.gist), (0, false));
+    }
+
+    #[test]
+    fn totals_are_ratios_of_sums() {
+        let one = SceneScore {
+            objects: 2,
+            detections: 4,
+            matched: 2,
+            mask_iou_sum: 1.5,
+            top1: 1,
+            top5: 2,
+            gist: false,
+            ms: 10.0,
+            ..SceneScore::default()
+        };
+        let two = SceneScore {
+            objects: 2,
+            detections: 0,
+            matched: 0,
+            gist: false,
+            ms: 30.0,
+            ..SceneScore::default()
+        };
+        let three = SceneScore {
+            objects: 1,
+            detections: 1,
+            matched: 1,
+            mask_iou_sum: 0.9,
+            top1: 1,
+            top5: 1,
+            gist: true,
+            ms: 20.0,
+            ..SceneScore::default()
+        };
+        let t = Totals::of([&one, &two, &three]);
+        assert_eq!((t.scenes, t.objects, t.detections, t.matched), (3, 5, 5, 3));
+        assert_eq!(t.recall, Some(0.6));
+        assert_eq!(t.precision, Some(0.6));
+        assert!((t.mask_iou.unwrap() - 0.8).abs() < 1e-12);
+        assert_eq!(t.top1, Some(2.0 / 3.0));
+        assert_eq!(t.top5, Some(1.0));
+        assert_eq!(t.gist, Some(1.0 / 3.0));
+        assert_eq!(t.ms_per_scene, Some(20.0));
+        // No detections at all: precision and per-match rates undefined.
+        let t = Totals::of([&two]);
+        assert_eq!((t.recall, t.precision, t.top1), (Some(0.0), None, None));
+        assert_eq!(Totals::of([]).recall, None);
+    }
+}

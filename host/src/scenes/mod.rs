@@ -413,3 +413,153 @@ pub fn gen_scenes(opts: &GenScenesOptions) -> Result<Summary> {
     s.push("time", format!("{:.1} s", start.elapsed().as_secs_f64()));
     Ok(s)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn b(x: u32, y: u32, width: u32, height: u32) -> BoxPx {
+        BoxPx {
+            x,
+            y,
+            width,
+            height,
+        }
+    }
+
+    #[test]
+    fn box_iou_edge_cases() {
+        let a = b(10, 10, 10, 10);
+        assert_eq!(a.iou(&a), 1.0);
+        // Touching edges share no pixel.
+        assert_eq!(a.iou(&b(20, 10, 10, 10)), 0.0);
+        assert_eq!(a.iou(&b(50, 50, 3, 3)), 0.0);
+        // Half the width overlapping: 50 / 150.
+        assert!((a.iou(&b(15, 10, 10, 10)) - 1.0 / 3.0).abs() < 1e-12);
+        // A box inside another: the area ratio, exactly 0.5 here.
+        assert_eq!(b(0, 0, 10, 10).iou(&b(0, 0, 10, 5)), 0.5);
+        // Empty boxes.
+        assert_eq!(b(0, 0, 0, 0).iou(&b(0, 0, 0, 0)), 0.0);
+        assert_eq!(b(0, 0, 0, 5).iou(&a), 0.0);
+    }
+
+    #[test]
+    fn box_of_a_mask() {
+        let mut m = GrayImage::new(8, 6);
+        assert_eq!(BoxPx::of_mask(&m), None);
+        m.put_pixel(2, 1, image::Luma([255]));
+        m.put_pixel(5, 4, image::Luma([1]));
+        assert_eq!(BoxPx::of_mask(&m), Some(b(2, 1, 4, 4)));
+    }
+
+    #[test]
+    fn objects_ranges_parse_or_fail() {
+        assert_eq!(parse_objects("1..4").unwrap(), (1, 4));
+        assert_eq!(parse_objects("2..=3").unwrap(), (2, 3));
+        assert_eq!(parse_objects("3").unwrap(), (3, 3));
+        for bad in ["0", "5", "3..2", "1..5", "x", "", "1.."] {
+            assert!(
+                matches!(
+                    parse_objects(bad),
+                    Err(HostError::InvalidArgument {
+                        name: "objects",
+                        ..
+                    })
+                ),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn bad_options_are_typed_errors() {
+        let opts = GenScenesOptions {
+            out: PathBuf::from("/nonexistent/never"),
+            scenes: 2,
+            seed: 1,
+            split: Split::Test,
+            width: 160,
+            height: 120,
+            objects: "1..4".into(),
+            classes: 19,
+        };
+        assert!(params(&opts).is_ok());
+        let with = |f: &dyn Fn(&mut GenScenesOptions)| {
+            let mut o = opts.clone();
+            f(&mut o);
+            gen_scenes(&o)
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default()
+        };
+        assert!(with(&|o| o.scenes = 0).contains("--scenes"));
+        assert!(with(&|o| o.classes = 0).contains("--classes"));
+        assert!(with(&|o| o.classes = 20).contains("--classes"));
+        assert!(with(&|o| o.width = 10).contains("--width"));
+        assert!(with(&|o| o.height = 5000).contains("--height"));
+        assert!(with(&|o| o.objects = "7".into()).contains("--objects"));
+        // Four distinct classes need four classes.
+        assert!(with(&|o| o.classes = 3).contains("--objects"));
+    }
+
+    #[test]
+    fn splits_and_indices_draw_apart() {
+        let key = |split, index| SceneKey {
+            seed: 1,
+            split,
+            index,
+        };
+        let mut seen = std::collections::HashSet::new();
+        for i in 0..500 {
+            assert!(seen.insert(key(Split::Test, i).stream()));
+            assert!(seen.insert(key(Split::Train, i).stream()));
+        }
+    }
+
+    #[test]
+    fn pfm_round_trips_through_the_reader() {
+        let data: Vec<f32> = (0..12).map(|v| v as f32 * 0.25).collect();
+        let gt = crate::ground_truth::parse_pfm(&pfm_bytes(&data, 4, 3)).unwrap();
+        assert_eq!((gt.width, gt.height), (4, 3));
+        assert_eq!(gt.data, data.iter().map(|&v| Some(v)).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn scenes_hold_their_objects_in_front_of_the_background() {
+        let p = SceneParams {
+            width: 160,
+            height: 120,
+            classes: 19,
+            objects: (1, 4),
+        };
+        for index in 0..6 {
+            let key = SceneKey {
+                seed: 3,
+                split: Split::Test,
+                index,
+            };
+            let s = render::render_scene(&p, key).unwrap();
+            assert!(!s.objects.is_empty() && s.objects.len() <= 4);
+            let classes: std::collections::HashSet<_> =
+                s.objects.iter().map(|o| &o.class).collect();
+            assert_eq!(classes.len(), s.objects.len(), "classes are distinct");
+            let max = render::max_disparity(160) as f32;
+            assert!(s.disparity.iter().all(|&d| d > 0.0 && d <= max));
+            for (o, m) in s.objects.iter().zip(&s.masks) {
+                assert_eq!(BoxPx::of_mask(m), Some(o.bbox));
+                // Fully inside both views: the right view shifts it left.
+                assert!(f64::from(o.bbox.x) >= o.disparity.ceil() - 1.0);
+                let inside: Vec<f32> = m
+                    .as_raw()
+                    .iter()
+                    .zip(&s.disparity)
+                    .filter(|(&v, _)| v != 0)
+                    .map(|(_, &d)| d)
+                    .collect();
+                assert_eq!(inside.len(), o.area);
+                assert!(inside.iter().all(|&d| f64::from(d) == o.disparity));
+            }
+            assert_ne!(s.left, s.right);
+        }
+    }
+}
