@@ -132,3 +132,68 @@ pub fn overview(tiles: Vec<(String, RgbImage)>) -> RgbImage {
         .collect();
     montage(&panels, COLUMNS)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenes::{ObjectTruth, SceneTruth};
+    use protogist::image::Rgb8;
+
+    #[test]
+    fn tiles_frame_truth_and_detections_in_their_colours() {
+        let (w, h) = (40usize, 30usize);
+        let gt = BoxPx {
+            x: 5,
+            y: 6,
+            width: 10,
+            height: 8,
+        };
+        let scene = Scene {
+            dir: "scene_0001".into(),
+            width: w,
+            height: h,
+            left: vec![Rgb8 { r: 1, g: 2, b: 3 }; w * h],
+            right: vec![],
+            disparity: vec![],
+            truth: SceneTruth {
+                format: String::new(),
+                width: w as u32,
+                height: h as u32,
+                objects: vec![ObjectTruth {
+                    class: "04_circle".into(),
+                    mask: String::new(),
+                    bbox: gt,
+                    disparity: 1.0,
+                    area: 80,
+                    contrast: true,
+                }],
+            },
+            masks: vec![],
+        };
+        let det = |known| Detection {
+            bbox: BoxPx { x: 22, ..gt },
+            mask: vec![],
+            top5: vec![("04_circle".into(), 0.9)],
+            known,
+        };
+        let colour = |c: Rgb888| Rgb([c.r(), c.g(), c.b()]);
+        let img = tile(&scene, &[det(true)], false);
+        assert_eq!(img.dimensions(), (80, 60));
+        // Box corners, at twice the scale.
+        assert_eq!(*img.get_pixel(10, 12), colour(GT));
+        assert_eq!(*img.get_pixel(29, 27), colour(GT));
+        // The detection is elsewhere: its claim is wrong.
+        assert_eq!(*img.get_pixel(44, 27), colour(WRONG));
+        // Inside the boxes the scene shows through.
+        assert_eq!(*img.get_pixel(20, 20), Rgb([1, 2, 3]));
+        let on_top = Detection {
+            bbox: gt,
+            ..det(true)
+        };
+        assert_eq!(
+            *tile(&scene, &[on_top], true).get_pixel(29, 27),
+            colour(RIGHT)
+        );
+        assert!(overview(vec![("a".into(), img.clone()), ("b".into(), img)]).width() > 160);
+    }
+}
