@@ -143,7 +143,7 @@ fn gen_scenes_then_gist_eval_reports_and_draws() {
     let o = eval(dir.path(), "s", MODEL, "ref", &["--objects", "2"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out = text(&o.stdout);
-    assert!(out.contains("mode Reference, K = 2"), "{out}");
+    assert!(out.contains("mode reference, K = 2"), "{out}");
     assert!(out.contains("recall") && out.contains("gist"), "{out}");
 }
 

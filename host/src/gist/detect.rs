@@ -64,6 +64,16 @@ pub enum Mode {
     GtDisparity,
 }
 
+impl Mode {
+    /// Its name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Reference => "reference",
+            Self::GtDisparity => "gt-disparity",
+        }
+    }
+}
+
 /// The int8 classifier and the names of its classes.
 #[derive(Clone, Debug)]
 pub struct Classifier<'a> {

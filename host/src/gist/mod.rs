@@ -246,10 +246,10 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
     write_atomic(&report_path, format!("{json}\n").as_bytes())?;
 
     let mut s = Summary::new(format!(
-        "protogist gist-eval: {} scenes of {}, mode {:?}, K = {}",
+        "protogist gist-eval: {} scenes of {}, mode {}, K = {}",
         report.overall.scenes,
         opts.scenes.display(),
-        opts.mode,
+        opts.mode.name(),
         opts.objects
     ));
     push_totals(&mut s, "all scenes", &report.overall);

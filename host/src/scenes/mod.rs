@@ -398,8 +398,15 @@ pub fn gen_scenes(opts: &GenScenesOptions) -> Result<Summary> {
     };
     write_json(&index_path, &index)?;
     let mut s = Summary::new(format!(
-        "protogist gen-scenes: {} {:?} scenes at {}x{}, seed {}",
-        opts.scenes, opts.split, p.width, p.height, opts.seed
+        "protogist gen-scenes: {} {} scenes at {}x{}, seed {}",
+        opts.scenes,
+        match opts.split {
+            Split::Test => "test",
+            Split::Train => "train",
+        },
+        p.width,
+        p.height,
+        opts.seed
     ));
     for n in p.objects.0..=p.objects.1 {
         let count = index
