@@ -2,10 +2,14 @@
 //! same way.
 //!
 //! **Adding a detector** (e.g. core's `protogist::pipeline`): write a
-//! struct holding its buffers and a [`Classifier`] (or its own model), and
-//! `impl Detector` for it, returning one [`Detection`] per object found;
-//! add a [`Mode`] variant and one arm in [`make_detector`]. Nothing else
-//! changes: matching, metrics, report and overview take any detector.
+//! struct holding its buffers and a reference to [`Shared`] (segmentation
+//! parameters with K, and the [`Classifier`] whose class names the scenes
+//! were checked against), and `impl Detector` for it, returning one
+//! [`Detection`] per object found; add a [`Mode`] variant and its arms in
+//! [`Mode::name`], [`Mode::needs_reference_stereo`] and [`make_detector`]
+//! (the compiler lists them). Nothing else changes: matching, metrics,
+//! report, overview and `cargo xtask bench` (one more entry in its
+//! `MODES`) take any detector.
 
 use crate::classify::shipped::categorise_mask;
 use crate::error::{HostError, Result};
@@ -70,6 +74,14 @@ impl Mode {
         match self {
             Self::Reference => "reference",
             Self::GtDisparity => "gt-disparity",
+        }
+    }
+
+    /// Whether [`Shared::dem`] must hold the f32 stereo model.
+    pub fn needs_reference_stereo(self) -> bool {
+        match self {
+            Self::Reference => true,
+            Self::GtDisparity => false,
         }
     }
 }

@@ -190,9 +190,10 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
             ..SegmentParams::default()
         },
         classifier: Classifier { model },
-        dem: match opts.mode {
-            Mode::Reference => Some(reference_dem(set.index.width as usize)?),
-            Mode::GtDisparity => None,
+        dem: if opts.mode.needs_reference_stereo() {
+            Some(reference_dem(set.index.width as usize)?)
+        } else {
+            None
         },
     };
     shared.segment.validate()?;
