@@ -196,9 +196,10 @@ pub fn load_scene(dir: &Path, index: &SceneIndex, objects: usize) -> Result<Scen
         check_size(&path, m.dimensions(), &truth)?;
         let found = BoxPx::of_mask(&m);
         if found != Some(o.bbox) {
+            let found = found.map_or_else(|| "empty".into(), |b| format!("{b}"));
             return Err(truth_error(
                 &path,
-                format!("its box is {found:?}, truth.json says {:?}", o.bbox),
+                format!("its box is {found}, truth.json says {}", o.bbox),
             ));
         }
         let off = m

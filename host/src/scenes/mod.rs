@@ -103,6 +103,16 @@ impl BoxPx {
     }
 }
 
+impl std::fmt::Display for BoxPx {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}x{} at ({}, {})",
+            self.width, self.height, self.x, self.y
+        )
+    }
+}
+
 /// One object of a scene's truth.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ObjectTruth {
