@@ -130,7 +130,7 @@ fn push_totals(s: &mut Summary, label: &str, t: &Totals) {
     s.push(
         label,
         format!(
-            "{} scenes, {} objects, {} detections: recall {}, precision {}, mask IoU {}, top-1 {}, top-5 {}, gist {}",
+            "{} scenes, {} objects, {} detections: recall {}, precision {}, mask IoU {}, top-1 {}, top-5 {}, gist {}; unknown {}, low-contrast recall {}",
             t.scenes,
             t.objects,
             t.detections,
@@ -140,6 +140,8 @@ fn push_totals(s: &mut Summary, label: &str, t: &Totals) {
             fmt_rate(t.top1),
             fmt_rate(t.top5),
             fmt_rate(t.gist),
+            fmt_rate(t.unknown),
+            fmt_rate(t.low_contrast_recall),
         ),
     );
 }

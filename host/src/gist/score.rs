@@ -13,7 +13,9 @@
 //! top-5 whether the class is among its five best. A scene's **gist** is
 //! right when every object is matched by a detection that claims its class
 //! (best class, known under Δ) and no other detection claims a class (an
-//! unmatched detection called unknown does not spoil it).
+//! unmatched detection called unknown does not spoil it). Two diagnostics
+//! go with them: the share of detections called unknown under Δ, and the
+//! recall of the objects drawn without contrast to their surroundings.
 
 use super::detect::Detection;
 use crate::scenes::load::Scene;
@@ -100,6 +102,12 @@ pub struct SceneScore {
     pub gist: bool,
     /// Time in the detector, ms.
     pub ms: f64,
+    /// Detections called unknown under Δ.
+    pub unknown: usize,
+    /// Objects drawn without contrast to their surroundings.
+    pub low_contrast: usize,
+    /// Of those, the matched ones.
+    pub low_contrast_matched: usize,
 }
 
 /// Scores one scene's detections against its truth.
@@ -129,6 +137,9 @@ pub fn score_scene(scene: &Scene, dets: &[Detection], ms: f64) -> SceneScore {
     }
     let claims = dets.iter().filter(|d| d.category().is_some()).count();
     s.gist = claimed_right == truth.len() && claims == truth.len();
+    s.unknown = dets.len() - claims;
+    s.low_contrast = truth.iter().filter(|o| !o.contrast).count();
+    s.low_contrast_matched = matches.iter().filter(|m| !truth[m.object].contrast).count();
     s
 }
 
@@ -162,6 +173,10 @@ pub struct Totals {
     pub gist: Option<f64>,
     /// Mean detector time per scene, ms.
     pub ms_per_scene: Option<f64>,
+    /// Detections called unknown under Δ / detections.
+    pub unknown: Option<f64>,
+    /// Recall of the objects drawn without contrast.
+    pub low_contrast_recall: Option<f64>,
 }
 
 impl Totals {
@@ -169,6 +184,7 @@ impl Totals {
     pub fn of<'a>(scores: impl IntoIterator<Item = &'a SceneScore>) -> Self {
         let mut t = Self::default();
         let (mut iou, mut top1, mut top5, mut gist, mut ms) = (0.0, 0, 0, 0, 0.0);
+        let (mut unknown, mut low, mut low_matched) = (0, 0, 0);
         for s in scores {
             t.scenes += 1;
             t.objects += s.objects;
@@ -179,6 +195,9 @@ impl Totals {
             top5 += s.top5;
             gist += usize::from(s.gist);
             ms += s.ms;
+            unknown += s.unknown;
+            low += s.low_contrast;
+            low_matched += s.low_contrast_matched;
         }
         t.recall = ratio(t.matched as f64, t.objects);
         t.precision = ratio(t.matched as f64, t.detections);
@@ -187,6 +206,8 @@ impl Totals {
         t.top5 = ratio(top5 as f64, t.matched);
         t.gist = ratio(gist as f64, t.scenes);
         t.ms_per_scene = ratio(ms, t.scenes);
+        t.unknown = ratio(unknown as f64, t.detections);
+        t.low_contrast_recall = ratio(low_matched as f64, low);
         t
     }
 }
@@ -310,7 +331,7 @@ mod tests {
         // Right class but unknown under Δ: top-1 counts, the gist does not.
         let unknown = [det(&s, 0, &["a"], false), det(&s, 1, &["b"], true)];
         let sc = score_scene(&s, &unknown, 0.0);
-        assert_eq!((sc.top1, sc.gist), (2, false));
+        assert_eq!((sc.top1, sc.gist, sc.unknown), (2, false, 1));
 
         // An extra detection: harmless when unknown, wrong when it claims.
         let mut extra = right.to_vec();
@@ -328,6 +349,14 @@ mod tests {
         // Nothing found.
         let sc = score_scene(&s, &[], 0.0);
         assert_eq!((sc.matched, sc.gist), (0, false));
+
+        // Low-contrast objects are counted apart.
+        let mut low = scene(&[("a", b(0, 0, 4, 4)), ("b", b(5, 5, 5, 5))]);
+        low.truth.objects[1].contrast = false;
+        let sc = score_scene(&low, &right[..1], 0.0);
+        assert_eq!((sc.low_contrast, sc.low_contrast_matched), (1, 0));
+        let sc = score_scene(&low, &right, 0.0);
+        assert_eq!((sc.low_contrast, sc.low_contrast_matched), (1, 1));
     }
 
     #[test]
@@ -341,6 +370,9 @@ mod tests {
             top5: 2,
             gist: false,
             ms: 10.0,
+            unknown: 1,
+            low_contrast: 1,
+            low_contrast_matched: 1,
             ..SceneScore::default()
         };
         let two = SceneScore {
@@ -349,6 +381,7 @@ mod tests {
             matched: 0,
             gist: false,
             ms: 30.0,
+            low_contrast: 1,
             ..SceneScore::default()
         };
         let three = SceneScore {
@@ -371,6 +404,8 @@ mod tests {
         assert_eq!(t.top5, Some(1.0));
         assert_eq!(t.gist, Some(1.0 / 3.0));
         assert_eq!(t.ms_per_scene, Some(20.0));
+        assert_eq!(t.unknown, Some(0.2));
+        assert_eq!(t.low_contrast_recall, Some(0.5));
         // No detections at all: precision and per-match rates undefined.
         let t = Totals::of([&two]);
         assert_eq!((t.recall, t.precision, t.top1), (Some(0.0), None, None));

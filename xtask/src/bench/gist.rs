@@ -31,6 +31,8 @@ pub fn section() -> Section {
          the shipped model, K = 4 detections per scene, matched to the truth greedily by box IoU >= 0.5. \
          Top-1 and top-5 are over matched objects; gist is the share of scenes whose every object \
          is matched and called by its class, with no other detection claiming a class. \
+         Unknown is the share of detections the model's Δ rejects; low-contrast recall is over the \
+         objects (one in five) drawn without contrast to their surroundings. \
          ms/scene is the detector's time per scene on one of 2 worker threads.\n\n\
          ```\ncargo run --release -- gen-scenes --out scenes --scenes {SCENES} --seed {SEED} --split test\n\
          cargo run --release -- gist-eval --scenes scenes --model host/data/shapes_model.bin \
@@ -70,16 +72,16 @@ pub fn section() -> Section {
         .collect();
     let _ = std::fs::remove_dir_all(&dir);
     body.push_str(
-        "| chain | recall | precision | mask IoU | top-1 | top-5 | gist | ms/scene |\n\
-         |---|---|---|---|---|---|---|---|\n",
+        "| chain | recall | precision | mask IoU | top-1 | top-5 | gist | unknown | low-contrast recall | ms/scene |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
     );
     for (label, r) in &reports {
         let Some(t) = r.as_ref().map(|r| &r["overall"]) else {
-            body.push_str(&format!("| {label} | {NOT_YET} | | | | | | |\n"));
+            body.push_str(&format!("| {label} | {NOT_YET} | | | | | | | | |\n"));
             continue;
         };
         body.push_str(&format!(
-            "| {label} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {label} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             pct(&t["recall"]),
             pct(&t["precision"]),
             t["mask_iou"]
@@ -88,6 +90,8 @@ pub fn section() -> Section {
             pct(&t["top1"]),
             pct(&t["top5"]),
             pct(&t["gist"]),
+            pct(&t["unknown"]),
+            pct(&t["low_contrast_recall"]),
             t["ms_per_scene"]
                 .as_f64()
                 .map_or_else(|| "n/a".into(), |v| format!("{v:.1}")),
