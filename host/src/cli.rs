@@ -11,6 +11,10 @@
 //! protogist train --dataset DIR --out model.json [--hidden H --epochs E]
 //!                 [--test-fraction F --seed S --gamma G]
 //! protogist eval --model model.json --dataset DIR --out DIR [--json]
+//! protogist gen-scenes --out DIR [--scenes N --seed S --split test|train]
+//!                      [--width W --height H --objects LO..HI --classes N]
+//! protogist gist-eval --scenes DIR --model M [--objects K]
+//!                     [--mode reference|gt-disparity] [--json] --out DIR
 //! ```
 
 use crate::demo::{finish, run_demo, DemoOptions};
@@ -88,6 +92,13 @@ pub enum Command {
     /// Generate seeded binary silhouettes of parametric shapes (PNG, object
     /// white on black), one subfolder per class.
     GenShapes(crate::classify::shapes::GenShapesOptions),
+    /// Generate seeded stereo scenes of 1 to 4 `gen-shapes` objects on
+    /// textured backgrounds, with ground truth (views, disparity PFM,
+    /// masks, truth.json, index.json).
+    GenScenes(crate::scenes::GenScenesOptions),
+    /// The end-to-end benchmark on a `gen-scenes` set: detection recall and
+    /// precision, mask IoU, top-1/top-5 category and gist accuracy, time.
+    GistEval(crate::gist::GistEvalOptions),
     /// Train the float network (section 4.4) on the shape vectors of an
     /// image-folder dataset; write the int8 model blob and its float JSON
     /// sidecar (`<out>.json`).
@@ -146,6 +157,8 @@ pub fn run(cli: Cli) -> Result<Summary> {
             &out,
         ),
         Some(Command::GenShapes(opts)) => crate::classify::shapes::gen_shapes(&opts),
+        Some(Command::GenScenes(opts)) => crate::scenes::gen_scenes(&opts),
+        Some(Command::GistEval(opts)) => crate::gist::gist_eval(&opts),
         Some(Command::Train(opts)) => crate::classify::model_cmd::run_train(&opts),
         Some(Command::Eval(opts)) => crate::classify::model_cmd::run_eval(&opts),
         Some(Command::Quantize(opts)) => crate::classify::quant_cmd::run_quantize(&opts),

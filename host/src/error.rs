@@ -125,6 +125,9 @@ pub enum HostError {
         /// What is wrong with it (one line).
         reason: String,
     },
+    /// A scene set (`gen-scenes`) that cannot be used.
+    #[error("{0}")]
+    Scene(#[from] crate::scenes::load::SceneError),
     /// An output path exists and is not a directory.
     #[error("{} exists and is not a directory", .0.display())]
     NotADirectory(PathBuf),

@@ -11,7 +11,9 @@
 //! [`stereo_cmd`] runs the DEM reference on a pair and scores it against
 //! [`ground_truth`]. [`classify`] holds the classification rules, the
 //! performance measures and plots of the paper's sections 4.1 and 5.1, and
-//! the development silhouettes of `protogist gen-shapes`.
+//! the development silhouettes of `protogist gen-shapes`. [`scenes`] renders
+//! seeded stereo scenes with ground truth (`protogist gen-scenes`), and
+//! [`gist`] measures the whole job on them (`protogist gist-eval`).
 
 pub mod canvas;
 pub mod classify;
@@ -19,6 +21,7 @@ pub mod cli;
 pub mod demo;
 pub mod error;
 pub mod eval;
+pub mod gist;
 pub mod ground_truth;
 pub mod io;
 pub mod panels;
@@ -26,6 +29,7 @@ pub mod plot;
 pub mod product;
 pub mod reference;
 pub mod run_cmd;
+pub mod scenes;
 pub mod stages;
 pub mod stereo_cmd;
 pub mod storage;

@@ -180,6 +180,7 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
         ),
     );
     let mut panels = run.panels(&pair.left);
+    panels.push(run.objects_panel(&pair.left));
     let mut report = serde_json::json!({
         "left": opts.left.display().to_string(),
         "right": opts.right.display().to_string(),

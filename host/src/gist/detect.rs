@@ -1,0 +1,286 @@
+//! Detection behind one trait, so the benchmark measures any chain the
+//! same way.
+//!
+//! **Adding a detector** (e.g. core's `protogist::pipeline`): write a
+//! struct holding its buffers and a reference to [`Shared`] (segmentation
+//! parameters with K, and the [`Classifier`] whose class names the scenes
+//! were checked against), and `impl Detector` for it, returning one
+//! [`Detection`] per object found; add a [`Mode`] variant and its arms in
+//! [`Mode::name`], [`Mode::needs_reference_stereo`] and [`make_detector`]
+//! (the compiler lists them). Nothing else changes: matching, metrics,
+//! report, overview and `cargo xtask bench` (one more entry in its
+//! `MODES`) take any detector.
+
+use crate::classify::shipped::categorise_mask;
+use crate::error::{HostError, Result};
+use crate::reference::stereo::{Decoder, DemParams};
+use crate::scenes::load::Scene;
+use crate::scenes::BoxPx;
+use crate::stages::{run_complete, run_conspicuity, run_segment};
+use protogist::complete::CompleteParams;
+use protogist::conspicuity::{EdgeParams, LuvTables};
+use protogist::disparity::{Disparity, DisparityCell};
+use protogist::image::ImageView;
+use protogist::mlp::{Identity, Model};
+use protogist::segment::SegmentParams;
+
+/// One object a detector reports.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Detection {
+    /// Its box in the left view.
+    pub bbox: BoxPx,
+    /// Its mask, row-major over the frame.
+    pub mask: Vec<bool>,
+    /// The best classes, best first, with their cosine scores (empty when
+    /// the mask has no shape).
+    pub top5: Vec<(String, f32)>,
+    /// Whether the best score reaches the model's Δ (else: unknown).
+    pub known: bool,
+}
+
+impl Detection {
+    /// The class it claims: its best class when known.
+    pub fn category(&self) -> Option<&str> {
+        self.known
+            .then(|| self.top5.first().map(|(c, _)| c.as_str()))
+            .flatten()
+    }
+}
+
+/// Finds objects in a scene.
+pub trait Detector {
+    /// Up to K objects of `scene`, most salient first.
+    ///
+    /// # Errors
+    /// A stage's typed error.
+    fn detect(&mut self, scene: &Scene) -> Result<Vec<Detection>>;
+}
+
+/// Which chain runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// Core's fixed-point pipeline ([`protogist::pipeline`]): the product,
+    /// the firmware's bits.
+    Core,
+    /// The f32 reference disparity energy model, completed over the
+    /// conspicuity regions, then core segmentation, shape and classifier.
+    Reference,
+    /// The scenes' ground-truth disparity instead of stereo: an upper
+    /// bound for the stereo stage.
+    GtDisparity,
+}
+
+impl Mode {
+    /// Its name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Core => "core",
+            Self::Reference => "reference",
+            Self::GtDisparity => "gt-disparity",
+        }
+    }
+
+    /// Whether [`Shared::dem`] must hold the f32 stereo model.
+    pub fn needs_reference_stereo(self) -> bool {
+        match self {
+            Self::Reference => true,
+            Self::Core | Self::GtDisparity => false,
+        }
+    }
+}
+
+/// The int8 classifier and the names of its classes.
+#[derive(Clone, Debug)]
+pub struct Classifier<'a> {
+    /// The model.
+    pub model: Model<'a>,
+}
+
+impl Classifier<'_> {
+    /// Categorises a 0/non-zero mask: top 5 and the Δ verdict.
+    ///
+    /// # Errors
+    /// As [`categorise_mask`].
+    pub fn categorise(
+        &self,
+        mask: &[u8],
+        w: usize,
+        h: usize,
+    ) -> Result<(Vec<(String, f32)>, bool)> {
+        let Some(c) = categorise_mask(&self.model, mask, w, h)? else {
+            return Ok((Vec::new(), false));
+        };
+        let top = c
+            .ranked
+            .iter()
+            .map(|r| {
+                let name = self.model.class_name(usize::from(r.class)).unwrap_or("?");
+                (name.to_string(), r.score as f32 / 65536.0)
+            })
+            .collect();
+        Ok((top, matches!(c.identity, Identity::Known(_))))
+    }
+}
+
+/// What every detector of a run shares: parameters and the classifier.
+pub struct Shared<'a> {
+    /// Segmentation parameters (`max_objects` = K).
+    pub segment: SegmentParams,
+    /// The classifier.
+    pub classifier: Classifier<'a>,
+    /// The stereo model, for [`Mode::Reference`].
+    pub dem: Option<(DemParams, Decoder)>,
+    /// The model blob, for [`Mode::Core`].
+    pub blob: &'a [u8],
+    /// The stereo point's decoder tables, for [`Mode::Core`] (empty
+    /// otherwise).
+    pub tables: Vec<Vec<u8>>,
+}
+
+/// The pipeline's parameters for `shared`'s K and the scenes' width.
+pub fn core_params(shared: &Shared<'_>, width: usize) -> protogist::pipeline::PipelineParams {
+    protogist::pipeline::PipelineParams {
+        segment: shared.segment,
+        ..protogist::pipeline::PipelineParams::DEFAULT
+    }
+    .with_max_disp(crate::run_cmd::default_max_disp(width))
+}
+
+/// A GT disparity in px as a cell (OFF when unknown or out of range).
+fn cell(v: Option<f32>) -> DisparityCell {
+    v.filter(|v| v.is_finite() && (0.0..255.0).contains(v))
+        .map(Disparity::from_num)
+        .into()
+}
+
+/// Segments `disparity` against the conspicuity of the left view and
+/// categorises every object found.
+fn segment_and_classify(
+    shared: &Shared<'_>,
+    scene: &Scene,
+    disparity: Option<&[DisparityCell]>,
+) -> Result<Vec<Detection>> {
+    let (w, h) = (scene.width, scene.height);
+    let edges = run_conspicuity(&LuvTables::new(), &EdgeParams::default(), &scene.left, w, h)?;
+    let owned;
+    let d = match disparity {
+        Some(d) => d,
+        None => {
+            let (params, decoder) = shared.dem.as_ref().ok_or(HostError::InvalidArgument {
+                name: "mode",
+                reason: "the reference chain needs a stereo model".into(),
+            })?;
+            let maps = crate::reference::stereo::stereo(
+                params,
+                decoder,
+                &ImageView::packed(&scene.left, w, h)?,
+                &ImageView::packed(&scene.right, w, h)?,
+            )?;
+            owned = run_complete(
+                &CompleteParams::default(),
+                &edges.edges,
+                &edges.smoothed,
+                &maps.disparity,
+                w,
+                h,
+            )?
+            .0;
+            &owned
+        }
+    };
+    let seg = run_segment(&shared.segment, d, &edges.edges, w, h)?;
+    let n = w * h;
+    let mut out = Vec::new();
+    for (k, obj) in seg.report.objects.iter().enumerate() {
+        let mask: Vec<bool> = seg.masks.iter().skip(k * n).take(n).copied().collect();
+        let Some(bbox) = BoxPx::of(w as u32, h as u32, |x, y| {
+            mask[(y as usize) * w + x as usize]
+        }) else {
+            continue;
+        };
+        if obj.area == 0 {
+            continue;
+        }
+        let (top5, known) = shared.classifier.categorise(&seg.mask_u8(k), w, h)?;
+        out.push(Detection {
+            bbox,
+            mask,
+            top5,
+            known,
+        });
+    }
+    Ok(out)
+}
+
+/// The f32 reference chain ([`Mode::Reference`]).
+pub struct ReferenceDetector<'s, 'm> {
+    shared: &'s Shared<'m>,
+}
+
+impl Detector for ReferenceDetector<'_, '_> {
+    fn detect(&mut self, scene: &Scene) -> Result<Vec<Detection>> {
+        segment_and_classify(self.shared, scene, None)
+    }
+}
+
+/// The chain on ground-truth disparity ([`Mode::GtDisparity`]).
+pub struct GtDisparityDetector<'s, 'm> {
+    shared: &'s Shared<'m>,
+}
+
+impl Detector for GtDisparityDetector<'_, '_> {
+    fn detect(&mut self, scene: &Scene) -> Result<Vec<Detection>> {
+        let d: Vec<DisparityCell> = scene.disparity.iter().map(|&v| cell(v)).collect();
+        segment_and_classify(self.shared, scene, Some(&d))
+    }
+}
+
+/// Core's pipeline ([`Mode::Core`]), through [`crate::product::run_frame`]
+/// as `protogist run` calls it.
+pub struct CoreDetector<'s, 'm> {
+    shared: &'s Shared<'m>,
+}
+
+impl Detector for CoreDetector<'_, '_> {
+    fn detect(&mut self, scene: &Scene) -> Result<Vec<Detection>> {
+        let (w, h) = (scene.width, scene.height);
+        let params = core_params(self.shared, w);
+        let run = crate::product::run_frame(
+            &params,
+            &self.shared.tables,
+            self.shared.blob,
+            &scene.left,
+            &scene.right,
+            w,
+            h,
+        )?;
+        Ok(run
+            .objects
+            .into_iter()
+            .filter_map(|o| {
+                let bbox = BoxPx::of(w as u32, h as u32, |x, y| {
+                    o.mask
+                        .get(y as usize * w + x as usize)
+                        .copied()
+                        .unwrap_or(false)
+                })?;
+                Some(Detection {
+                    bbox,
+                    known: o.category.is_some(),
+                    top5: o.top,
+                    mask: o.mask,
+                })
+            })
+            .collect())
+    }
+}
+
+/// A detector of `mode` over `shared` (one per worker thread).
+pub fn make_detector<'s>(mode: Mode, shared: &'s Shared<'_>) -> Box<dyn Detector + Send + 's> {
+    match mode {
+        Mode::Core => Box::new(CoreDetector { shared }),
+        Mode::Reference => Box::new(ReferenceDetector { shared }),
+        Mode::GtDisparity => Box::new(GtDisparityDetector { shared }),
+    }
+}
