@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Instructions per frame pixel spent in one firmware function, block by
-block, from QEMU's translation-block trace (docs/STEREO.md, "Phase
-refinement").
+block, from QEMU's translation-block trace (how the stereo engine's steps
+were measured; docs/STEREO.md).
 
     cargo xtask firmware   # builds the ELF
     python3 scripts/qemu_block_profile.py \

@@ -57,11 +57,6 @@ pub struct StereoOptions {
     /// `reference` (the f32 reference of the same point).
     #[arg(long, value_enum, default_value_t = Engine::Core)]
     pub engine: Engine,
-    /// Complete the map over the conspicuity regions of the left view
-    /// (`protogist::complete`, the pipeline's border step); the metrics
-    /// then score the completed map, and `model` the map before it.
-    #[arg(long)]
-    pub complete: bool,
     /// Print the numbers as JSON.
     #[arg(long)]
     pub json: bool,
@@ -94,7 +89,6 @@ impl StereoOptions {
             point: "full".into(),
             lr: None,
             engine: Engine::Core,
-            complete: false,
             json: false,
             time_at_least: 0,
             out,
@@ -433,40 +427,7 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         "engine": opts.engine.name(),
         "stereo_ms": run_ms,
     });
-    let model_f32 = disparity.clone();
-    let mut final_f32 = disparity;
-    if opts.complete {
-        let t = Instant::now();
-        let edges = crate::stages::run_conspicuity(
-            &protogist::conspicuity::LuvTables::new(),
-            &protogist::conspicuity::EdgeParams::default(),
-            &lp,
-            w,
-            h,
-        )?;
-        let (done, report) = crate::stages::run_complete(
-            &protogist::complete::CompleteParams::default(),
-            &edges.edges,
-            &edges.smoothed,
-            &cells,
-            w,
-            h,
-        )?;
-        let ms = t.elapsed().as_secs_f64() * 1e3;
-        s.push(
-            "completion",
-            format!(
-                "{} regions, {} replaced, {} filled, {ms:.1} ms",
-                report.regions, report.replaced, report.filled
-            ),
-        );
-        json["completion_ms"] = serde_json::json!(ms);
-        final_f32 = cells_f32(&done);
-        panels.push(Panel::new(
-            "disparity_completed",
-            disparity_panel(&final_f32, w, h, max),
-        ));
-    }
+    let final_f32 = disparity;
     if let Some(gt) = gt_small {
         let m = metrics(&final_f32, &gt.data);
         let gmax = gt.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
@@ -480,11 +441,6 @@ pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
         panels.push(Panel::new("error", error_panel(&final_f32, &gt)));
         json["gt_max_disp"] = serde_json::json!(gmax);
         json["final"] = metrics_json(&m);
-        if opts.complete {
-            let before = metrics(&model_f32, &gt.data);
-            push_metrics(&mut s, "model (before completion)", &before);
-            json["model"] = metrics_json(&before);
-        }
         if let Some(raw) = &raw {
             json["raw_argmax"] = metrics_json(raw);
         }

@@ -229,7 +229,7 @@ fn reset_starts_a_new_frame() {
     assert_eq!((first, sgm.rows()), (again, 1));
 }
 
-/// The scratch the module docs and docs/STEREO.md state: `3·w·n + w + 2·n`
+/// The scratch the module docs state: `3·w·n + w + 2·n`
 /// `u16`s (printed with `--nocapture`).
 #[test]
 fn scratch_at_160_px() {

@@ -1,8 +1,7 @@
 //! Decisions: the argmin of the path sums with its parabola and margin,
 //! the right map derived from the left, and the OFF tests.
 
-use super::pass::Pass;
-use super::LeftRight;
+use super::{C2f, LeftRight};
 use crate::disparity::DisparityCell;
 use crate::fixed::U8F8;
 use crate::stereo::StereoReport;
@@ -86,68 +85,90 @@ fn parabola(s: &[u32], lo: usize, best: usize, sb: u32) -> i32 {
     disparity
 }
 
-impl<K> Pass<'_, K> {
-    /// The right map of the left-right check derived from the left one
-    /// (OpenCV SGBM's `disp2`): right pixel `x − d` takes the candidate `d`
-    /// (`U8F8` bits, integer) of least path sum over the left pixels `x`
-    /// with evidence (`total > 0`) and their valid candidates `d <= x`;
-    /// the first such (by `x`, then `d`) wins a tie; `-1` where no left
-    /// pixel maps. `scores`, `lo`, `sums`: the left row's; `best` is
-    /// scratch (`w` long).
-    pub(super) fn right_from_left(
-        &self,
-        scores: &[i64],
-        lo: &[u16],
-        sums: &[u32],
-        best: &mut [u32],
-        right: &mut [i32],
-    ) {
-        // At least 1; `max` shows the compiler (no panic path in `chunks`).
-        let n = self.n.max(1);
-        right.fill(-1);
-        best.fill(u32::MAX);
-        for (x, (raw, (&lo, s))) in scores
-            .chunks_exact(n.saturating_add(1))
-            .zip(lo.iter().zip(sums.chunks_exact(n)))
-            .enumerate()
-        {
-            let lo = usize::from(lo);
-            if raw.get(n).copied().unwrap_or(0) <= 0 || lo > x {
-                continue;
-            }
-            let valid = (x - lo + 1).min(n);
-            for (d, &c) in (lo..).zip(s.iter().take(valid)) {
-                let xr = x - d;
-                if let (Some(b), Some(r)) = (best.get_mut(xr), right.get_mut(xr)) {
-                    if c < *b {
-                        *b = c;
-                        *r = (d as i32) << 8;
-                    }
+/// The right map of the left-right check derived from the left one
+/// (OpenCV SGBM's `disp2`): right pixel `x − d` takes the candidate `d`
+/// (`U8F8` bits, integer) of least path sum over the left pixels `x`
+/// with evidence (`total > 0`) and their valid candidates `d <= x`;
+/// the first such (by `x`, then `d`) wins a tie; `-1` where no left
+/// pixel maps. `n`: the candidates per pixel; `scores`, `lo`, `sums`:
+/// the left row's; `best` is scratch (`w` long).
+pub(super) fn right_from_left(
+    n: usize,
+    scores: &[i64],
+    lo: &[u16],
+    sums: &[u32],
+    best: &mut [u32],
+    right: &mut [i32],
+) {
+    // At least 1; `max` shows the compiler (no panic path in `chunks`).
+    let n = n.max(1);
+    right.fill(-1);
+    best.fill(u32::MAX);
+    for (x, (raw, (&lo, s))) in scores
+        .chunks_exact(n.saturating_add(1))
+        .zip(lo.iter().zip(sums.chunks_exact(n)))
+        .enumerate()
+    {
+        let lo = usize::from(lo);
+        if raw.get(n).copied().unwrap_or(0) <= 0 || lo > x {
+            continue;
+        }
+        let valid = (x - lo + 1).min(n);
+        for (d, &c) in (lo..).zip(s.iter().take(valid)) {
+            let xr = x - d;
+            if let (Some(b), Some(r)) = (best.get_mut(xr), right.get_mut(xr)) {
+                if c < *b {
+                    *b = c;
+                    *r = (d as i32) << 8;
                 }
             }
         }
     }
+}
 
-    /// The decision of one pixel: its scores row `raw` (for the total),
-    /// window `lo`, path sums `sums`, last valid candidate `top`.
-    pub(super) fn decision(
-        &self,
-        raw: &[i64],
-        lo: u16,
-        sums: &[u32],
-        top: usize,
-    ) -> Option<Decision> {
-        let lo = usize::from(lo);
-        let total = raw.get(self.n).copied().unwrap_or(0);
-        if total <= 0 || lo > top {
-            return None;
+/// The decision of one pixel with `n` candidates: its scores row `raw`
+/// (for the total), window `lo`, path sums `sums`, last valid candidate
+/// `top`.
+pub(super) fn decision(
+    n: usize,
+    raw: &[i64],
+    lo: u16,
+    sums: &[u32],
+    top: usize,
+) -> Option<Decision> {
+    let lo = usize::from(lo);
+    let total = raw.get(n).copied().unwrap_or(0);
+    if total <= 0 || lo > top {
+        return None;
+    }
+    decide(sums, lo, (top - lo + 1).min(n))
+}
+
+/// The OFF tests' thresholds, in the engine's integers.
+#[derive(Clone, Copy)]
+pub(super) struct OffTests {
+    /// OFF when `margin·2^16` is below this.
+    min_margin_sums: i64,
+    /// The left-right tolerance in `U8F8` (`None`: no check).
+    check: Option<i32>,
+}
+
+impl OffTests {
+    /// The tests of `e`.
+    pub(super) fn of<K>(e: &C2f<K>) -> Self {
+        let check = match e.params.left_right {
+            LeftRight::Off => None,
+            LeftRight::Read | LeftRight::Derived => e.dem.lr_tolerance_q8,
+        };
+        Self {
+            min_margin_sums: e.min_margin_sums,
+            check,
         }
-        decide(sums, lo, (top - lo + 1).min(self.n))
     }
 
     /// The OFF tests of left pixel `x` (texture, ambiguity, left-right
     /// against the right decisions `right`).
-    pub(super) fn off_tests(
+    pub(super) fn verdict(
         &self,
         x: usize,
         d: Option<Decision>,
@@ -158,16 +179,12 @@ impl<K> Pass<'_, K> {
             return Verdict::Texture;
         };
         if d.margin
-            .is_some_and(|m| (i64::from(m) << 16) < self.e.min_margin_sums)
+            .is_some_and(|m| (i64::from(m) << 16) < self.min_margin_sums)
         {
             return Verdict::Ambiguous;
         }
         let v = d.disparity;
-        let check = match self.e.params.left_right {
-            LeftRight::Off => None,
-            LeftRight::Read | LeftRight::Derived => self.e.dem.lr_tolerance_q8,
-        };
-        let ok = check.is_none_or(|tol| {
+        let ok = self.check.is_none_or(|tol| {
             let xr = x as i64 - i64::from((v + 128) >> 8);
             usize::try_from(xr)
                 .ok()

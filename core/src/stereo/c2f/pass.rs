@@ -2,9 +2,9 @@
 //! decisions, and the windows of the next finer level or the output.
 
 use super::buffers::{level_len, take, Work};
-use super::decision::Verdict;
+use super::decision::{decision, right_from_left, OffTests, Verdict};
 use super::rows::{level_row, Cells};
-use super::votes::costs_of;
+use super::votes::{costs_of, Voter};
 use super::{C2f, LeftRight, PATHS};
 use crate::image::RgbRows;
 use crate::stereo::filters::{grey_row, Bank, MAX_TAPS};
@@ -30,13 +30,10 @@ pub(super) struct Pass<'e, K> {
     pub(super) full: (usize, usize),
     /// Candidates per pixel.
     pub(super) n: usize,
-    pub(super) shifts: usize,
-    pub(super) step: usize,
-    /// Whether the band applies (a windowed level with a band).
-    pub(super) band: Option<usize>,
-    /// [`Pass::shift_range`] of every window `lo` (a `u8`), worked out
-    /// once: no division per pixel.
-    pub(super) ranges: [[u16; 2]; 256],
+    /// The votes' geometry (shifts, band).
+    voter: Voter,
+    /// The OFF tests.
+    off: OffTests,
 }
 
 impl<'e, K> Pass<'e, K> {
@@ -44,50 +41,23 @@ impl<'e, K> Pass<'e, K> {
         let p = &e.params;
         let layout = p.level_params(k).layout();
         let windowed = k < usize::from(p.coarse);
-        let mut pass = Self {
+        let (w, n) = (level_len(full.0, k), p.candidates(k));
+        Self {
             e,
             k,
-            w: level_len(full.0, k),
+            w,
             h: level_len(full.1, k),
             full,
-            n: p.candidates(k),
-            shifts: layout.shifts(0),
-            step: usize::from(layout.shift_step.max(1)),
-            band: p.band.filter(|_| windowed).map(usize::from),
-            ranges: [[0; 2]; 256],
-        };
-        // Shifts are at most 256 (`max_disp` is a `u8`), so `u16` holds them.
-        let mut ranges = [[0u16; 2]; 256];
-        for (lo, r) in (0u16..).zip(ranges.iter_mut()) {
-            let x = pass.shift_range_of(lo);
-            *r = [x.start, x.end].map(|v| u16::try_from(v).unwrap_or(u16::MAX));
+            n,
+            voter: Voter::new(
+                w,
+                n,
+                (layout.shifts(0), usize::from(layout.shift_step.max(1))),
+                p.band.filter(|_| windowed).map(usize::from),
+                usize::from(e.dem.params.carriers),
+            ),
+            off: OffTests::of(e),
         }
-        pass.ranges = ranges;
-        pass
-    }
-
-    /// The shift indices whose votes a pixel with window `lo` takes: those
-    /// with `|s − centre| <= band` (centre `lo + (n − 1)/2`), or all.
-    pub(super) fn shift_range(&self, lo: u16) -> core::ops::Range<usize> {
-        match self.ranges.get(usize::from(lo)) {
-            Some(&[a, b]) => usize::from(a)..usize::from(b),
-            None => self.shift_range_of(lo),
-        }
-    }
-
-    /// [`Pass::shift_range`] worked out.
-    fn shift_range_of(&self, lo: u16) -> core::ops::Range<usize> {
-        let Some(b) = self.band else {
-            return 0..self.shifts;
-        };
-        let centre2 = 2 * usize::from(lo) + self.n - 1;
-        // 2s in [centre2 − 2b, centre2 + 2b], s = ks·step.
-        let (lo2, hi2) = (centre2.saturating_sub(2 * b), centre2 + 2 * b);
-        // Never 0 (`step >= 1`); `max` shows the compiler (no panic path).
-        let step2 = (2 * self.step).max(1);
-        let first = lo2.div_ceil(step2);
-        let last = (hi2 / step2 + 1).min(self.shifts);
-        first.min(last)..last
     }
 
     #[allow(clippy::too_many_lines)]
@@ -172,7 +142,7 @@ impl<'e, K> Pass<'e, K> {
         } else {
             sgms.map(Sgm::without_diagonals)
         };
-        let groups = (carriers * self.shifts) as u64;
+        let groups = (carriers * self.voter.shifts) as u64;
         let (wc, hc) = (
             level_len(self.full.0, self.k + 1),
             level_len(self.full.1, self.k + 1),
@@ -221,11 +191,13 @@ impl<'e, K> Pass<'e, K> {
             // shifts in its band (the cell of left x and right x − s).
             let (z2, lo2) = ([&*z_l, &*z_r], [&*lo_l, &*lo_r]);
             let (sc2, vo2) = ([&mut *sl, &mut *sr], [&mut *vo_l, &mut *vo_r]);
-            cells += self.votes(table, z2, lo2, sc2, vo2, col, lr.reads_right());
+            cells += self
+                .voter
+                .votes(table, z2, lo2, sc2, vo2, col, lr.reads_right());
             // Costs, aggregation, decisions.
             probe.enter(Step::Readout);
             let need = |total: i64, voters: u16| -> bool {
-                let cells = if self.band.is_some() {
+                let cells = if self.voter.band.is_some() {
                     u64::from(voters)
                 } else {
                     groups
@@ -271,7 +243,7 @@ impl<'e, K> Pass<'e, K> {
             // Right-referenced decisions first: the left-right check reads
             // them.
             match lr {
-                LeftRight::Derived => self.right_from_left(sl, lo_l, sum_l, sum_r, rp),
+                LeftRight::Derived => right_from_left(n, sl, lo_l, sum_l, sum_r, rp),
                 // The coarse levels' windows still read `rp`: none.
                 LeftRight::Off => rp.fill(-1),
                 LeftRight::Read => {
@@ -281,9 +253,7 @@ impl<'e, K> Pass<'e, K> {
                         .zip(lo_r.iter().zip(sum_r.chunks_exact(n)))
                         .enumerate()
                     {
-                        *pk = self
-                            .decision(raw, lo, s, w - 1 - x)
-                            .map_or(-1, |d| d.disparity);
+                        *pk = decision(n, raw, lo, s, w - 1 - x).map_or(-1, |d| d.disparity);
                     }
                 }
             }
@@ -293,11 +263,11 @@ impl<'e, K> Pass<'e, K> {
                 .zip(lo_l.iter().zip(sum_l.chunks_exact(n)).zip(vo_l.iter()))
                 .enumerate()
             {
-                let d = self.decision(raw, lo, s, x);
+                let d = decision(n, raw, lo, s, x);
                 *pk = d.map_or(-1, |d| d.disparity);
                 if let Output::Sink(sink, report) = &mut out {
                     let total = raw.get(n).copied().unwrap_or(0);
-                    let verdict = self.off_tests(x, d, need(total, v), rp);
+                    let verdict = self.off.verdict(x, d, need(total, v), rp);
                     if self.k == 0 {
                         sink.cell(x, y, verdict.count(report));
                     } else if let Some(c) = col.get_mut(x) {

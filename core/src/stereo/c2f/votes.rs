@@ -1,6 +1,5 @@
 //! The cells and votes of a row, and each pixel's normalised costs.
 
-use super::pass::Pass;
 use crate::stereo::filters::Z;
 use crate::stereo::DemTable;
 
@@ -137,10 +136,82 @@ pub(super) fn costs_of<const N: usize>(
     }
 }
 
-impl<K> Pass<'_, K> {
+/// One level's geometry of the votes: the row width, the window length,
+/// the shifts and the band.
+pub(super) struct Voter {
+    /// Level width.
+    pub(super) w: usize,
+    /// Candidates per pixel.
+    pub(super) n: usize,
+    /// Position shifts.
+    pub(super) shifts: usize,
+    /// Shift step, px.
+    step: usize,
+    /// The band, where it applies (a windowed level with a band).
+    pub(super) band: Option<usize>,
+    /// Carriers.
+    carriers: usize,
+    /// [`Voter::shift_range`] of every window `lo` (a `u8`), worked out
+    /// once: no division per pixel.
+    ranges: [[u16; 2]; 256],
+}
+
+impl Voter {
+    /// The geometry of a level `w` wide with `n` candidates per pixel,
+    /// `shifts` shifts `step` px apart, `band` and `carriers`.
+    pub(super) fn new(
+        w: usize,
+        n: usize,
+        (shifts, step): (usize, usize),
+        band: Option<usize>,
+        carriers: usize,
+    ) -> Self {
+        let mut voter = Self {
+            w,
+            n,
+            shifts,
+            step,
+            band,
+            carriers,
+            ranges: [[0; 2]; 256],
+        };
+        // Shifts are at most 256 (`max_disp` is a `u8`), so `u16` holds them.
+        let mut ranges = [[0u16; 2]; 256];
+        for (lo, r) in (0u16..).zip(ranges.iter_mut()) {
+            let x = voter.shift_range_of(lo);
+            *r = [x.start, x.end].map(|v| u16::try_from(v).unwrap_or(u16::MAX));
+        }
+        voter.ranges = ranges;
+        voter
+    }
+
+    /// The shift indices whose votes a pixel with window `lo` takes: those
+    /// with `|s − centre| <= band` (centre `lo + (n − 1)/2`), or all.
+    fn shift_range(&self, lo: u16) -> core::ops::Range<usize> {
+        match self.ranges.get(usize::from(lo)) {
+            Some(&[a, b]) => usize::from(a)..usize::from(b),
+            None => self.shift_range_of(lo),
+        }
+    }
+
+    /// [`Voter::shift_range`] worked out.
+    fn shift_range_of(&self, lo: u16) -> core::ops::Range<usize> {
+        let Some(b) = self.band else {
+            return 0..self.shifts;
+        };
+        let centre2 = 2 * usize::from(lo) + self.n - 1;
+        // 2s in [centre2 − 2b, centre2 + 2b], s = ks·step.
+        let (lo2, hi2) = (centre2.saturating_sub(2 * b), centre2 + 2 * b);
+        // Never 0 (`step >= 1`); `max` shows the compiler (no panic path).
+        let step2 = (2 * self.step).max(1);
+        let first = lo2.div_ceil(step2);
+        let last = (hi2 / step2 + 1).min(self.shifts);
+        first.min(last)..last
+    }
+
     /// The cells and votes of one row: for each pixel of each eye (left,
     /// right), its window's scores and total (`n + 1` per pixel, in
-    /// `scores`) from the cells of the shifts [`Pass::shift_range`] of its
+    /// `scores`) from the cells of the shifts [`Voter::shift_range`] of its
     /// window `lo` (the cell of left `x` and right `x − s`), and with a
     /// band the number of groups voting (`voters`); `cells` is scratch for
     /// one pixel's cells (`w` long); `right`: the right eye's too (else
@@ -178,7 +249,7 @@ impl<K> Pass<'_, K> {
         }
     }
 
-    /// [`Pass::votes`] of one eye (`LEFT`: left-referenced), pixel by
+    /// [`Voter::votes`] of one eye (`LEFT`: left-referenced), pixel by
     /// pixel, then carrier by carrier: first the cells, then their votes.
     /// `N` is the window length `self.n` where the caller knows it as a
     /// constant, 0 otherwise.
@@ -196,7 +267,7 @@ impl<K> Pass<'_, K> {
         let n = if N == 0 { self.n.max(1) } else { N };
         let (w, step) = (self.w.max(1), self.step.max(1));
         let (step_pow2, step_log) = (step.is_power_of_two(), step.trailing_zeros());
-        let carriers = usize::from(self.e.dem.params.carriers);
+        let carriers = self.carriers;
         let bytes = table.weight_bytes();
         // Group `c·shifts + ks` starts at `6N·(c·shifts + ks)`.
         let n6 = 6 * table.disparities();
