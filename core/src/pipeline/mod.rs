@@ -98,10 +98,12 @@ pub struct PipelineParams {
 pub const STEREO_DEFAULT: C2fParams = C2fParams::FAST;
 
 impl PipelineParams {
-    /// The defaults: [`STEREO_DEFAULT`] with 32 disparities, the paper's
-    /// conspicuity and figure-ground settings, one object, the model's Δ,
-    /// and room for classifiers up to 2048 hidden units and 64 classes.
-    pub const DEFAULT: Self = Self {
+    /// The paper's settings: [`STEREO_DEFAULT`] with 32 disparities, the
+    /// paper's conspicuity and figure-ground values (the foreground band
+    /// mean + 0.1σ .. mean + 2σ, r = σ/2.5, A = 1), one object, the
+    /// model's Δ, and room for classifiers up to 2048 hidden units and 64
+    /// classes.
+    pub const PAPER: Self = Self {
         stereo: STEREO_DEFAULT,
         edges: EdgeParams {
             smooth: SmoothParams { iterations: 2 },
@@ -131,6 +133,25 @@ impl PipelineParams {
             classes: 64,
         },
     };
+
+    /// The default: [`PipelineParams::PAPER`] without the foreground
+    /// band's upper cut, which treats the nearest objects as wrong
+    /// estimates (docs/PIPELINE.md, "Choices").
+    pub const DEFAULT: Self = Self {
+        segment: SegmentParams {
+            fg_high: Ratio::new(100, 1),
+            ..Self::PAPER.segment
+        },
+        ..Self::PAPER
+    };
+
+    /// The named settings, by the name the CLI takes.
+    pub const NAMED: [(&'static str, Self); 2] = [("default", Self::DEFAULT), ("paper", Self::PAPER)];
+
+    /// The named setting `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::NAMED.iter().find(|(n, _)| *n == name).map(|&(_, p)| p)
+    }
 
     /// These parameters searching `k` objects.
     #[must_use]

@@ -46,6 +46,9 @@ pub struct GistEvalOptions {
     /// Objects to detect per scene, most salient first (K).
     #[arg(long, default_value_t = 4)]
     pub objects: u8,
+    /// The pipeline's named setting (`default` or `paper`).
+    #[arg(long, default_value = "default")]
+    pub preset: String,
     /// Which chain runs.
     #[arg(long, value_enum, default_value = "core")]
     pub mode: Mode,
@@ -186,10 +189,16 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
     check_classes(&set, &opts.model, &names)?;
     ensure_dir(&opts.out)?;
 
+    let preset = protogist::pipeline::PipelineParams::from_name(&opts.preset).ok_or_else(|| {
+        HostError::InvalidArgument {
+            name: "preset",
+            reason: format!("unknown setting {:?} (default, paper)", opts.preset),
+        }
+    })?;
     let shared = Shared {
         segment: SegmentParams {
             max_objects: opts.objects,
-            ..SegmentParams::default()
+            ..preset.segment
         },
         classifier: Classifier { model },
         dem: if opts.mode.needs_reference_stereo() {
