@@ -114,12 +114,39 @@ pub enum HostError {
         /// What is wrong with it (one line).
         reason: String,
     },
+    /// A class folder of an evaluation dataset that the model does not
+    /// know.
+    #[error("{}: class {class:?} is not one of the model's classes ({known})", path.display())]
+    UnknownClass {
+        /// The class folder.
+        path: PathBuf,
+        /// Its name.
+        class: String,
+        /// The model's class names, comma-separated.
+        known: String,
+    },
     /// A model file that cannot be used.
     #[error("model {}: {reason}", path.display())]
     BadModel {
         /// The model file.
         path: PathBuf,
         /// What is wrong with it (one line).
+        reason: String,
+    },
+    /// A concurrent writer holds the lock of an output.
+    #[error("another protogist run is writing this output (lock file {} held for over {waited} s; remove it if no run is writing)", path.display())]
+    Locked {
+        /// The lock file.
+        path: PathBuf,
+        /// Seconds waited.
+        waited: u64,
+    },
+    /// A value that could not be serialised for output.
+    #[error("cannot serialise {what}: {reason}")]
+    Serialize {
+        /// What was being written.
+        what: String,
+        /// The serialiser's message.
         reason: String,
     },
     /// An output path exists and is not a directory.

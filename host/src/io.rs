@@ -13,7 +13,6 @@ use crate::panels::Panel;
 use image::{ImageReader, RgbImage};
 use protogist::image::Rgb8;
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Loads a PNG or JPEG (the format is sniffed from the bytes) as 8-bit RGB.
@@ -130,75 +129,20 @@ pub fn ensure_dir(dir: &Path) -> Result<()> {
     fs::create_dir_all(dir).map_err(|e| HostError::io(dir, e))
 }
 
-/// Writes every panel as `DIR/{name}.png`, all or nothing.
-///
-/// All PNGs are encoded in memory first; then each is written to a hidden
-/// temporary name in `dir` and, once every temporary file is complete, all
-/// are renamed into place. On any failure the temporary files, and any
-/// panel already renamed by this call, are removed. Returns the final paths.
+/// Writes every panel as `DIR/{name}.png`, all or nothing: one
+/// [`Output`](crate::output::Output) result (see [`crate::output`]).
+/// Returns the final paths.
 ///
 /// # Errors
 /// [`HostError::Encode`] or [`HostError::Io`]; `dir` is then left without
 /// any panel of this call.
 pub fn write_panels(dir: &Path, panels: &[Panel]) -> Result<Vec<PathBuf>> {
-    ensure_dir(dir)?;
-    let encoded = panels
-        .iter()
-        .map(|p| p.encode_png().map(|bytes| (p.name.as_str(), bytes)))
-        .collect::<Result<Vec<_>>>()?;
-    let pid = std::process::id();
-    let mut staged: Vec<(PathBuf, PathBuf)> = Vec::with_capacity(encoded.len());
-    let mut renamed: Vec<PathBuf> = Vec::new();
-    let result = (|| {
-        for (name, bytes) in &encoded {
-            let tmp = dir.join(format!(".{name}.png.tmp-{pid}"));
-            let fin = dir.join(format!("{name}.png"));
-            staged.push((tmp.clone(), fin));
-            write_synced(&tmp, bytes)?;
-        }
-        for (tmp, fin) in &staged {
-            fs::rename(tmp, fin).map_err(|e| HostError::io(fin, e))?;
-            renamed.push(fin.clone());
-        }
-        Ok(())
-    })();
-    if let Err(e) = result {
-        // Best effort: the original error is what the user needs to see.
-        for path in staged.iter().map(|(t, _)| t).chain(&renamed) {
-            let _ = fs::remove_file(path);
-        }
-        return Err(e);
-    }
-    Ok(renamed)
+    let mut out = crate::output::Output::dir(dir);
+    out.add_panels(panels)?;
+    out.commit()
 }
 
-/// Writes `bytes` to `path` atomically: to a hidden temporary name in the
-/// same directory, flushed, then renamed into place. On failure the
-/// temporary file is removed and `path` is untouched.
-///
-/// # Errors
-/// [`HostError::Io`].
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path
-        .file_name()
-        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let result = write_synced(&tmp, bytes)
-        .and_then(|()| fs::rename(&tmp, path).map_err(|e| HostError::io(path, e)));
-    if result.is_err() {
-        // Best effort: the original error is what the user needs to see.
-        let _ = fs::remove_file(&tmp);
-    }
-    result
-}
-
-/// Writes `bytes` to `path` and flushes them to disk.
-fn write_synced(path: &Path, bytes: &[u8]) -> Result<()> {
-    let io = |e| HostError::io(path, e);
-    let mut file = fs::File::create(path).map_err(io)?;
-    file.write_all(bytes).map_err(io)?;
-    file.sync_all().map_err(io)
-}
+pub use crate::output::write_atomic;
 
 #[cfg(test)]
 mod tests {

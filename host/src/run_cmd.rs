@@ -3,7 +3,7 @@
 //! figure-ground, object masks and shape vectors, with the paper's Fig. 2
 //! panels, Fig. 4-style shape plots and a `report.json`.
 
-use crate::demo::finish;
+use crate::demo::finish_with;
 use crate::error::{HostError, Result};
 use crate::panels::{rgb_from, Panel};
 use crate::reference::stereo::DemParams;
@@ -192,18 +192,8 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
         "disparity": source,
         "objects": objects,
     });
-    finish(&opts.out, panels, &mut s, start)?;
-    write_report(&opts.out, &report)?;
+    let mut out = crate::output::Output::dir(&opts.out);
+    out.add_json("report.json", &report)?;
+    finish_with(out, panels, &mut s, start)?;
     Ok(s)
-}
-
-/// Writes `report.json` under a temporary name, then renames it.
-fn write_report(dir: &std::path::Path, report: &serde_json::Value) -> Result<()> {
-    let path = dir.join("report.json");
-    let tmp = dir.join(".report.json.part");
-    std::fs::write(&tmp, format!("{report:#}\n")).map_err(|e| HostError::io(&tmp, e))?;
-    std::fs::rename(&tmp, &path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        HostError::io(&path, e)
-    })
 }

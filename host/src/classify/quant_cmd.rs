@@ -7,12 +7,11 @@
 //! the same dataset it rebuilds the blob `train` wrote, bit for bit.
 
 use super::dataset::load_dataset;
-use super::model::{bad_model, ModelFile};
+use super::model::{bad_model, parse_sidecar, ModelKind};
 use super::quant::{emit_rust, model_error, quantize};
 use crate::error::{HostError, Result};
 use crate::io::{ensure_dir, write_atomic};
 use crate::summary::Summary;
-use protogist::mlp::blob::MAGIC;
 use protogist::mlp::Model;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -55,12 +54,12 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
         });
     }
     let bytes = std::fs::read(&opts.model).map_err(|e| HostError::io(&opts.model, e))?;
-    let blob = if bytes.starts_with(&MAGIC) {
+    let kind = ModelKind::of(&bytes);
+    let blob = if kind == ModelKind::Blob {
         Model::parse(&bytes).map_err(|e| bad_model(&opts.model, model_error(e)))?;
         bytes
-    } else {
-        let file: ModelFile =
-            serde_json::from_slice(&bytes).map_err(|e| bad_model(&opts.model, e.to_string()))?;
+    } else if kind == ModelKind::Sidecar {
+        let file = parse_sidecar(&bytes, &opts.model)?;
         let net = file.network(&opts.model)?;
         let dir = opts.dataset.as_ref().ok_or(HostError::InvalidArgument {
             name: "dataset",
@@ -82,6 +81,14 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
             .unzip();
         let meta = super::model_cmd::train_meta(&file, dir);
         quantize(&net, &calib, &labels, &file.classes, &meta)?
+    } else {
+        return Err(bad_model(
+            &opts.model,
+            format!(
+                "is {}; --model takes an int8 PGML blob (model.bin) or its JSON float sidecar (model.bin.json)",
+                kind.describe()
+            ),
+        ));
     };
     let model = Model::parse(&blob).map_err(|e| bad_model(&opts.model, model_error(e)))?;
     let mut s = Summary::new(format!("protogist quantize: {}", opts.model.display()));
