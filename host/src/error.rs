@@ -54,6 +54,26 @@ pub enum HostError {
         /// The decoder's error.
         source: image::ImageError,
     },
+    /// A truncated or corrupt JPEG (found by the strict decoder).
+    #[error("{} is damaged (truncated or corrupt JPEG): {reason}", path.display())]
+    DamagedImage {
+        /// The input file.
+        path: PathBuf,
+        /// The strict decoder's message.
+        reason: String,
+    },
+    /// An input image above [`crate::io::MAX_INPUT_PIXELS`].
+    #[error("{} is {width}x{height}, over the limit of {limit} pixels", path.display())]
+    ImageTooLarge {
+        /// The input file.
+        path: PathBuf,
+        /// Its width.
+        width: u32,
+        /// Its height.
+        height: u32,
+        /// The limit, pixels.
+        limit: u64,
+    },
     /// A panel could not be encoded as PNG.
     #[error("cannot encode panel {name}: {source}")]
     Encode {

@@ -15,22 +15,72 @@ use protogist::image::Rgb8;
 use std::fs;
 use std::path::{Path, PathBuf};
 
+/// Largest input image accepted, in pixels (checked from the header,
+/// before anything is decoded): 2^26, 67 Mpx, about 200 MB as 8-bit RGB.
+pub const MAX_INPUT_PIXELS: u64 = 1 << 26;
+
 /// Loads a PNG or JPEG (the format is sniffed from the bytes) as 8-bit RGB.
+///
+/// The size in the header is checked against [`MAX_INPUT_PIXELS`] before
+/// decoding. A JPEG is first decoded strictly (`zune-jpeg`'s strict mode):
+/// a file cut short, or with corrupt entropy-coded data or a marker out of
+/// place, is an error, where the lenient decoder would fill the missing
+/// part in grey and carry on.
 ///
 /// # Errors
 /// [`HostError::Io`] when the file cannot be opened or read,
-/// [`HostError::Decode`] when it is not a supported, intact image.
+/// [`HostError::Decode`] when it is not a supported, intact image,
+/// [`HostError::DamagedImage`] for a truncated or corrupt JPEG,
+/// [`HostError::ImageTooLarge`] above the size limit.
 pub fn load_rgb(path: &Path) -> Result<RgbImage> {
+    let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
+    decode_rgb(&bytes, path)
+}
+
+/// [`load_rgb`] on the bytes of a file (`path` names it in errors).
+///
+/// # Errors
+/// As [`load_rgb`].
+pub fn decode_rgb(bytes: &[u8], path: &Path) -> Result<RgbImage> {
     let decode = |source| HostError::Decode {
         path: path.to_path_buf(),
         source,
     };
-    let reader = ImageReader::open(path)
-        .map_err(|e| HostError::io(path, e))?
-        .with_guessed_format()
-        .map_err(|e| HostError::io(path, e))?;
-    let img = reader.decode().map_err(decode)?;
+    let reader = || {
+        ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| HostError::io(path, e))
+    };
+    let format = reader()?.format();
+    let (w, h) = reader()?.into_dimensions().map_err(decode)?;
+    if u64::from(w) * u64::from(h) > MAX_INPUT_PIXELS {
+        return Err(HostError::ImageTooLarge {
+            path: path.to_path_buf(),
+            width: w,
+            height: h,
+            limit: MAX_INPUT_PIXELS,
+        });
+    }
+    if format == Some(image::ImageFormat::Jpeg) {
+        check_jpeg(bytes).map_err(|reason| HostError::DamagedImage {
+            path: path.to_path_buf(),
+            reason,
+        })?;
+    }
+    let img = reader()?.decode().map_err(decode)?;
     Ok(img.to_rgb8())
+}
+
+/// Decodes a JPEG in strict mode, for its errors only.
+fn check_jpeg(bytes: &[u8]) -> std::result::Result<(), String> {
+    use zune_core::bytestream::ZCursor;
+    use zune_core::options::DecoderOptions;
+    let opts = DecoderOptions::default()
+        .set_strict_mode(true)
+        .set_max_width(usize::MAX)
+        .set_max_height(usize::MAX);
+    let mut d = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), opts);
+    d.decode().map(|_| ()).map_err(|e| format!("{e:?}"))
 }
 
 /// The working size for a `width` x `height` input and a target width:
@@ -147,6 +197,36 @@ pub use crate::output::write_atomic;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A seeded textured JPEG.
+    pub(crate) fn jpeg(w: u32, h: u32) -> Vec<u8> {
+        let img = RgbImage::from_fn(w, h, |x, y| {
+            let v = (x * 7 + y * 13 + (x * y) % 17) as u8;
+            image::Rgb([v, v.wrapping_mul(3), 255 - v])
+        });
+        let mut out = std::io::Cursor::new(Vec::new());
+        img.write_to(&mut out, image::ImageFormat::Jpeg).unwrap();
+        out.into_inner()
+    }
+
+    #[test]
+    fn truncated_and_corrupt_jpegs_are_errors() {
+        let p = Path::new("x.jpg");
+        let good = jpeg(64, 48);
+        assert_eq!(decode_rgb(&good, p).unwrap().dimensions(), (64, 48));
+        let half = &good[..good.len() / 2];
+        let e = decode_rgb(half, p).unwrap_err();
+        assert!(matches!(e, HostError::DamagedImage { .. }), "{e}");
+        // One flipped bit in the entropy-coded data: a stuffed 0xFF 0x00
+        // becomes 0xFF 0x01, a marker where none can be. (Corruption that
+        // still decodes cannot be told from an image.)
+        let mut flipped = good.clone();
+        let sos = good.windows(2).position(|w| w == [0xff, 0xda]).unwrap();
+        let k = sos + good[sos..].windows(2).position(|w| w == [0xff, 0x00]).unwrap();
+        flipped[k + 1] = 0x01;
+        let e = decode_rgb(&flipped, p).unwrap_err();
+        assert!(matches!(e, HostError::DamagedImage { .. }), "{e}");
+    }
     use image::Rgb;
 
     fn mean(img: &RgbImage) -> [f64; 3] {

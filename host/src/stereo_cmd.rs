@@ -229,7 +229,7 @@ pub fn run_train_dem(params: &DemParams, out: &Path) -> Result<Summary> {
     let start = Instant::now();
     let table = DemTable::from_decoder(&dem::train(params));
     let bytes = table.to_bytes();
-    std::fs::write(out, &bytes).map_err(|e| HostError::io(out, e))?;
+    crate::output::write_atomic(out, &bytes)?;
     let mut s = Summary::new(format!("protogist train-dem: {}", out.display()));
     s.push("max disparity", params.max_disp);
     s.push("groups", table.layout.groups());

@@ -359,7 +359,7 @@ pub fn load_models(path: &std::path::Path) -> Result<(Vec<u8>, ModelFile)> {
         return Err(bad_model(
             path,
             format!(
-                "is {}; --model takes the int8 PGML blob written by `protogist train` (its JSON float sidecar beside it)",
+                "is {}, not a protogist model blob (--model takes the int8 PGML blob written by `protogist train`, its JSON float sidecar beside it)",
                 kind.describe()
             ),
         ));

@@ -10,7 +10,8 @@ use super::dataset::load_dataset;
 use super::model::{bad_model, parse_sidecar, ModelKind};
 use super::quant::{emit_rust, model_error, quantize};
 use crate::error::{HostError, Result};
-use crate::io::{ensure_dir, write_atomic};
+use crate::io::ensure_dir;
+use crate::output::Output;
 use crate::summary::Summary;
 use protogist::mlp::Model;
 use std::collections::HashSet;
@@ -34,11 +35,13 @@ pub struct QuantizeOptions {
     pub emit_rust: Option<PathBuf>,
 }
 
-fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+/// Adds `bytes` as `path` to `out`, creating its folder.
+fn add_file(out: &mut Output, path: &Path, bytes: Vec<u8>) -> Result<()> {
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         ensure_dir(parent)?;
     }
-    write_atomic(path, bytes)
+    out.add(path, bytes);
+    Ok(())
 }
 
 /// `protogist quantize`.
@@ -103,14 +106,17 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
         ),
     );
     s.push("blob", format!("{} B", blob.len()));
+    // The blob and the Rust source are one result: both or neither.
+    let mut files = Output::files();
     if let Some(out) = &opts.out {
-        write_file(out, &blob)?;
+        add_file(&mut files, out, blob.clone())?;
         s.push("wrote", out.display());
     }
     if let Some(rs) = &opts.emit_rust {
         let what = format!("{} ({})", opts.model.display(), model.meta());
-        write_file(rs, emit_rust(&blob, &what).as_bytes())?;
+        add_file(&mut files, rs, emit_rust(&blob, &what).into_bytes())?;
         s.push("wrote", rs.display());
     }
+    files.commit()?;
     Ok(s)
 }
