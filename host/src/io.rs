@@ -222,7 +222,11 @@ mod tests {
         // still decodes cannot be told from an image.)
         let mut flipped = good.clone();
         let sos = good.windows(2).position(|w| w == [0xff, 0xda]).unwrap();
-        let k = sos + good[sos..].windows(2).position(|w| w == [0xff, 0x00]).unwrap();
+        let k = sos
+            + good[sos..]
+                .windows(2)
+                .position(|w| w == [0xff, 0x00])
+                .unwrap();
         flipped[k + 1] = 0x01;
         let e = decode_rgb(&flipped, p).unwrap_err();
         assert!(matches!(e, HostError::DamagedImage { .. }), "{e}");

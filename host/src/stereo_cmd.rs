@@ -3,7 +3,7 @@
 
 use crate::demo::finish;
 use crate::error::{HostError, Result};
-use crate::ground_truth::{downscale_gt, load_gt, metrics, GtMap, Metrics};
+use crate::ground_truth::{gt_at, load_gt, metrics, GtMap, Metrics};
 use crate::io;
 use crate::panels::{rgb_from, Panel};
 use crate::reference::stereo::table::{DemTable, DEFAULT_TABLE};
@@ -380,7 +380,10 @@ pub fn load_pair(
         height: h,
         left: lp,
         right: rp,
-        gt: gt_full.map(|g| downscale_gt(&g, w, h)),
+        gt: match (gt_full, gt) {
+            (Some(g), Some(path)) => Some(gt_at(&g, w, h, path)?),
+            _ => None,
+        },
     })
 }
 
