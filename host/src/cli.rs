@@ -120,6 +120,68 @@ pub enum Command {
     },
 }
 
+/// Parses a command line (`args` with the program name first), then checks
+/// every float flag of every command in one place: a NaN or infinite value
+/// (`nan`, `inf`, or `1e39` for an `f32`) is a usage error, as a malformed
+/// number is. Each flag's range (such as `--gamma` in `(0, 1]`) is then its
+/// command's to check.
+///
+/// # Errors
+/// clap's error for bad arguments, `--help` and `--version`.
+pub fn parse_args<I, T>(args: I) -> std::result::Result<Cli, clap::Error>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    use clap::{CommandFactory, FromArgMatches};
+    let mut cmd = Cli::command();
+    let matches = cmd.try_get_matches_from_mut(args)?;
+    check_float_flags(&mut cmd, &matches)?;
+    Cli::from_arg_matches(&matches)
+}
+
+/// [`parse_args`]' check, over `matches` and its subcommands.
+fn check_float_flags(
+    cmd: &mut clap::Command,
+    matches: &clap::ArgMatches,
+) -> std::result::Result<(), clap::Error> {
+    use std::any::TypeId;
+    let mut bad = None;
+    for arg in cmd.get_arguments() {
+        let id = arg.get_id().as_str();
+        let ty = arg.get_value_parser().type_id();
+        let values: Vec<f64> = if ty == TypeId::of::<f32>() {
+            matches
+                .get_many::<f32>(id)
+                .map(|v| v.map(|&x| f64::from(x)).collect())
+                .unwrap_or_default()
+        } else if ty == TypeId::of::<f64>() {
+            matches
+                .get_many::<f64>(id)
+                .map(|v| v.copied().collect())
+                .unwrap_or_default()
+        } else {
+            continue;
+        };
+        if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+            let name = arg.get_long().unwrap_or(id).to_string();
+            bad = Some(format!(
+                "invalid value '{v}' for '--{name}': not a finite number"
+            ));
+            break;
+        }
+    }
+    if let Some(msg) = bad {
+        return Err(cmd.error(clap::error::ErrorKind::ValueValidation, msg));
+    }
+    if let Some((name, sub)) = matches.subcommand() {
+        if let Some(c) = cmd.find_subcommand_mut(name) {
+            check_float_flags(c, sub)?;
+        }
+    }
+    Ok(())
+}
+
 /// Runs the parsed command line; returns the summary to print.
 ///
 /// # Errors
@@ -256,4 +318,64 @@ pub fn segment_eval_summary(
     let mean = results.iter().map(|r| r.iou).sum::<f64>() / results.len() as f64;
     s.push("mean IoU", format!("{mean:.3}"));
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+    use std::any::TypeId;
+
+    /// Every float flag of every command, found by walking the parser, with
+    /// the arguments its command requires.
+    fn float_flags() -> Vec<(String, String, Vec<String>)> {
+        let mut out = Vec::new();
+        for sub in Cli::command().get_subcommands() {
+            let required: Vec<String> = sub
+                .get_arguments()
+                .filter(|a| a.is_required_set())
+                .flat_map(|a| [format!("--{}", a.get_long().unwrap()), "x".into()])
+                .collect();
+            for a in sub.get_arguments() {
+                let ty = a.get_value_parser().type_id();
+                if ty == TypeId::of::<f32>() || ty == TypeId::of::<f64>() {
+                    let name = a.get_long().unwrap().to_string();
+                    out.push((sub.get_name().to_string(), name, required.clone()));
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn every_float_flag_of_every_command_rejects_nan_and_infinity() {
+        let flags = float_flags();
+        // The walk finds the flags the issue named, among the others.
+        for name in ["min-margin", "lr", "gamma", "test-fraction", "gt-scale"] {
+            assert!(flags.iter().any(|(_, n, _)| n == name), "{name}: {flags:?}");
+        }
+        for (sub, name, required) in &flags {
+            for bad in ["nan", "NaN", "inf", "-inf", "1e39"] {
+                let mut argv = vec!["protogist".to_string(), sub.clone()];
+                argv.extend(required.iter().cloned());
+                argv.push(format!("--{name}={bad}"));
+                let err = match parse_args(&argv) {
+                    // 1e39 is finite as an f64.
+                    Ok(_) if bad == "1e39" => continue,
+                    Ok(_) => panic!("{argv:?} accepted"),
+                    Err(e) => e,
+                };
+                assert_eq!(
+                    err.kind(),
+                    clap::error::ErrorKind::ValueValidation,
+                    "{argv:?}: {err}"
+                );
+                assert!(err.to_string().contains(&format!("--{name}")), "{err}");
+            }
+            let mut argv = vec!["protogist".to_string(), sub.clone()];
+            argv.extend(required.iter().cloned());
+            argv.extend([format!("--{name}"), "0.5".into()]);
+            assert!(parse_args(&argv).is_ok(), "{argv:?}");
+        }
+    }
 }
