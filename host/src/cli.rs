@@ -33,6 +33,10 @@ pub struct Cli {
     /// What to run; without one, the demo runs with its defaults.
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// Memory a run may plan to use, MiB (default 4096): a run that would
+    /// need more is refused before it starts (docs/CLI.md, `limits`).
+    #[arg(long, global = true, value_name = "MIB")]
+    pub max_memory: Option<u64>,
 }
 
 /// The commands.
@@ -187,6 +191,9 @@ fn check_float_flags(
 /// # Errors
 /// Whatever the command fails with, as a [`HostError`].
 pub fn run(cli: Cli) -> Result<Summary> {
+    if let Some(cmd) = &cli.command {
+        preflight(cmd, crate::limits::limit_bytes(cli.max_memory))?;
+    }
     match cli.command {
         None => run_demo(&DemoOptions::default()),
         Some(Command::Demo { out, width, height }) => run_demo(&DemoOptions { out, width, height }),
@@ -218,6 +225,64 @@ pub fn run(cli: Cli) -> Result<Summary> {
             height,
             disparity,
         }) => segment_eval_summary(scenes, width, height, disparity),
+    }
+}
+
+/// Checks sizes, parameters and memory before a command starts
+/// ([`crate::limits`]): nothing is allocated or trained for a run that
+/// cannot finish.
+///
+/// # Errors
+/// The first failed check's typed error.
+pub fn preflight(cmd: &Command, limit: u64) -> Result<()> {
+    use crate::limits as l;
+    let frame = |w: usize, h: usize, what: &str| {
+        l::check_frame(w, h)?;
+        l::check_memory(what, l::core_frame_bytes(w, h), limit)
+    };
+    match cmd {
+        Command::Demo { width, height, .. } => frame(*width, *height, "the demo"),
+        Command::Conspicuity { image, width, .. } if *width > 0 => {
+            let (w, h) = l::working_size_of(image, *width)?;
+            frame(w, h, "conspicuity")
+        }
+        Command::Stereo(opts) if opts.width > 0 => {
+            let (w, h) = l::working_size_of(&opts.left, opts.width)?;
+            match opts.readout.engine {
+                crate::stereo_cmd::Engine::Reference => {
+                    let params = crate::stereo_cmd::preset::params_for(opts, w)?;
+                    l::check_stereo(&params, w, h, limit)
+                }
+                crate::stereo_cmd::Engine::Core => frame(w, h, "the stereo engine"),
+            }
+        }
+        Command::Run(opts) if opts.width > 0 => {
+            let (w, h) = l::working_size_of(&opts.left, opts.width)?;
+            if opts.gt_disparity.is_some() {
+                return frame(w, h, "the pipeline");
+            }
+            let params = DemParams {
+                max_disp: opts.max_disp,
+                refine_radius: opts.refine,
+                ..DemParams::default()
+            };
+            l::check_stereo(&params, w, h, limit)
+        }
+        Command::SegmentEval { width, height, .. } => frame(*width, *height, "segment-eval"),
+        Command::Train(opts) => {
+            l::check_hidden(opts.hidden)?;
+            let (classes, images) = crate::classify::dataset::count_images(&opts.dataset)?;
+            l::check_memory(
+                &format!(
+                    "training a {}-{}-{classes} network on up to {images} images",
+                    protogist::shape::SHAPE_LEN,
+                    opts.hidden
+                ),
+                l::train_bytes(protogist::shape::SHAPE_LEN, opts.hidden, classes, images),
+                limit,
+            )
+        }
+        _ => Ok(()),
     }
 }
 
@@ -305,6 +370,7 @@ pub fn segment_eval_summary(
     if scenes == 0 {
         return Err(HostError::ZeroDimension { name: "scenes" });
     }
+    crate::limits::check_frame(width, height)?;
     let results = crate::eval::segment_eval(scenes, width, height, source)?;
     let mut s = Summary::new(format!(
         "protogist segment-eval: {scenes} seeded scenes at {width}x{height}, disparity {source:?}"

@@ -153,6 +153,16 @@ pub enum HostError {
         /// What is wrong with it (one line).
         reason: String,
     },
+    /// A run that would need more memory than the limit.
+    #[error("{what} needs about {need_mib} MiB, over the limit of {limit_mib} MiB (raise it with --max-memory MIB)")]
+    TooMuchMemory {
+        /// What would need it.
+        what: String,
+        /// The estimate, MiB.
+        need_mib: u64,
+        /// The limit, MiB.
+        limit_mib: u64,
+    },
     /// A concurrent writer holds the lock of an output.
     #[error("another protogist run is writing this output (lock file {} held for over {waited} s; remove it if no run is writing)", path.display())]
     Locked {

@@ -42,6 +42,24 @@ pub fn load_rgb(path: &Path) -> Result<RgbImage> {
 /// # Errors
 /// As [`load_rgb`].
 pub fn decode_rgb(bytes: &[u8], path: &Path) -> Result<RgbImage> {
+    Ok(decode_image(bytes, path)?.to_rgb8())
+}
+
+/// Loads a PNG or JPEG as decoded (grey, RGB, with alpha), with the checks
+/// of [`load_rgb`].
+///
+/// # Errors
+/// As [`load_rgb`].
+pub fn load_image(path: &Path) -> Result<image::DynamicImage> {
+    let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
+    decode_image(&bytes, path)
+}
+
+/// [`load_image`] on the bytes of a file (`path` names it in errors).
+///
+/// # Errors
+/// As [`load_rgb`].
+pub fn decode_image(bytes: &[u8], path: &Path) -> Result<image::DynamicImage> {
     let decode = |source| HostError::Decode {
         path: path.to_path_buf(),
         source,
@@ -67,8 +85,7 @@ pub fn decode_rgb(bytes: &[u8], path: &Path) -> Result<RgbImage> {
             reason,
         })?;
     }
-    let img = reader()?.decode().map_err(decode)?;
-    Ok(img.to_rgb8())
+    reader()?.decode().map_err(decode)
 }
 
 /// Decodes a JPEG in strict mode, for its errors only.

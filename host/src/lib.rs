@@ -20,6 +20,7 @@ pub mod error;
 pub mod eval;
 pub mod ground_truth;
 pub mod io;
+pub mod limits;
 pub mod output;
 pub mod panels;
 pub mod plot;

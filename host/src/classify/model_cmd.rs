@@ -112,6 +112,7 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
     if opts.hidden == 0 {
         return Err(HostError::ZeroDimension { name: "hidden" });
     }
+    crate::limits::check_hidden(opts.hidden)?;
     if opts.epochs == 0 {
         return Err(HostError::ZeroDimension { name: "epochs" });
     }
