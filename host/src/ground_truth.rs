@@ -40,7 +40,15 @@ fn bad_gt(path: &Path, reason: impl Into<String>) -> HostError {
 /// or `scale` is not positive.
 pub fn load_gt(path: &Path, scale: f32) -> Result<GtMap> {
     let bytes = std::fs::read(path).map_err(|e| HostError::io(path, e))?;
-    let gt = parse_gt(&bytes, path, scale)?;
+    gt_from_bytes(&bytes, path, scale)
+}
+
+/// [`load_gt`] on the bytes of a file (`path` names it in errors).
+///
+/// # Errors
+/// As [`load_gt`], but for reading.
+pub fn gt_from_bytes(bytes: &[u8], path: &Path, scale: f32) -> Result<GtMap> {
+    let gt = parse_gt(bytes, path, scale)?;
     check_values(&gt).map_err(|r| bad_gt(path, r))?;
     Ok(gt)
 }
