@@ -83,11 +83,9 @@ fn png_of(img: image::DynamicImage) -> Vec<u8> {
 }
 
 fn grey16_seed() -> Vec<u8> {
-    png_of(image::DynamicImage::ImageLuma16(image::ImageBuffer::from_fn(
-        8,
-        6,
-        |x, y| image::Luma([((x + y) % 5 * 64) as u16]),
-    )))
+    png_of(image::DynamicImage::ImageLuma16(
+        image::ImageBuffer::from_fn(8, 6, |x, y| image::Luma([((x + y) % 5 * 64) as u16])),
+    ))
 }
 
 fn rgb_seed() -> Vec<u8> {
@@ -99,7 +97,9 @@ fn rgb_seed() -> Vec<u8> {
 }
 
 fn jpeg_seed() -> Vec<u8> {
-    let img = image::RgbImage::from_fn(16, 16, |x, y| image::Rgb([(x * 16) as u8, (y * 9) as u8, 99]));
+    let img = image::RgbImage::from_fn(16, 16, |x, y| {
+        image::Rgb([(x * 16) as u8, (y * 9) as u8, 99])
+    });
     let mut out = std::io::Cursor::new(Vec::new());
     img.write_to(&mut out, image::ImageFormat::Jpeg).unwrap();
     out.into_inner()

@@ -379,3 +379,38 @@ fn eval_scores_a_separate_test_folder_and_train_writes_one_result() {
         "come from different runs",
     );
 }
+
+#[test]
+fn run_writes_its_panels_and_report_as_one_result() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    let (l, r) = (cwd.join("l.png"), cwd.join("r.png"));
+    save(&view(96, 72, 0), &l, image::ImageFormat::Png);
+    save(&view(96, 72, 3), &r, image::ImageFormat::Png);
+    let out = cwd.join("out");
+    // report.json cannot be written: no panel may be left either.
+    fs::create_dir_all(out.join("report.json")).unwrap();
+    let run = || {
+        protogist(
+            &["run", "--left", s(&l), "--right", s(&r), "--out", s(&out)],
+            cwd,
+        )
+    };
+    assert_one_line_error(&run(), "is a directory");
+    let names = |d: &Path| -> Vec<String> {
+        let mut v: Vec<String> = fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(names(&out), ["report.json"]);
+    fs::remove_dir(out.join("report.json")).unwrap();
+    let ok = run();
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    let written = names(&out);
+    assert!(written.iter().any(|n| n == "report.json"), "{written:?}");
+    assert!(written.iter().any(|n| n == "overview.png"), "{written:?}");
+    assert!(!written.iter().any(|n| n.contains(".tmp")), "{written:?}");
+}
