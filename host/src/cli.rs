@@ -37,6 +37,10 @@ pub struct Cli {
     /// need more is refused before it starts (docs/CLI.md, `limits`).
     #[arg(long, global = true, value_name = "MIB")]
     pub max_memory: Option<u64>,
+    /// Decode a truncated or corrupt JPEG anyway, with a warning (the
+    /// missing part comes out grey); by default it is an error.
+    #[arg(long, global = true)]
+    pub accept_damaged: bool,
 }
 
 /// The commands.
@@ -191,6 +195,7 @@ fn check_float_flags(
 /// # Errors
 /// Whatever the command fails with, as a [`HostError`].
 pub fn run(cli: Cli) -> Result<Summary> {
+    io::set_accept_damaged(cli.accept_damaged);
     if let Some(cmd) = &cli.command {
         preflight(cmd, crate::limits::limit_bytes(cli.max_memory))?;
     }

@@ -19,6 +19,18 @@ use std::path::{Path, PathBuf};
 /// before anything is decoded): 2^26, 67 Mpx, about 200 MB as 8-bit RGB.
 pub const MAX_INPUT_PIXELS: u64 = 1 << 26;
 
+/// Whether a damaged JPEG is decoded anyway, with a warning
+/// (`--accept-damaged`); off by default.
+static ACCEPT_DAMAGED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Accept (`true`) or refuse (`false`, the default) damaged JPEGs in every
+/// later load of this process; an accepted one is decoded leniently, with
+/// a `warning:` line on stderr. Set once from the command line
+/// (`--accept-damaged`).
+pub fn set_accept_damaged(accept: bool) {
+    ACCEPT_DAMAGED.store(accept, std::sync::atomic::Ordering::Relaxed);
+}
+
 /// Loads a PNG or JPEG (the format is sniffed from the bytes) as 8-bit RGB.
 ///
 /// The size in the header is checked against [`MAX_INPUT_PIXELS`] before
@@ -30,7 +42,8 @@ pub const MAX_INPUT_PIXELS: u64 = 1 << 26;
 /// # Errors
 /// [`HostError::Io`] when the file cannot be opened or read,
 /// [`HostError::Decode`] when it is not a supported, intact image,
-/// [`HostError::DamagedImage`] for a truncated or corrupt JPEG,
+/// [`HostError::DamagedImage`] for a truncated or corrupt JPEG (unless
+/// [`set_accept_damaged`]),
 /// [`HostError::ImageTooLarge`] above the size limit.
 pub fn load_rgb(path: &Path) -> Result<RgbImage> {
     let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
@@ -80,10 +93,16 @@ pub fn decode_image(bytes: &[u8], path: &Path) -> Result<image::DynamicImage> {
         });
     }
     if format == Some(image::ImageFormat::Jpeg) {
-        check_jpeg(bytes).map_err(|reason| HostError::DamagedImage {
-            path: path.to_path_buf(),
-            reason,
-        })?;
+        if let Err(reason) = check_jpeg(bytes) {
+            let err = HostError::DamagedImage {
+                path: path.to_path_buf(),
+                reason,
+            };
+            if !ACCEPT_DAMAGED.load(std::sync::atomic::Ordering::Relaxed) {
+                return Err(err);
+            }
+            eprintln!("warning: {err}; decoded anyway (--accept-damaged)");
+        }
     }
     reader()?.decode().map_err(decode)
 }

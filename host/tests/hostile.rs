@@ -59,6 +59,24 @@ fn a_truncated_jpeg_is_an_error_for_every_command_that_reads_images() {
     assert!(!out.exists());
     let ok = protogist(&["conspicuity", "--image", s(&good), "--out", s(&out)], cwd);
     assert!(ok.status.success(), "{}", text(&ok.stderr));
+    // Accepted on request, with a warning.
+    let ok = protogist(
+        &[
+            "conspicuity",
+            "--image",
+            s(&cut),
+            "--out",
+            s(&out),
+            "--accept-damaged",
+        ],
+        cwd,
+    );
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    let warn = text(&ok.stderr);
+    assert!(
+        warn.starts_with("warning: ") && warn.contains("is damaged"),
+        "{warn}"
+    );
 }
 
 fn pfm(w: usize, h: usize, v: f32) -> Vec<u8> {
