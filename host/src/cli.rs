@@ -37,6 +37,14 @@ pub struct Cli {
     /// What to run; without one, the demo runs with its defaults.
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// Memory a run may plan to use, MiB (default 4096): a run that would
+    /// need more is refused before it starts (docs/CLI.md, `limits`).
+    #[arg(long, global = true, value_name = "MIB")]
+    pub max_memory: Option<u64>,
+    /// Decode a truncated or corrupt JPEG anyway, with a warning (the
+    /// missing part comes out grey); by default it is an error.
+    #[arg(long, global = true)]
+    pub accept_damaged: bool,
 }
 
 /// The commands.
@@ -131,11 +139,77 @@ pub enum Command {
     },
 }
 
+/// Parses a command line (`args` with the program name first), then checks
+/// every float flag of every command in one place: a NaN or infinite value
+/// (`nan`, `inf`, or `1e39` for an `f32`) is a usage error, as a malformed
+/// number is. Each flag's range (such as `--gamma` in `(0, 1]`) is then its
+/// command's to check.
+///
+/// # Errors
+/// clap's error for bad arguments, `--help` and `--version`.
+pub fn parse_args<I, T>(args: I) -> std::result::Result<Cli, clap::Error>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    use clap::{CommandFactory, FromArgMatches};
+    let mut cmd = Cli::command();
+    let matches = cmd.try_get_matches_from_mut(args)?;
+    check_float_flags(&mut cmd, &matches)?;
+    Cli::from_arg_matches(&matches)
+}
+
+/// [`parse_args`]' check, over `matches` and its subcommands.
+fn check_float_flags(
+    cmd: &mut clap::Command,
+    matches: &clap::ArgMatches,
+) -> std::result::Result<(), clap::Error> {
+    use std::any::TypeId;
+    let mut bad = None;
+    for arg in cmd.get_arguments() {
+        let id = arg.get_id().as_str();
+        let ty = arg.get_value_parser().type_id();
+        let values: Vec<f64> = if ty == TypeId::of::<f32>() {
+            matches
+                .get_many::<f32>(id)
+                .map(|v| v.map(|&x| f64::from(x)).collect())
+                .unwrap_or_default()
+        } else if ty == TypeId::of::<f64>() {
+            matches
+                .get_many::<f64>(id)
+                .map(|v| v.copied().collect())
+                .unwrap_or_default()
+        } else {
+            continue;
+        };
+        if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+            let name = arg.get_long().unwrap_or(id).to_string();
+            bad = Some(format!(
+                "invalid value '{v}' for '--{name}': not a finite number"
+            ));
+            break;
+        }
+    }
+    if let Some(msg) = bad {
+        return Err(cmd.error(clap::error::ErrorKind::ValueValidation, msg));
+    }
+    if let Some((name, sub)) = matches.subcommand() {
+        if let Some(c) = cmd.find_subcommand_mut(name) {
+            check_float_flags(c, sub)?;
+        }
+    }
+    Ok(())
+}
+
 /// Runs the parsed command line; returns the summary to print.
 ///
 /// # Errors
 /// Whatever the command fails with, as a [`HostError`].
 pub fn run(cli: Cli) -> Result<Summary> {
+    io::set_accept_damaged(cli.accept_damaged);
+    if let Some(cmd) = &cli.command {
+        preflight(cmd, crate::limits::limit_bytes(cli.max_memory))?;
+    }
     match cli.command {
         None => run_demo(&DemoOptions::default()),
         Some(Command::Demo { out, width, height }) => run_demo(&DemoOptions { out, width, height }),
@@ -169,6 +243,76 @@ pub fn run(cli: Cli) -> Result<Summary> {
             height,
             disparity,
         }) => segment_eval_summary(scenes, width, height, disparity),
+    }
+}
+
+/// Checks sizes, parameters and memory before a command starts
+/// ([`crate::limits`]): nothing is allocated or trained for a run that
+/// cannot finish.
+///
+/// # Errors
+/// The first failed check's typed error.
+pub fn preflight(cmd: &Command, limit: u64) -> Result<()> {
+    use crate::limits as l;
+    let frame = |w: usize, h: usize, what: &str| {
+        l::check_frame(w, h)?;
+        l::check_memory(what, l::core_frame_bytes(w, h), limit)
+    };
+    match cmd {
+        Command::Demo { width, height, .. } => frame(*width, *height, "the demo"),
+        Command::Conspicuity { image, width, .. } if *width > 0 => {
+            let (w, h) = l::working_size_of(image, *width)?;
+            frame(w, h, "conspicuity")
+        }
+        Command::Stereo(opts) if opts.width > 0 => {
+            let (w, h) = l::working_size_of(&opts.left, opts.width)?;
+            let point = protogist::stereo::c2f::C2fParams::from_name(&opts.point);
+            match (&opts.engine, point) {
+                (crate::stereo_cmd::Engine::Reference, Some(p)) => {
+                    let (mut dem, _) = crate::stereo_cmd::engine::reference_of(&p);
+                    dem.max_disp = opts.max_disp;
+                    l::check_stereo(&dem, w, h, limit)
+                }
+                _ => frame(w, h, "the stereo engine"),
+            }
+        }
+        Command::Run(opts) if opts.width > 0 => {
+            let (w, h) = l::working_size_of(&opts.left, opts.width)?;
+            l::check_frame(w, h)?;
+            let params =
+                protogist::pipeline::PipelineParams::DEFAULT.with_objects(opts.objects.clamp(1, 8));
+            let workspace = protogist::pipeline::workspace_bytes(w, h, &params) as u64;
+            l::check_memory(
+                "the pipeline",
+                l::core_frame_bytes(w, h).saturating_add(workspace),
+                limit,
+            )?;
+            if opts.gt_disparity.is_some() || opts.reference {
+                let params = DemParams {
+                    max_disp: opts
+                        .max_disp
+                        .unwrap_or_else(|| crate::run_cmd::default_max_disp(w)),
+                    ..DemParams::default()
+                };
+                l::check_stereo(&params, w, h, limit)?;
+            }
+            Ok(())
+        }
+        Command::SegmentEval { width, height, .. } => frame(*width, *height, "segment-eval"),
+        Command::Train(opts) => {
+            l::check_hidden(opts.hidden)?;
+            let (classes, images) = crate::classify::dataset::count_images(&opts.dataset)?;
+            l::check_memory(
+                &format!(
+                    "training a {}-{}-{classes} network on up to {images} images",
+                    protogist::shape::SHAPE_LEN,
+                    opts.hidden
+                ),
+                l::train_bytes(protogist::shape::SHAPE_LEN, opts.hidden, classes, images),
+                limit,
+            )
+        }
+        _ => Ok(()),
     }
 }
 
@@ -256,6 +400,7 @@ pub fn segment_eval_summary(
     if scenes == 0 {
         return Err(HostError::ZeroDimension { name: "scenes" });
     }
+    crate::limits::check_frame(width, height)?;
     let results = crate::eval::segment_eval(scenes, width, height, source)?;
     let mut s = Summary::new(format!(
         "protogist segment-eval: {scenes} seeded scenes at {width}x{height}, disparity {source:?}"
@@ -269,4 +414,64 @@ pub fn segment_eval_summary(
     let mean = results.iter().map(|r| r.iou).sum::<f64>() / results.len() as f64;
     s.push("mean IoU", format!("{mean:.3}"));
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+    use std::any::TypeId;
+
+    /// Every float flag of every command, found by walking the parser, with
+    /// the arguments its command requires.
+    fn float_flags() -> Vec<(String, String, Vec<String>)> {
+        let mut out = Vec::new();
+        for sub in Cli::command().get_subcommands() {
+            let required: Vec<String> = sub
+                .get_arguments()
+                .filter(|a| a.is_required_set())
+                .flat_map(|a| [format!("--{}", a.get_long().unwrap()), "x".into()])
+                .collect();
+            for a in sub.get_arguments() {
+                let ty = a.get_value_parser().type_id();
+                if ty == TypeId::of::<f32>() || ty == TypeId::of::<f64>() {
+                    let name = a.get_long().unwrap().to_string();
+                    out.push((sub.get_name().to_string(), name, required.clone()));
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn every_float_flag_of_every_command_rejects_nan_and_infinity() {
+        let flags = float_flags();
+        // The walk finds the flags the issue named, among the others.
+        for name in ["gamma", "test-fraction", "gt-scale"] {
+            assert!(flags.iter().any(|(_, n, _)| n == name), "{name}: {flags:?}");
+        }
+        for (sub, name, required) in &flags {
+            for bad in ["nan", "NaN", "inf", "-inf", "1e39"] {
+                let mut argv = vec!["protogist".to_string(), sub.clone()];
+                argv.extend(required.iter().cloned());
+                argv.push(format!("--{name}={bad}"));
+                let err = match parse_args(&argv) {
+                    // 1e39 is finite as an f64.
+                    Ok(_) if bad == "1e39" => continue,
+                    Ok(_) => panic!("{argv:?} accepted"),
+                    Err(e) => e,
+                };
+                assert_eq!(
+                    err.kind(),
+                    clap::error::ErrorKind::ValueValidation,
+                    "{argv:?}: {err}"
+                );
+                assert!(err.to_string().contains(&format!("--{name}")), "{err}");
+            }
+            let mut argv = vec!["protogist".to_string(), sub.clone()];
+            argv.extend(required.iter().cloned());
+            argv.extend([format!("--{name}"), "0.5".into()]);
+            assert!(parse_args(&argv).is_ok(), "{argv:?}");
+        }
+    }
 }

@@ -6,7 +6,6 @@
 //! then written by [`finish`], so a failure leaves no half-written output.
 
 use crate::error::{HostError, Result};
-use crate::io;
 use crate::panels::{self, Panel};
 use crate::stages::{run_conspicuity, run_segment};
 use crate::summary::Summary;
@@ -216,23 +215,44 @@ fn mask_iou(a: &[bool], gt: &[u8]) -> f64 {
 /// appends the closing summary lines (time and output directory).
 ///
 /// # Errors
-/// As [`io::write_panels`].
+/// As [`crate::io::write_panels`].
 pub fn finish(
     dir: &std::path::Path,
+    panels: Vec<Panel>,
+    summary: &mut Summary,
+    start: Instant,
+) -> Result<()> {
+    finish_with(crate::output::Output::dir(dir), panels, summary, start)
+}
+
+/// As [`finish`], the panels committed with the other files of `out` (an
+/// [`Output::dir`](crate::output::Output::dir) result, such as a report) as
+/// one result.
+///
+/// # Errors
+/// As [`crate::output::Output::commit`].
+pub fn finish_with(
+    mut out: crate::output::Output,
     mut panels: Vec<Panel>,
     summary: &mut Summary,
     start: Instant,
 ) -> Result<()> {
     let overview = panels::montage(&panels, OVERVIEW_COLUMNS);
     panels.push(Panel::new("overview", overview));
-    let written = io::write_panels(dir, &panels)?;
+    out.add_panels(&panels)?;
+    let dir = out.folder().map(std::path::Path::to_path_buf);
+    let written = out.commit()?;
+    let pngs = written
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "png"))
+        .count();
     summary.push(
         "total time",
         format!("{:.1} ms", start.elapsed().as_secs_f64() * 1e3),
     );
     summary.push(
         "output",
-        format!("{} ({} PNG files)", dir.display(), written.len()),
+        format!("{} ({pngs} PNG files)", dir.unwrap_or_default().display()),
     );
     Ok(())
 }

@@ -57,6 +57,26 @@ pub enum HostError {
         /// The decoder's error.
         source: image::ImageError,
     },
+    /// A truncated or corrupt JPEG (found by the strict decoder).
+    #[error("{} is damaged (truncated or corrupt JPEG): {reason}", path.display())]
+    DamagedImage {
+        /// The input file.
+        path: PathBuf,
+        /// The strict decoder's message.
+        reason: String,
+    },
+    /// An input image above [`crate::io::MAX_INPUT_PIXELS`].
+    #[error("{} is {width}x{height}, over the limit of {limit} pixels", path.display())]
+    ImageTooLarge {
+        /// The input file.
+        path: PathBuf,
+        /// Its width.
+        width: u32,
+        /// Its height.
+        height: u32,
+        /// The limit, pixels.
+        limit: u64,
+    },
     /// A panel could not be encoded as PNG.
     #[error("cannot encode panel {name}: {source}")]
     Encode {
@@ -117,6 +137,17 @@ pub enum HostError {
         /// What is wrong with it (one line).
         reason: String,
     },
+    /// A class folder of an evaluation dataset that the model does not
+    /// know.
+    #[error("{}: class {class:?} is not one of the model's classes ({known})", path.display())]
+    UnknownClass {
+        /// The class folder.
+        path: PathBuf,
+        /// Its name.
+        class: String,
+        /// The model's class names, comma-separated.
+        known: String,
+    },
     /// A model file that cannot be used.
     #[error("model {}: {reason}", path.display())]
     BadModel {
@@ -128,6 +159,32 @@ pub enum HostError {
     /// A scene set (`gen-scenes`) that cannot be used.
     #[error("{0}")]
     Scene(#[from] crate::scenes::load::SceneError),
+    /// A run that would need more memory than the limit.
+    #[error("{what} needs about {need_mib} MiB, over the limit of {limit_mib} MiB (raise it with --max-memory MIB)")]
+    TooMuchMemory {
+        /// What would need it.
+        what: String,
+        /// The estimate, MiB.
+        need_mib: u64,
+        /// The limit, MiB.
+        limit_mib: u64,
+    },
+    /// A concurrent writer holds the lock of an output.
+    #[error("another protogist run is writing this output (lock file {} held for over {waited} s; remove it if no run is writing)", path.display())]
+    Locked {
+        /// The lock file.
+        path: PathBuf,
+        /// Seconds waited.
+        waited: u64,
+    },
+    /// A value that could not be serialised for output.
+    #[error("cannot serialise {what}: {reason}")]
+    Serialize {
+        /// What was being written.
+        what: String,
+        /// The serialiser's message.
+        reason: String,
+    },
     /// An output path exists and is not a directory.
     #[error("{} exists and is not a directory", .0.display())]
     NotADirectory(PathBuf),

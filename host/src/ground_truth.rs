@@ -40,14 +40,83 @@ fn bad_gt(path: &Path, reason: impl Into<String>) -> HostError {
 /// or `scale` is not positive.
 pub fn load_gt(path: &Path, scale: f32) -> Result<GtMap> {
     let bytes = std::fs::read(path).map_err(|e| HostError::io(path, e))?;
+    gt_from_bytes(&bytes, path, scale)
+}
+
+/// [`load_gt`] on the bytes of a file (`path` names it in errors).
+///
+/// # Errors
+/// As [`load_gt`], but for reading.
+pub fn gt_from_bytes(bytes: &[u8], path: &Path, scale: f32) -> Result<GtMap> {
+    let gt = parse_gt(bytes, path, scale)?;
+    check_values(&gt).map_err(|r| bad_gt(path, r))?;
+    Ok(gt)
+}
+
+/// Checks what a left-referenced disparity map can hold: every known
+/// value in `[0, width)` px (a disparity of the image's width or more
+/// would match a pixel outside the other view; a negative one, a point
+/// behind the cameras' convergence that a left-referenced map cannot
+/// have), not subnormal, and at least one known pixel. Byte-swapped data
+/// (values such as 5.7e36, or subnormals such as 4.6e-41) and a wrong
+/// `--gt-scale` fail.
+///
+/// # Errors
+/// A one-line reason naming the first bad value, or that no pixel is
+/// known.
+pub fn check_values(gt: &GtMap) -> std::result::Result<(), String> {
+    let max = gt.width as f32;
+    let mut known = 0usize;
+    for (k, v) in gt.data.iter().enumerate() {
+        let Some(v) = *v else { continue };
+        let possible = |v: f32| (0.0..max).contains(&v) && !v.is_subnormal();
+        if !possible(v) {
+            let bad = gt.data.iter().flatten().filter(|&&v| !possible(v)).count();
+            return Err(format!(
+                "disparity {v:e} px at ({}, {}) is not in [0, {}) for an image {} px wide ({bad} such pixels; byte-swapped data or a wrong --gt-scale?)",
+                k % gt.width,
+                k / gt.width,
+                gt.width,
+                gt.width
+            ));
+        }
+        known += 1;
+    }
+    if known == 0 {
+        return Err(format!(
+            "no ground-truth pixel: all {} pixels are unknown (0 in a PNG, inf or NaN in a PFM)",
+            gt.data.len()
+        ));
+    }
+    Ok(())
+}
+
+/// `gt` at the working size (see [`downscale_gt`]), checked to keep at
+/// least one known pixel.
+///
+/// # Errors
+/// [`HostError::BadGroundTruth`] when no pixel is known at that size.
+pub fn gt_at(gt: &GtMap, width: usize, height: usize, path: &Path) -> Result<GtMap> {
+    let small = downscale_gt(gt, width, height);
+    if small.data.iter().all(Option::is_none) {
+        return Err(bad_gt(
+            path,
+            format!("no ground-truth pixel is left at the working size {width}x{height}"),
+        ));
+    }
+    Ok(small)
+}
+
+/// The map in `bytes`, by its magic (see [`load_gt`]), unchecked.
+fn parse_gt(bytes: &[u8], path: &Path, scale: f32) -> Result<GtMap> {
     if bytes.starts_with(b"P") && bytes.get(1).is_some_and(|&b| b == b'f' || b == b'F') {
-        return parse_pfm(&bytes).map_err(|r| bad_gt(path, r));
+        return parse_pfm(bytes).map_err(|r| bad_gt(path, r));
     }
     if bytes.starts_with(numpy::NPY_MAGIC) {
-        return numpy::parse_npy(&bytes).map_err(|r| bad_gt(path, r));
+        return numpy::parse_npy(bytes).map_err(|r| bad_gt(path, r));
     }
     if numpy::ZIP_MAGICS.iter().any(|m| bytes.starts_with(m)) {
-        return numpy::parse_npz(&bytes).map_err(|r| bad_gt(path, r));
+        return numpy::parse_npz(bytes).map_err(|r| bad_gt(path, r));
     }
     if !(scale.is_finite() && scale > 0.0) {
         return Err(bad_gt(
@@ -55,7 +124,7 @@ pub fn load_gt(path: &Path, scale: f32) -> Result<GtMap> {
             format!("--gt-scale must be positive, got {scale}"),
         ));
     }
-    let img = ImageReader::new(std::io::Cursor::new(&bytes))
+    let img = ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| HostError::io(path, e))?
         .decode()
@@ -123,6 +192,12 @@ pub fn parse_pfm(bytes: &[u8]) -> std::result::Result<GtMap, String> {
             "PFM data truncated: {} bytes, need {}",
             body.len(),
             4 * w * h
+        ));
+    }
+    if body.len() > 4 * w * h {
+        return Err(format!(
+            "{} trailing bytes after the {w}x{h} PFM raster",
+            body.len() - 4 * w * h
         ));
     }
     let mut data = vec![None; w * h];
@@ -250,6 +325,70 @@ mod tests {
         assert!(parse_pfm(&b[..b.len() - 1]).is_err());
         assert!(parse_pfm(b"PF\n2 2\n-1.0\n").is_err());
         assert!(parse_pfm(b"Pf\n0 2\n-1.0\n").is_err());
+    }
+
+    fn pfm(w: usize, h: usize, values: &[f32]) -> Vec<u8> {
+        let mut b = format!("Pf\n{w} {h}\n-1.0\n").into_bytes();
+        for v in values {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b
+    }
+
+    fn load(bytes: &[u8], scale: f32) -> Result<GtMap> {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("gt");
+        std::fs::write(&p, bytes).unwrap();
+        load_gt(&p, scale)
+    }
+
+    fn reason(r: Result<GtMap>) -> String {
+        match r {
+            Err(HostError::BadGroundTruth { reason, .. }) => reason,
+            other => panic!("not BadGroundTruth: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn impossible_disparities_and_empty_maps_are_errors() {
+        assert!(load(&pfm(4, 1, &[0.0, 1.5, 3.9, f32::NAN]), 1.0).is_ok());
+        for (values, needle) in [
+            ([-1.0, 1.0, 1.0, 1.0], "-1e0 px"),
+            ([1.0, 1e30, 1.0, 1.0], "1e30 px at (1, 0) is not in [0, 4)"),
+            ([1.0, 1.0, 4.0, 1.0], "4e0 px"),
+            (
+                [f32::NAN, f32::INFINITY, f32::NAN, f32::NEG_INFINITY],
+                "no ground-truth pixel",
+            ),
+        ] {
+            let r = reason(load(&pfm(4, 1, &values), 1.0));
+            assert!(r.contains(needle), "{r}");
+        }
+        // Byte-swapped data (a big-endian scale on little-endian floats).
+        let mut swapped = b"Pf\n4 1\n1.0\n".to_vec();
+        for v in [1.0f32, 2.0, 3.0, 2.5] {
+            swapped.extend_from_slice(&v.to_le_bytes());
+        }
+        let r = reason(load(&swapped, 1.0));
+        assert!(r.contains("byte-swapped"), "{r}");
+        // Trailing bytes after the raster.
+        let mut long = pfm(4, 1, &[1.0; 4]);
+        long.push(0);
+        assert!(reason(load(&long, 1.0)).contains("1 trailing bytes"));
+        // An all-zero PNG: every pixel unknown.
+        let mut png = std::io::Cursor::new(Vec::new());
+        image::GrayImage::new(4, 2)
+            .write_to(&mut png, image::ImageFormat::Png)
+            .unwrap();
+        let r = reason(load(png.get_ref(), 1.0));
+        assert!(r.contains("no ground-truth pixel"), "{r}");
+        // A PNG scaled for 256 read at scale 1: values past the width.
+        let mut png = std::io::Cursor::new(Vec::new());
+        image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(4, 2, image::Luma([512u16]))
+            .write_to(&mut png, image::ImageFormat::Png)
+            .unwrap();
+        assert!(load(png.get_ref(), 256.0).is_ok());
+        assert!(reason(load(png.get_ref(), 1.0)).contains("--gt-scale"));
     }
 
     #[test]

@@ -13,25 +13,110 @@ use crate::panels::Panel;
 use image::{ImageReader, RgbImage};
 use protogist::image::Rgb8;
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
+
+/// Largest input image accepted, in pixels (checked from the header,
+/// before anything is decoded): 2^26, 67 Mpx, about 200 MB as 8-bit RGB.
+pub const MAX_INPUT_PIXELS: u64 = 1 << 26;
+
+/// Whether a damaged JPEG is decoded anyway, with a warning
+/// (`--accept-damaged`); off by default.
+static ACCEPT_DAMAGED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Accept (`true`) or refuse (`false`, the default) damaged JPEGs in every
+/// later load of this process; an accepted one is decoded leniently, with
+/// a `warning:` line on stderr. Set once from the command line
+/// (`--accept-damaged`).
+pub fn set_accept_damaged(accept: bool) {
+    ACCEPT_DAMAGED.store(accept, std::sync::atomic::Ordering::Relaxed);
+}
 
 /// Loads a PNG or JPEG (the format is sniffed from the bytes) as 8-bit RGB.
 ///
+/// The size in the header is checked against [`MAX_INPUT_PIXELS`] before
+/// decoding. A JPEG is first decoded strictly (`zune-jpeg`'s strict mode):
+/// a file cut short, or with corrupt entropy-coded data or a marker out of
+/// place, is an error, where the lenient decoder would fill the missing
+/// part in grey and carry on.
+///
 /// # Errors
 /// [`HostError::Io`] when the file cannot be opened or read,
-/// [`HostError::Decode`] when it is not a supported, intact image.
+/// [`HostError::Decode`] when it is not a supported, intact image,
+/// [`HostError::DamagedImage`] for a truncated or corrupt JPEG (unless
+/// [`set_accept_damaged`]),
+/// [`HostError::ImageTooLarge`] above the size limit.
 pub fn load_rgb(path: &Path) -> Result<RgbImage> {
+    let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
+    decode_rgb(&bytes, path)
+}
+
+/// [`load_rgb`] on the bytes of a file (`path` names it in errors).
+///
+/// # Errors
+/// As [`load_rgb`].
+pub fn decode_rgb(bytes: &[u8], path: &Path) -> Result<RgbImage> {
+    Ok(decode_image(bytes, path)?.to_rgb8())
+}
+
+/// Loads a PNG or JPEG as decoded (grey, RGB, with alpha), with the checks
+/// of [`load_rgb`].
+///
+/// # Errors
+/// As [`load_rgb`].
+pub fn load_image(path: &Path) -> Result<image::DynamicImage> {
+    let bytes = fs::read(path).map_err(|e| HostError::io(path, e))?;
+    decode_image(&bytes, path)
+}
+
+/// [`load_image`] on the bytes of a file (`path` names it in errors).
+///
+/// # Errors
+/// As [`load_rgb`].
+pub fn decode_image(bytes: &[u8], path: &Path) -> Result<image::DynamicImage> {
     let decode = |source| HostError::Decode {
         path: path.to_path_buf(),
         source,
     };
-    let reader = ImageReader::open(path)
-        .map_err(|e| HostError::io(path, e))?
-        .with_guessed_format()
-        .map_err(|e| HostError::io(path, e))?;
-    let img = reader.decode().map_err(decode)?;
-    Ok(img.to_rgb8())
+    let reader = || {
+        ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| HostError::io(path, e))
+    };
+    let format = reader()?.format();
+    let (w, h) = reader()?.into_dimensions().map_err(decode)?;
+    if u64::from(w) * u64::from(h) > MAX_INPUT_PIXELS {
+        return Err(HostError::ImageTooLarge {
+            path: path.to_path_buf(),
+            width: w,
+            height: h,
+            limit: MAX_INPUT_PIXELS,
+        });
+    }
+    if format == Some(image::ImageFormat::Jpeg) {
+        if let Err(reason) = check_jpeg(bytes) {
+            let err = HostError::DamagedImage {
+                path: path.to_path_buf(),
+                reason,
+            };
+            if !ACCEPT_DAMAGED.load(std::sync::atomic::Ordering::Relaxed) {
+                return Err(err);
+            }
+            eprintln!("warning: {err}; decoded anyway (--accept-damaged)");
+        }
+    }
+    reader()?.decode().map_err(decode)
+}
+
+/// Decodes a JPEG in strict mode, for its errors only.
+fn check_jpeg(bytes: &[u8]) -> std::result::Result<(), String> {
+    use zune_core::bytestream::ZCursor;
+    use zune_core::options::DecoderOptions;
+    let opts = DecoderOptions::default()
+        .set_strict_mode(true)
+        .set_max_width(usize::MAX)
+        .set_max_height(usize::MAX);
+    let mut d = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), opts);
+    d.decode().map(|_| ()).map_err(|e| format!("{e:?}"))
 }
 
 /// The working size for a `width` x `height` input and a target width:
@@ -130,79 +215,58 @@ pub fn ensure_dir(dir: &Path) -> Result<()> {
     fs::create_dir_all(dir).map_err(|e| HostError::io(dir, e))
 }
 
-/// Writes every panel as `DIR/{name}.png`, all or nothing.
-///
-/// All PNGs are encoded in memory first; then each is written to a hidden
-/// temporary name in `dir` and, once every temporary file is complete, all
-/// are renamed into place. On any failure the temporary files, and any
-/// panel already renamed by this call, are removed. Returns the final paths.
+/// Writes every panel as `DIR/{name}.png`, all or nothing: one
+/// [`Output`](crate::output::Output) result (see [`crate::output`]).
+/// Returns the final paths.
 ///
 /// # Errors
 /// [`HostError::Encode`] or [`HostError::Io`]; `dir` is then left without
 /// any panel of this call.
 pub fn write_panels(dir: &Path, panels: &[Panel]) -> Result<Vec<PathBuf>> {
-    ensure_dir(dir)?;
-    let encoded = panels
-        .iter()
-        .map(|p| p.encode_png().map(|bytes| (p.name.as_str(), bytes)))
-        .collect::<Result<Vec<_>>>()?;
-    let pid = std::process::id();
-    let mut staged: Vec<(PathBuf, PathBuf)> = Vec::with_capacity(encoded.len());
-    let mut renamed: Vec<PathBuf> = Vec::new();
-    let result = (|| {
-        for (name, bytes) in &encoded {
-            let tmp = dir.join(format!(".{name}.png.tmp-{pid}"));
-            let fin = dir.join(format!("{name}.png"));
-            staged.push((tmp.clone(), fin));
-            write_synced(&tmp, bytes)?;
-        }
-        for (tmp, fin) in &staged {
-            fs::rename(tmp, fin).map_err(|e| HostError::io(fin, e))?;
-            renamed.push(fin.clone());
-        }
-        Ok(())
-    })();
-    if let Err(e) = result {
-        // Best effort: the original error is what the user needs to see.
-        for path in staged.iter().map(|(t, _)| t).chain(&renamed) {
-            let _ = fs::remove_file(path);
-        }
-        return Err(e);
-    }
-    Ok(renamed)
+    let mut out = crate::output::Output::dir(dir);
+    out.add_panels(panels)?;
+    out.commit()
 }
 
-/// Writes `bytes` to `path` atomically: to a hidden temporary name in the
-/// same directory, flushed, then renamed into place. On failure the
-/// temporary file is removed and `path` is untouched.
-///
-/// # Errors
-/// [`HostError::Io`].
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path
-        .file_name()
-        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let result = write_synced(&tmp, bytes)
-        .and_then(|()| fs::rename(&tmp, path).map_err(|e| HostError::io(path, e)));
-    if result.is_err() {
-        // Best effort: the original error is what the user needs to see.
-        let _ = fs::remove_file(&tmp);
-    }
-    result
-}
-
-/// Writes `bytes` to `path` and flushes them to disk.
-fn write_synced(path: &Path, bytes: &[u8]) -> Result<()> {
-    let io = |e| HostError::io(path, e);
-    let mut file = fs::File::create(path).map_err(io)?;
-    file.write_all(bytes).map_err(io)?;
-    file.sync_all().map_err(io)
-}
+pub use crate::output::write_atomic;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A seeded textured JPEG.
+    pub(crate) fn jpeg(w: u32, h: u32) -> Vec<u8> {
+        let img = RgbImage::from_fn(w, h, |x, y| {
+            let v = (x * 7 + y * 13 + (x * y) % 17) as u8;
+            image::Rgb([v, v.wrapping_mul(3), 255 - v])
+        });
+        let mut out = std::io::Cursor::new(Vec::new());
+        img.write_to(&mut out, image::ImageFormat::Jpeg).unwrap();
+        out.into_inner()
+    }
+
+    #[test]
+    fn truncated_and_corrupt_jpegs_are_errors() {
+        let p = Path::new("x.jpg");
+        let good = jpeg(64, 48);
+        assert_eq!(decode_rgb(&good, p).unwrap().dimensions(), (64, 48));
+        let half = &good[..good.len() / 2];
+        let e = decode_rgb(half, p).unwrap_err();
+        assert!(matches!(e, HostError::DamagedImage { .. }), "{e}");
+        // One flipped bit in the entropy-coded data: a stuffed 0xFF 0x00
+        // becomes 0xFF 0x01, a marker where none can be. (Corruption that
+        // still decodes cannot be told from an image.)
+        let mut flipped = good.clone();
+        let sos = good.windows(2).position(|w| w == [0xff, 0xda]).unwrap();
+        let k = sos
+            + good[sos..]
+                .windows(2)
+                .position(|w| w == [0xff, 0x00])
+                .unwrap();
+        flipped[k + 1] = 0x01;
+        let e = decode_rgb(&flipped, p).unwrap_err();
+        assert!(matches!(e, HostError::DamagedImage { .. }), "{e}");
+    }
     use image::Rgb;
 
     fn mean(img: &RgbImage) -> [f64; 3] {

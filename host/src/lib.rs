@@ -24,6 +24,8 @@ pub mod eval;
 pub mod gist;
 pub mod ground_truth;
 pub mod io;
+pub mod limits;
+pub mod output;
 pub mod panels;
 pub mod plot;
 pub mod product;

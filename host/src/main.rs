@@ -1,14 +1,13 @@
 //! `protogist`: the host command line. Without arguments it runs the demo.
 
-use clap::Parser;
-use protogist_host::cli::{run, Cli};
+use protogist_host::cli::{parse_args, run};
 use std::process::ExitCode;
 
 /// Exit code for a failed run (clap uses 2 for bad arguments).
 const FAILURE: u8 = 1;
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let cli = match parse_args(std::env::args_os()) {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {
             // --help and --version: clap prints them to stdout.

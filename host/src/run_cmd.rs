@@ -6,7 +6,6 @@
 //! or given ground truth with `--gt-disparity`) and prints its agreement
 //! with core's.
 
-use crate::demo::finish;
 use crate::error::{HostError, Result};
 use crate::panels::{rgb_from, Panel};
 use crate::product::{run_frame, tables_for};
@@ -217,8 +216,9 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
         });
         panels.extend(r.panels);
     }
-    finish(&opts.out, panels, &mut s, start)?;
-    write_report(&opts.out, &report)?;
+    let mut out = crate::output::Output::dir(&opts.out);
+    out.add_json("report.json", &report)?;
+    crate::demo::finish_with(out, panels, &mut s, start)?;
     Ok(s)
 }
 
@@ -374,16 +374,5 @@ fn reference_chain(
         objects,
         masks,
         source,
-    })
-}
-
-/// Writes `report.json` under a temporary name, then renames it.
-fn write_report(dir: &std::path::Path, report: &serde_json::Value) -> Result<()> {
-    let path = dir.join("report.json");
-    let tmp = dir.join(".report.json.part");
-    std::fs::write(&tmp, format!("{report:#}\n")).map_err(|e| HostError::io(&tmp, e))?;
-    std::fs::rename(&tmp, &path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        HostError::io(&path, e)
     })
 }

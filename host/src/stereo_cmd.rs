@@ -4,7 +4,7 @@
 
 use crate::demo::finish;
 use crate::error::{HostError, Result};
-use crate::ground_truth::{downscale_gt, load_gt, metrics, GtMap, Metrics};
+use crate::ground_truth::{gt_at, load_gt, metrics, GtMap, Metrics};
 use crate::io;
 use crate::panels::{rgb_from, Panel};
 use crate::reference::stereo::table::{DemTable, DEFAULT_TABLE};
@@ -149,7 +149,7 @@ pub fn run_train_dem(params: &DemParams, out: &Path) -> Result<Summary> {
     let start = Instant::now();
     let table = DemTable::from_decoder(&dem::train(params));
     let bytes = table.to_bytes();
-    std::fs::write(out, &bytes).map_err(|e| HostError::io(out, e))?;
+    crate::output::write_atomic(out, &bytes)?;
     let mut s = Summary::new(format!("protogist train-dem: {}", out.display()));
     s.push("max disparity", params.max_disp);
     s.push("groups", table.layout.groups());
@@ -300,7 +300,10 @@ pub fn load_pair(
         height: h,
         left: lp,
         right: rp,
-        gt: gt_full.map(|g| downscale_gt(&g, w, h)),
+        gt: match (gt_full, gt) {
+            (Some(g), Some(path)) => Some(gt_at(&g, w, h, path)?),
+            _ => None,
+        },
     })
 }
 

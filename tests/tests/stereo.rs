@@ -190,7 +190,7 @@ fn the_command_rejects_bad_files_with_one_line_errors() {
     let gt_small = write_png(
         d,
         "g.png",
-        image::DynamicImage::ImageLuma8(image::GrayImage::new(10, 10)),
+        image::DynamicImage::ImageLuma8(image::GrayImage::from_pixel(10, 10, image::Luma([1]))),
     );
     let gt_rgb = write_png(d, "grgb.png", rgb(128, 96));
     let junk = d.join("junk.pfm");

@@ -51,6 +51,8 @@ pub fn run_ci() -> Result<CiSummary> {
     timed("fetch-data", t);
     let (totals, t) = step("test: cargo test --workspace", || {
         // The real-data tests must not skip in CI: a missing file fails them.
+        // The fuzz targets (host/tests/fuzz.rs) run here with their short
+        // budget; `cargo xtask fuzz` runs them long.
         let mut cmd = host_cargo();
         cmd.args(["test", "--locked", "--workspace"])
             .env("PROTOGIST_REQUIRE_DATA", "1");

@@ -4,6 +4,7 @@ mod bench;
 mod ci;
 mod data;
 mod firmware;
+mod fuzz;
 mod setup;
 mod util;
 
@@ -17,6 +18,7 @@ commands:
               stereo pairs into the data cache
   firmware    build the Cortex-M firmware and run it under QEMU mps2-an386
   bench       measure and write docs/BENCHMARKS.md
+  fuzz [N]    run every fuzz target of host/tests/fuzz.rs for N cases (default 100000)
   setup       install missing system packages / rustup components";
 
 fn main() -> ExitCode {
@@ -26,6 +28,7 @@ fn main() -> ExitCode {
         Some("fetch-data") => data::fetch().map(|_| ()),
         Some("firmware") => firmware::build_and_run().map(|_| ()),
         Some("bench") => bench::run(),
+        Some("fuzz") => fuzz::run(&args[1..]),
         Some("setup") => setup::ensure_all(),
         Some("-h" | "--help" | "help") => {
             println!("{USAGE}");

@@ -146,11 +146,15 @@ impl PipelineParams {
     };
 
     /// The named settings, by the name the CLI takes.
-    pub const NAMED: [(&'static str, Self); 2] = [("default", Self::DEFAULT), ("paper", Self::PAPER)];
+    pub const NAMED: [(&'static str, Self); 2] =
+        [("default", Self::DEFAULT), ("paper", Self::PAPER)];
 
     /// The named setting `name`.
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::NAMED.iter().find(|(n, _)| *n == name).map(|&(_, p)| p)
+        Self::NAMED
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|&(_, p)| p)
     }
 
     /// These parameters searching `k` objects.

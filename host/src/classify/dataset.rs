@@ -123,6 +123,46 @@ pub fn shape_inputs(mask: &[u8], w: usize, h: usize) -> Result<Option<ShapePair>
 /// [`HostError::Dataset`] for a missing directory, no class folder, a
 /// class folder without (usable) images; decoding and I/O errors.
 pub fn load_dataset(dir: &Path) -> Result<Dataset> {
+    let (classes, class_dirs, files) = dataset_files(dir)?;
+    let vectors: Vec<Result<Option<ShapePair>>> = files
+        .par_iter()
+        .map(|(_, _, p)| {
+            let img = crate::io::load_image(p)?;
+            let (m, w, h) = mask_of(&img);
+            shape_inputs(&m, w, h)
+        })
+        .collect();
+    let mut samples = vec![];
+    let mut skipped = 0;
+    for ((key, label, _), v) in files.into_iter().zip(vectors) {
+        match v? {
+            Some((x, shape)) => samples.push(Sample {
+                key,
+                label,
+                x,
+                shape,
+            }),
+            None => skipped += 1,
+        }
+    }
+    for (c, cd) in class_dirs.iter().enumerate() {
+        if !samples.iter().any(|s| s.label == c) {
+            return Err(dataset_error(cd, "no image with a usable mask"));
+        }
+    }
+    Ok(Dataset {
+        classes,
+        samples,
+        skipped,
+    })
+}
+
+/// The image files of an image-folder dataset: `(key, label, path)`.
+type Files = Vec<(String, usize, PathBuf)>;
+
+/// The class names, class folders and image files of `dir`, without
+/// reading any image.
+fn dataset_files(dir: &Path) -> Result<(Vec<String>, Vec<PathBuf>, Files)> {
     if !dir.is_dir() {
         return Err(dataset_error(dir, "not a directory"));
     }
@@ -154,40 +194,17 @@ pub fn load_dataset(dir: &Path) -> Result<Dataset> {
         }
         classes.push(name);
     }
-    let vectors: Vec<Result<Option<ShapePair>>> = files
-        .par_iter()
-        .map(|(_, _, p)| {
-            let img = image::open(p).map_err(|source| HostError::Decode {
-                path: p.clone(),
-                source,
-            })?;
-            let (m, w, h) = mask_of(&img);
-            shape_inputs(&m, w, h)
-        })
-        .collect();
-    let mut samples = vec![];
-    let mut skipped = 0;
-    for ((key, label, _), v) in files.into_iter().zip(vectors) {
-        match v? {
-            Some((x, shape)) => samples.push(Sample {
-                key,
-                label,
-                x,
-                shape,
-            }),
-            None => skipped += 1,
-        }
-    }
-    for (c, cd) in class_dirs.iter().enumerate() {
-        if !samples.iter().any(|s| s.label == c) {
-            return Err(dataset_error(cd, "no image with a usable mask"));
-        }
-    }
-    Ok(Dataset {
-        classes,
-        samples,
-        skipped,
-    })
+    Ok((classes, class_dirs, files))
+}
+
+/// Classes and image files of a dataset folder, from its listing alone
+/// (for the memory check before training).
+///
+/// # Errors
+/// As [`load_dataset`] for the folder's layout.
+pub fn count_images(dir: &Path) -> Result<(usize, usize)> {
+    let (classes, _, files) = dataset_files(dir)?;
+    Ok((classes.len(), files.len()))
 }
 
 /// A seeded stratified split: for each class, `round(fraction · n_c)` of

@@ -27,6 +27,7 @@
 //! Rates are fractions in `[0, 1]` throughout; the paper prints them in %.
 
 pub mod dataset;
+pub mod eval_set;
 pub mod families;
 pub mod metrics;
 pub mod mlp;

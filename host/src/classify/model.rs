@@ -51,12 +51,78 @@ pub struct ModelFile {
     pub w2: Vec<f64>,
     /// Output biases.
     pub b2: Vec<f64>,
+    /// CRC-32 of the blob written with this sidecar, so that a blob and a
+    /// sidecar of different runs are told apart (absent in older files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blob_crc32: Option<u32>,
+    /// The float class templates (each class's mean network output over
+    /// the training split), so that `eval` can score a folder that does not
+    /// hold the training images (absent in older files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub templates: Option<Vec<Vec<f32>>>,
 }
 
 pub(crate) fn bad_model(path: &Path, reason: impl Into<String>) -> HostError {
     HostError::BadModel {
         path: path.to_path_buf(),
         reason: reason.into(),
+    }
+}
+
+/// What a model file holds, told by its content (never by its name).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelKind {
+    /// An int8 model blob (`PGML` magic, docs/MODEL_FORMAT.md).
+    Blob,
+    /// A JSON object: a float sidecar, or meant to be one.
+    Sidecar,
+    /// An empty file.
+    Empty,
+    /// Neither.
+    Other,
+}
+
+impl ModelKind {
+    /// The kind of `bytes`.
+    pub fn of(bytes: &[u8]) -> Self {
+        if bytes.starts_with(&protogist::mlp::blob::MAGIC) {
+            return Self::Blob;
+        }
+        match bytes.iter().find(|b| !b.is_ascii_whitespace()) {
+            None if bytes.is_empty() => Self::Empty,
+            Some(b'{') => Self::Sidecar,
+            _ => Self::Other,
+        }
+    }
+
+    /// What the file is, for a message.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Blob => "an int8 PGML model blob",
+            Self::Sidecar => "a JSON file",
+            Self::Empty => "empty",
+            Self::Other => "neither a PGML model blob nor a JSON float sidecar",
+        }
+    }
+}
+
+/// Parses a float sidecar, after telling by its content that it is one.
+///
+/// # Errors
+/// [`HostError::BadModel`] saying what the file is instead (a blob, empty,
+/// something else) and that the JSON float sidecar written by `protogist
+/// train` was expected, or where the JSON is malformed.
+pub fn parse_sidecar(bytes: &[u8], path: &Path) -> Result<ModelFile> {
+    match ModelKind::of(bytes) {
+        ModelKind::Sidecar => serde_json::from_slice(bytes)
+            .map_err(|e| bad_model(path, format!("malformed JSON float sidecar: {e}"))),
+        kind => Err(bad_model(
+            path,
+            format!(
+                "is {}; expected the JSON float sidecar written by `protogist train` (model.bin.json)",
+                kind.describe()
+            ),
+        )),
     }
 }
 
@@ -129,6 +195,8 @@ mod tests {
             b1: net.b1.to_vec(),
             w2: net.w2.iter().copied().collect(),
             b2: net.b2.to_vec(),
+            blob_crc32: None,
+            templates: None,
         }
     }
 

@@ -9,20 +9,20 @@
 //! names, training parameters and split. `eval` reads both.
 
 use super::dataset::{load_dataset, stratified_split, Dataset};
+use super::eval_set::{eval_set, outputs as eval_outputs};
 use super::metrics::{cmc, Det};
 use super::mlp::{Mlp, GAMMA};
 use super::model::{bad_model, ModelFile, MODEL_FORMAT};
-use super::plots::{cmc_points, write_plot, Curve, PlotKind, ORANGE, SHAPE_BLUE};
+use super::plots::{add_plot, cmc_points, Curve, PlotKind, ORANGE, SHAPE_BLUE};
 use super::quant::{int_outputs, int_scores, model_error, quantize, score_sets};
 use super::rules::{evaluate, ranked, Evaluation, Templates};
 use super::train::{train, TrainParams};
 use crate::error::{HostError, Result};
-use crate::io::{ensure_dir, write_atomic};
+use crate::io::ensure_dir;
 use crate::summary::Summary;
 use ndarray::Array2;
 use protogist::shape::SHAPE_LEN;
 use serde::Serialize;
-use std::collections::HashSet;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -112,6 +112,7 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
     if opts.hidden == 0 {
         return Err(HostError::ZeroDimension { name: "hidden" });
     }
+    crate::limits::check_hidden(opts.hidden)?;
     if opts.epochs == 0 {
         return Err(HostError::ZeroDimension { name: "epochs" });
     }
@@ -173,6 +174,8 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
         b1: net.b1.to_vec(),
         w2: net.w2.iter().copied().collect(),
         b2: net.b2.to_vec(),
+        blob_crc32: None,
+        templates: Some(train_templates(&out, &y, n)?),
     };
     if let Some(parent) = opts.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         ensure_dir(parent)?;
@@ -191,9 +194,16 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
         &ds.classes,
         &train_meta(&model, &opts.dataset),
     )?;
+    let model = ModelFile {
+        blob_crc32: Some(protogist::mlp::blob::crc32(&blob)),
+        ..model
+    };
     let json = serde_json::to_vec(&model).map_err(|e| bad_model(&opts.out, e.to_string()))?;
-    write_atomic(&sidecar_path(&opts.out), &json)?;
-    write_atomic(&opts.out, &blob)?;
+    // The blob and its sidecar are one result: both or neither.
+    let mut files = crate::output::Output::files();
+    files.add(&opts.out, blob.clone());
+    files.add(sidecar_path(&opts.out), json);
+    files.commit()?;
     let mut s = Summary::new(format!("protogist train: {}", opts.dataset.display()));
     s.push("classes", n);
     s.push(
@@ -241,6 +251,24 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
     );
     s.push("time", format!("{:.1} s", start.elapsed().as_secs_f64()));
     Ok(s)
+}
+
+/// The float templates of `train`'s sidecar: each class's mean output
+/// over the training split (`outputs`, one row per image of class
+/// `labels[i]`).
+///
+/// # Errors
+/// [`ClassifyError`](super::ClassifyError) for a class without images.
+fn train_templates(outputs: &Array2<f64>, labels: &[usize], n: usize) -> Result<Vec<Vec<f32>>> {
+    let rows: Vec<Vec<f32>> = outputs
+        .rows()
+        .into_iter()
+        .map(|r| r.iter().map(|&o| o as f32).collect())
+        .collect();
+    let t = Templates::from_outputs(&rows, labels, n)?;
+    Ok((0..n)
+        .map(|c| t.template(c).map(<[f32]>::to_vec).unwrap_or_default())
+        .collect())
 }
 
 /// The metadata string a blob records: how `train` made it (the dataset
@@ -327,11 +355,32 @@ pub struct EvalReport {
 /// I/O errors, a malformed blob or sidecar.
 pub fn load_models(path: &std::path::Path) -> Result<(Vec<u8>, ModelFile)> {
     let blob = std::fs::read(path).map_err(|e| HostError::io(path, e))?;
+    let kind = super::model::ModelKind::of(&blob);
+    if kind != super::model::ModelKind::Blob {
+        return Err(bad_model(
+            path,
+            format!(
+                "is {}, not a protogist model blob (--model takes the int8 PGML blob written by `protogist train`, its JSON float sidecar beside it)",
+                kind.describe()
+            ),
+        ));
+    }
     protogist::mlp::Model::parse(&blob).map_err(|e| bad_model(path, model_error(e)))?;
     let side = sidecar_path(path);
     let text = std::fs::read(&side).map_err(|e| HostError::io(&side, e))?;
-    let model: ModelFile =
-        serde_json::from_slice(&text).map_err(|e| bad_model(&side, e.to_string()))?;
+    let model: ModelFile = super::model::parse_sidecar(&text, &side)?;
+    if let Some(crc) = model.blob_crc32 {
+        let got = protogist::mlp::blob::crc32(&blob);
+        if got != crc {
+            return Err(bad_model(
+                path,
+                format!(
+                    "the blob (CRC-32 {got:#010x}) is not the one its sidecar {} was written with ({crc:#010x}): the two files come from different runs",
+                    side.display()
+                ),
+            ));
+        }
+    }
     Ok((blob, model))
 }
 
@@ -366,51 +415,22 @@ pub fn evaluate_model(opts: &EvalOptions) -> Result<(EvalReport, String)> {
         ));
     }
     let ds = load_dataset(&opts.dataset)?;
-    if ds.classes != model.classes {
-        return Err(HostError::Dataset {
-            path: opts.dataset.clone(),
-            reason: format!(
-                "its {} classes are not the model's {}",
-                ds.classes.len(),
-                model.classes.len()
-            ),
-        });
-    }
-    let train_set: HashSet<&str> = model.train.iter().map(String::as_str).collect();
-    let test_set: HashSet<&str> = model.test.iter().map(String::as_str).collect();
-    let outputs = |pick: &HashSet<&str>| {
-        let (x, labels) = inputs(&ds, |i| pick.contains(ds.samples[i].key.as_str()));
-        let y = net.predict(x.view());
-        let v: Vec<Vec<f32>> = y
-            .rows()
-            .into_iter()
-            .map(|r| r.iter().map(|&o| o as f32).collect())
-            .collect();
-        (v, labels)
-    };
-    let (train_out, train_y) = outputs(&train_set);
-    let (test_out, test_y) = outputs(&test_set);
-    if test_out.is_empty() {
-        return Err(HostError::InvalidArgument {
-            name: "dataset",
-            reason: "none of the model's test images is in it (trained with --test-fraction 0?)"
-                .into(),
-        });
-    }
-    let n = ds.classes.len();
-    let templates = Templates::from_outputs(&train_out, &train_y, n)?;
+    let set = eval_set(&ds, &model, &net, &opts.dataset, &side)?;
+    let n = model.classes.len();
+    let test_out = eval_outputs(&net, &ds, &set.probes);
+    let test_y = set.labels.clone();
+    let templates = set.templates.clone();
     let ev = evaluate(&templates, &test_out, &test_y)?;
-    let (fm, f_rates, f_det) = EvalMetrics::of(&ev, train_out.len())?;
+    let (fm, f_rates, f_det) = EvalMetrics::of(&ev, set.train)?;
     // The int8 network on the same probes, with the blob's templates.
-    let test_raw: Vec<Vec<i16>> = ds
-        .samples
+    let test_raw: Vec<Vec<i16>> = set
+        .probes
         .iter()
-        .filter(|s| test_set.contains(s.key.as_str()))
-        .map(|s| s.shape.clone())
+        .map(|&i| ds.samples[i].shape.clone())
         .collect();
     let int_s = int_scores(&qm, &int_outputs(&qm, &test_raw)?)?;
     let iev = score_sets(&int_s, &test_y);
-    let (im, i_rates, i_det) = EvalMetrics::of(&iev, train_out.len())?;
+    let (im, i_rates, i_det) = EvalMetrics::of(&iev, set.train)?;
     let agree = test_out
         .iter()
         .zip(&int_s)
@@ -444,6 +464,7 @@ pub fn evaluate_model(opts: &EvalOptions) -> Result<(EvalReport, String)> {
         ]
     };
     let det_pts = |d: &Det| d.points().iter().map(|p| (p.far, p.frr)).collect();
+    let mut files = crate::output::Output::dir(&opts.out);
     for (name, kind, c) in [
         (
             "cmc",
@@ -457,11 +478,13 @@ pub fn evaluate_model(opts: &EvalOptions) -> Result<(EvalReport, String)> {
         ),
         ("roc", PlotKind::Roc, curves(f_det.roc(), i_det.roc())),
     ] {
-        write_plot(&opts.out, name, kind, &c, (480, 360))?;
+        add_plot(&mut files, name, kind, &c, (480, 360))?;
     }
     let json =
         serde_json::to_string_pretty(&report).map_err(|e| bad_model(&opts.model, e.to_string()))?;
-    write_atomic(&opts.out.join("metrics.json"), json.as_bytes())?;
+    files.add("metrics.json", json.clone().into_bytes());
+    // Plots and metrics are one result: all or nothing.
+    files.commit()?;
     Ok((report, json))
 }
 

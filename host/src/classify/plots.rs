@@ -24,7 +24,7 @@ use super::probit::probit;
 use crate::canvas::{draw_marks, TextMark};
 use crate::canvas::{HAnchor, VAnchor};
 use crate::error::{HostError, Result};
-use crate::io::{ensure_dir, write_atomic};
+use crate::io::ensure_dir;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -221,8 +221,35 @@ pub fn render_svg(kind: PlotKind, curves: &[Curve], size: (u32, u32)) -> String 
     s
 }
 
-/// Writes `DIR/{name}.png` and `DIR/{name}.svg`, each atomically; returns
-/// their paths.
+/// Adds `{name}.png` and `{name}.svg` to `out` (an
+/// [`Output::dir`](crate::output::Output::dir) result).
+///
+/// # Errors
+/// [`HostError::Encode`].
+pub fn add_plot(
+    out: &mut crate::output::Output,
+    name: &str,
+    kind: PlotKind,
+    curves: &[Curve],
+    size: (u32, u32),
+) -> Result<()> {
+    let img = render_png(kind, curves, size);
+    let mut png = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut png, image::ImageFormat::Png)
+        .map_err(|source| HostError::Encode {
+            name: name.to_owned(),
+            source,
+        })?;
+    out.add(format!("{name}.png"), png.into_inner());
+    out.add(
+        format!("{name}.svg"),
+        render_svg(kind, curves, size).into_bytes(),
+    );
+    Ok(())
+}
+
+/// Writes `DIR/{name}.png` and `DIR/{name}.svg` as one result of loose
+/// files ([`add_plot`], [`crate::output`]); returns their paths.
 ///
 /// # Errors
 /// [`HostError::Io`], [`HostError::NotADirectory`] or
@@ -235,18 +262,18 @@ pub fn write_plot(
     size: (u32, u32),
 ) -> Result<[PathBuf; 2]> {
     ensure_dir(dir)?;
-    let img = render_png(kind, curves, size);
-    let mut png = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut png, image::ImageFormat::Png)
-        .map_err(|source| HostError::Encode {
-            name: name.to_owned(),
-            source,
-        })?;
-    let png_path = dir.join(format!("{name}.png"));
-    let svg_path = dir.join(format!("{name}.svg"));
-    write_atomic(&png_path, png.get_ref())?;
-    write_atomic(&svg_path, render_svg(kind, curves, size).as_bytes())?;
-    Ok([png_path, svg_path])
+    let mut staged = crate::output::Output::dir(dir);
+    add_plot(&mut staged, name, kind, curves, size)?;
+    // Loose files: other results in `dir` are not this one's to replace.
+    let mut out = crate::output::Output::files();
+    for (path, bytes) in staged.into_files() {
+        out.add(path, bytes);
+    }
+    out.commit()?;
+    Ok([
+        dir.join(format!("{name}.png")),
+        dir.join(format!("{name}.svg")),
+    ])
 }
 
 /// A CMC curve's points from the rates at ranks 1..N.

@@ -7,12 +7,12 @@
 //! the same dataset it rebuilds the blob `train` wrote, bit for bit.
 
 use super::dataset::load_dataset;
-use super::model::{bad_model, ModelFile};
+use super::model::{bad_model, parse_sidecar, ModelKind};
 use super::quant::{emit_rust, model_error, quantize};
 use crate::error::{HostError, Result};
-use crate::io::{ensure_dir, write_atomic};
+use crate::io::ensure_dir;
+use crate::output::Output;
 use crate::summary::Summary;
-use protogist::mlp::blob::MAGIC;
 use protogist::mlp::Model;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -35,11 +35,13 @@ pub struct QuantizeOptions {
     pub emit_rust: Option<PathBuf>,
 }
 
-fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+/// Adds `bytes` as `path` to `out`, creating its folder.
+fn add_file(out: &mut Output, path: &Path, bytes: Vec<u8>) -> Result<()> {
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         ensure_dir(parent)?;
     }
-    write_atomic(path, bytes)
+    out.add(path, bytes);
+    Ok(())
 }
 
 /// `protogist quantize`.
@@ -55,12 +57,12 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
         });
     }
     let bytes = std::fs::read(&opts.model).map_err(|e| HostError::io(&opts.model, e))?;
-    let blob = if bytes.starts_with(&MAGIC) {
+    let kind = ModelKind::of(&bytes);
+    let blob = if kind == ModelKind::Blob {
         Model::parse(&bytes).map_err(|e| bad_model(&opts.model, model_error(e)))?;
         bytes
-    } else {
-        let file: ModelFile =
-            serde_json::from_slice(&bytes).map_err(|e| bad_model(&opts.model, e.to_string()))?;
+    } else if kind == ModelKind::Sidecar {
+        let file = parse_sidecar(&bytes, &opts.model)?;
         let net = file.network(&opts.model)?;
         let dir = opts.dataset.as_ref().ok_or(HostError::InvalidArgument {
             name: "dataset",
@@ -82,6 +84,14 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
             .unzip();
         let meta = super::model_cmd::train_meta(&file, dir);
         quantize(&net, &calib, &labels, &file.classes, &meta)?
+    } else {
+        return Err(bad_model(
+            &opts.model,
+            format!(
+                "is {}; --model takes an int8 PGML blob (model.bin) or its JSON float sidecar (model.bin.json)",
+                kind.describe()
+            ),
+        ));
     };
     let model = Model::parse(&blob).map_err(|e| bad_model(&opts.model, model_error(e)))?;
     let mut s = Summary::new(format!("protogist quantize: {}", opts.model.display()));
@@ -96,14 +106,17 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
         ),
     );
     s.push("blob", format!("{} B", blob.len()));
+    // The blob and the Rust source are one result: both or neither.
+    let mut files = Output::files();
     if let Some(out) = &opts.out {
-        write_file(out, &blob)?;
+        add_file(&mut files, out, blob.clone())?;
         s.push("wrote", out.display());
     }
     if let Some(rs) = &opts.emit_rust {
         let what = format!("{} ({})", opts.model.display(), model.meta());
-        write_file(rs, emit_rust(&blob, &what).as_bytes())?;
+        add_file(&mut files, rs, emit_rust(&blob, &what).into_bytes())?;
         s.push("wrote", rs.display());
     }
+    files.commit()?;
     Ok(s)
 }
