@@ -11,6 +11,8 @@ pub mod camera;
 pub mod mlp_run;
 pub mod objects;
 pub mod probe;
+pub mod product;
+pub mod stereo_camera;
 pub mod stereo_run;
 
 pub use protogist as pg;
