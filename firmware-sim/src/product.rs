@@ -15,6 +15,7 @@ use embedded_hal::digital::{self, OutputPin};
 
 use crate::camera::CameraError;
 use crate::pg::checksum::Fnv1a;
+use crate::pg::conspicuity::Luv;
 use crate::pg::image::ImageError;
 use crate::pg::mlp::Identity;
 use crate::pg::pipeline::{
@@ -406,8 +407,13 @@ pub struct RamPlan {
     pub kept: usize,
     /// Stereo's scratch.
     pub stereo: usize,
-    /// CIELUV map, labelling and edge map of the colour phase.
+    /// The colour phase: the CIELUV map, the edge map and the rest (the
+    /// labelling of the completion, its region tables, row scratch).
     pub colour: usize,
+    /// The colour phase's CIELUV map.
+    pub luv: usize,
+    /// The colour phase's edge map (one `bool` per pixel).
+    pub edge_map: usize,
     /// Segmentation and the classifier.
     pub objects: usize,
     /// The workspace: `kept` plus the largest phase.
@@ -422,6 +428,8 @@ impl RamPlan {
             kept: layout::kept_bytes(width, height, &PARAMS),
             stereo: layout::stereo_bytes(width, height, &PARAMS),
             colour: layout::colour_bytes(width, height),
+            luv: width * height * core::mem::size_of::<Luv>(),
+            edge_map: width * height,
             objects: layout::object_bytes(width, height, &PARAMS),
             workspace: workspace_bytes(width, height, &PARAMS),
         }
@@ -433,7 +441,9 @@ impl RamPlan {
     }
 }
 
-/// `ram-plan WxH frames=… kept=… stereo=… colour=… objects=… workspace=… total=…`.
+/// `ram-plan WxH frames=… kept=… stereo=… colour=… luv=… edge-map=…
+/// labelling=… objects=… workspace=… total=…` (`labelling` is the rest of
+/// the colour phase).
 ///
 /// # Errors
 /// When `out` fails.
@@ -441,11 +451,14 @@ pub fn write_ram_plan(out: &mut impl Write, width: usize, height: usize) -> fmt:
     let r = RamPlan::at(width, height);
     writeln!(
         out,
-        "ram-plan {width}x{height} frames={} kept={} stereo={} colour={} objects={} workspace={} total={}",
+        "ram-plan {width}x{height} frames={} kept={} stereo={} colour={} luv={} edge-map={} labelling={} objects={} workspace={} total={}",
         r.frames,
         r.kept,
         r.stereo,
         r.colour,
+        r.luv,
+        r.edge_map,
+        r.colour.saturating_sub(r.luv + r.edge_map),
         r.objects,
         r.workspace,
         r.total()

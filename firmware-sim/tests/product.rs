@@ -186,7 +186,7 @@ fn rgb565_expands_by_bit_replication() {
     assert_eq!(expand_rgb565(0xffff), Rgb8::new(255, 255, 255));
     // Red 0b10000 -> 0b10000_100, green 0b100000 -> 0b100000_10.
     assert_eq!(
-        expand_rgb565(0b10000_100000_10000),
+        expand_rgb565((0b10000 << 11) | (0b10_0000 << 5) | 0b10000),
         Rgb8::new(132, 130, 132)
     );
     // Expanding is monotonic in each channel.

@@ -4,6 +4,7 @@ mod bench;
 mod ci;
 mod data;
 mod firmware;
+mod product;
 mod setup;
 mod util;
 
@@ -15,7 +16,7 @@ commands:
   ci          fmt, clippy, fetch-data, tests, no_std core build, firmware under QEMU vs host
   fetch-data  download the aloe (Debian opencv-doc) and motorcycle (scikit-image wheel)
               stereo pairs into the data cache
-  firmware    build the Cortex-M firmware and run it under QEMU mps2-an386
+  firmware    build the Cortex-M firmware and the product and run them under QEMU mps2-an386
   bench       measure and write docs/BENCHMARKS.md
   setup       install missing system packages / rustup components";
 
@@ -24,7 +25,16 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci::run(),
         Some("fetch-data") => data::fetch().map(|_| ()),
-        Some("firmware") => firmware::build_and_run().map(|_| ()),
+        Some("firmware") => firmware::build_and_run()
+            .and_then(|_| product::run())
+            .map(|p| {
+                println!(
+                    "{} product lines equal on host, QEMU and {}\n{}",
+                    p.lines,
+                    product::GOLDEN,
+                    p.report
+                )
+            }),
         Some("bench") => bench::run(),
         Some("setup") => setup::ensure_all(),
         Some("-h" | "--help" | "help") => {
