@@ -2,7 +2,7 @@
 //! pipeline (`protogist::pipeline`) → report each proto-object → LED.
 //!
 //! The pair comes from a [`StereoCamera`] in the sensor's RGB565 format;
-//! the pipeline reads each eye as RGB rows ([`Rgb565View`]). Frames and
+//! the pipeline reads each eye as RGB rows ([`crate::stereo_camera::Rgb565View`]). Frames and
 //! workspace are the caller's (statics in `.bss` on the board, sized by
 //! [`FRAME_LEN`] and [`WORKSPACE_WORDS`]); the decoder tables and the
 //! model are `const`s in flash. The report's `product`, `object` and
