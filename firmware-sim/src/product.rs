@@ -21,7 +21,8 @@ use crate::pg::mlp::Identity;
 use crate::pg::pipeline::{
     self, layout, workspace_bytes, Frame, Observer, Pipeline, PipelineError, PipelineParams, Stage,
 };
-use crate::pg::segment::STAT_FRAC_BITS;
+use crate::pg::segment::{Step as SegmentStep, STAT_FRAC_BITS};
+use crate::pg::stereo::Step as StereoStep;
 use crate::stereo_camera::{pair_len, StereoCamera};
 use crate::Ticks;
 
@@ -76,12 +77,75 @@ fn stage_index(s: Stage) -> Option<usize> {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StageTicks(pub [u64; 7]);
 
-/// Times the pipeline's stages as it enters them.
+/// The steps of the stereo and figure-ground stages, as the report names
+/// them. `stereo-readout` includes the phase refinement, which runs on
+/// each row the read-out emits.
+pub const STEPS: [&str; 13] = [
+    "stereo-pyramid",
+    "stereo-filters",
+    "stereo-energies",
+    "stereo-readout",
+    "stereo-sgm",
+    "seg-foreground",
+    "seg-slice",
+    "seg-region",
+    "seg-refine",
+    "seg-nms",
+    "seg-close",
+    "seg-fill",
+    "seg-mask",
+];
+
+fn stereo_step_index(s: StereoStep) -> usize {
+    match s {
+        StereoStep::Pyramid => 0,
+        StereoStep::Filters => 1,
+        StereoStep::Energies => 2,
+        StereoStep::Readout => 3,
+        StereoStep::Sgm => 4,
+    }
+}
+
+fn segment_step_index(s: SegmentStep) -> usize {
+    5 + match s {
+        SegmentStep::Foreground => 0,
+        SegmentStep::Slice => 1,
+        SegmentStep::Region => 2,
+        SegmentStep::Refine => 3,
+        SegmentStep::Nms => 4,
+        SegmentStep::Close => 5,
+        SegmentStep::Fill => 6,
+        SegmentStep::Mask => 7,
+    }
+}
+
+/// Ticks per step of one frame ([`STEPS`] order). A stage's steps need not
+/// add up to it: its set-up between steps is in none.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepTicks(pub [u64; 13]);
+
+/// Times the pipeline's stages as it enters them, and the steps of stereo
+/// (told as they start) and figure-ground (told as they end).
 struct StageClock<'t, T: Ticks> {
     ticks: &'t mut T,
     stage: Option<usize>,
     since: u64,
     spent: StageTicks,
+    /// The stereo step running, and when the last step mark was.
+    step: Option<usize>,
+    step_since: u64,
+    steps: StepTicks,
+}
+
+impl<T: Ticks> StageClock<'_, T> {
+    /// Closes the running stereo step at `now`.
+    fn close_step(&mut self, now: u64) {
+        if let Some(slot) = self.step.and_then(|i| self.steps.0.get_mut(i)) {
+            *slot += now - self.step_since;
+        }
+        self.step = None;
+        self.step_since = now;
+    }
 }
 
 impl<T: Ticks> Observer for StageClock<'_, T> {
@@ -90,8 +154,24 @@ impl<T: Ticks> Observer for StageClock<'_, T> {
         if let Some(slot) = self.stage.and_then(|i| self.spent.0.get_mut(i)) {
             *slot += now - self.since;
         }
+        self.close_step(now);
         self.stage = stage_index(stage);
         self.since = now;
+    }
+
+    fn stereo_step(&mut self, step: StereoStep) {
+        let now = self.ticks.now();
+        self.close_step(now);
+        self.step = Some(stereo_step_index(step));
+    }
+
+    fn segment_step(&mut self, step: SegmentStep) {
+        // Told when the step is done: the time since the last mark is its.
+        let now = self.ticks.now();
+        if let Some(slot) = self.steps.0.get_mut(segment_step_index(step)) {
+            *slot += now - self.step_since;
+        }
+        self.step_since = now;
     }
 }
 
@@ -184,6 +264,8 @@ pub struct FrameSummary {
     pub checksum: u32,
     /// Ticks per stage.
     pub ticks: StageTicks,
+    /// Ticks per step of stereo and figure-ground.
+    pub steps: StepTicks,
     /// Ticks from the capture's start to the pipeline's result.
     pub total: u64,
 }
@@ -243,12 +325,15 @@ impl<'a, C: StereoCamera, P: OutputPin> Product<'a, C, P> {
             stage: Some(1),
             since: t1,
             spent: StageTicks::default(),
+            step: None,
+            step_since: t1,
+            steps: StepTicks::default(),
         };
         let result = self
             .pipeline
             .run_observed(&left, &right, workspace, &mut clock)
             .map_err(ProductError::Pipeline)?;
-        let mut spent = clock.spent;
+        let (mut spent, steps) = (clock.spent, clock.steps);
         let total = clock.ticks.now() - t0;
         spent.0[0] = t1 - t0;
         let checksum = write_frame(out, &self.pipeline, &result)?;
@@ -259,6 +344,7 @@ impl<'a, C: StereoCamera, P: OutputPin> Product<'a, C, P> {
             objects: result.objects().len(),
             checksum,
             ticks: spent,
+            steps,
             total,
         })
     }

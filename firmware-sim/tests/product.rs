@@ -268,3 +268,40 @@ fn bad_input_gets_typed_errors() {
         .views(&frame[..FRAME_LEN - 1])
         .is_err());
 }
+
+/// A clock that advances one tick per reading.
+struct Counter(u64);
+
+impl firmware_sim::Ticks for Counter {
+    fn now(&mut self) -> u64 {
+        self.0 += 1;
+        self.0
+    }
+}
+
+#[test]
+fn every_stage_and_step_is_timed() {
+    let mut product = Product::new(SimStereoCamera::new(), MockLed::default(), pipeline());
+    let (mut frame, mut ws) = (vec![0u16; FRAME_LEN], vec![0u64; WORKSPACE_WORDS]);
+    let mut ticks = Counter(0);
+    let s = product
+        .frame(
+            (WIDTH, HEIGHT),
+            &mut frame,
+            &mut ws,
+            &mut ticks,
+            &mut String::new(),
+        )
+        .unwrap();
+    assert!(s.ticks.0.iter().all(|&t| t > 0), "{:?}", s.ticks);
+    assert!(s.ticks.0.iter().sum::<u64>() <= s.total);
+    let steps = firmware_sim::product::STEPS;
+    for (name, t) in steps.iter().zip(s.steps.0) {
+        assert!(t > 0, "{name} not timed: {:?}", s.steps);
+    }
+    let stereo: u64 = s.steps.0[..5].iter().sum();
+    assert!(
+        stereo <= s.ticks.0[1],
+        "stereo's steps are within the stage"
+    );
+}

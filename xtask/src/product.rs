@@ -200,12 +200,31 @@ pub fn report(stdout: &str, elf: &Sizes, ram_budget: u64) -> Result<String> {
         grouped(INSTRUCTION_BUDGET),
         fits(total - capture.min(total), INSTRUCTION_BUDGET)
     ));
+    let steps: Vec<(&str, u64)> = stdout
+        .lines()
+        .filter_map(|l| match l.split_whitespace().collect::<Vec<_>>()[..] {
+            ["instr", "step", name, n] => n.parse().ok().map(|n| (name, n)),
+            _ => None,
+        })
+        .collect();
+    let row = |name: &str, n: u64, indent: usize| {
+        format!(
+            "{:indent$}{name:<16} {:>12} ({:.1} per pixel)\n",
+            "",
+            grouped(n),
+            n as f64 / (160.0 * 120.0)
+        )
+    };
     for (name, n) in &stages {
-        r.push_str(&format!(
-            "    {name:<12} {:>12} ({:.1} per pixel)\n",
-            grouped(*n),
-            *n as f64 / (160.0 * 120.0)
-        ));
+        r.push_str(&row(name, *n, 4));
+        let prefix = match *name {
+            "stereo" => "stereo-",
+            "segment" => "seg-",
+            _ => continue,
+        };
+        for (step, n) in steps.iter().filter(|s| s.0.starts_with(prefix)) {
+            r.push_str(&row(step, *n, 6));
+        }
     }
     Ok(r)
 }
@@ -239,6 +258,7 @@ object 0 box=64,26,53x69 area=2769 delta=11 class=04_circle cos=0.9213 verdict=k
 objects-checksum 160x120 0x41f566b2
 instr stage capture 20000000
 instr stage stereo 28000000
+instr step stereo-sgm 3000000
 instr total 48000000
 ram-plan 160x120 frames=76800 kept=92160 stereo=69600 colour=244056 luv=115200 edge-map=19200 labelling=109656 objects=70008 workspace=336216 total=413016
 ram-plan 128x96 frames=49152 kept=61056 stereo=53800 colour=160440 luv=73728 edge-map=12288 labelling=74424 objects=47280 workspace=221496 total=270648
@@ -276,6 +296,10 @@ stack peak 39524 bytes
         assert!(r.contains("colour (244,056 B: CIELUV map 115,200 B"), "{r}");
         assert!(r.contains("28,000,000 without the simulated"), "{r}");
         assert!(r.contains("budget 32,000,000: fits"), "{r}");
+        assert!(
+            r.contains("\n      stereo-sgm          3,000,000 (156.2 per pixel)\n"),
+            "{r}"
+        );
         let small = Sizes {
             flash: 1,
             ram: 100_000,

@@ -25,7 +25,7 @@ mod mcu {
     use firmware_sim::pg::pipeline::Pipeline;
     use firmware_sim::product::{
         write_pipeline_error, write_ram_plan, Product, FRAME_LEN, HEIGHT, MODEL, PARAMS, STAGES,
-        TABLES, WIDTH, WORKSPACE_WORDS,
+        STEPS, TABLES, WIDTH, WORKSPACE_WORDS,
     };
     use firmware_sim::stereo_camera::SimStereoCamera;
 
@@ -65,6 +65,9 @@ mod mcu {
         for (name, t) in STAGES.iter().zip(s.ticks.0) {
             writeln!(out, "instr stage {name} {}", to_instructions(t))?;
         }
+        for (name, t) in STEPS.iter().zip(s.steps.0) {
+            writeln!(out, "instr step {name} {}", to_instructions(t))?;
+        }
         let total = to_instructions(s.total);
         writeln!(out, "instr total {total}")?;
         write_ipp(out, "frame", WIDTH, HEIGHT, total)?;
@@ -99,7 +102,7 @@ mod host {
     use embedded_hal::digital::{ErrorType, OutputPin};
     use firmware_sim::pg::pipeline::Pipeline;
     use firmware_sim::product::{
-        write_ram_plan, Product, FRAME_LEN, HEIGHT, MODEL, PARAMS, STAGES, TABLES, WIDTH,
+        write_ram_plan, Product, FRAME_LEN, HEIGHT, MODEL, PARAMS, STAGES, STEPS, TABLES, WIDTH,
         WORKSPACE_WORDS,
     };
     use firmware_sim::stereo_camera::SimStereoCamera;
@@ -153,6 +156,9 @@ mod host {
         // Writing into a String cannot fail.
         for (name, t) in STAGES.iter().zip(s.ticks.0) {
             let _ = writeln!(out, "host-ns stage {name} {t}");
+        }
+        for (name, t) in STEPS.iter().zip(s.steps.0) {
+            let _ = writeln!(out, "host-ns step {name} {t}");
         }
         let _ = writeln!(out, "host-ns total {}", s.total);
         let _ = write_ram_plan(&mut out, WIDTH, HEIGHT);
