@@ -12,6 +12,8 @@ pub mod display;
 pub mod mlp_run;
 pub mod objects;
 pub mod probe;
+pub mod product;
+pub mod stereo_camera;
 pub mod stereo_run;
 
 pub use protogist as pg;

@@ -23,12 +23,14 @@ const NOT_YET: &str = "not yet measured";
 
 pub fn run() -> Result<()> {
     let qemu = build_and_run()?;
+    let product = crate::product::run()?;
     let sections = [
         machine(),
         qemu_ipp(&qemu.stdout),
         stereo_m4(&qemu.stdout),
         stereo_points(&qemu.stdout),
         firmware_size(&qemu.stdout)?,
+        crate::product::bench_section(&product),
         host_criterion(),
         scratch(&qemu.stdout),
         segmentation_iou(),

@@ -2,7 +2,7 @@
 
 use crate::firmware::{build_and_run, build_thumb, compare, host_output, size_report};
 use crate::util::{self, host_cargo, step, Result};
-use crate::{data, setup};
+use crate::{data, product, setup};
 
 /// Wall time per step, and (passed, failed, ignored) test counts.
 type CiSummary = (Vec<(&'static str, f64)>, (u64, u64, u64));
@@ -74,6 +74,18 @@ pub fn run_ci() -> Result<CiSummary> {
         Ok((qemu, lines))
     })?;
     timed("firmware", t);
+    let (product, t) = step(
+        "product: core's pipeline on QEMU vs host vs the golden list",
+        product::run,
+    )?;
+    println!(
+        "{} product lines equal on host, QEMU and {} (QEMU run {:.1} s)\n{}",
+        product.lines,
+        product::GOLDEN,
+        product.qemu.secs,
+        product.report
+    );
+    timed("product", t);
     let (_, t) = step("instructions per pixel (QEMU -icount, SysTick)", || {
         println!(
             "{lines} checksum/edges lines equal on host and QEMU (QEMU run {:.1} s)",

@@ -16,6 +16,11 @@ pub fn elf() -> PathBuf {
     thumb_bin("firmware-sim")
 }
 
+/// The product's ELF (`firmware-sim/src/bin/product.rs`).
+pub fn product_elf() -> PathBuf {
+    thumb_bin("product")
+}
+
 /// The ELF of one firmware-sim binary of the thumbv7em build.
 fn thumb_bin(name: &str) -> PathBuf {
     root()
@@ -122,13 +127,14 @@ pub fn run_qemu(elf: &std::path::Path) -> Result<QemuRun> {
     })
 }
 
-/// Builds firmware-sim for thumbv7em, checks that neither the firmware
-/// nor the panic probe (every core stage on opaque inputs,
+/// Builds firmware-sim for thumbv7em, checks that neither the firmware,
+/// the product (core's pipeline, `firmware-sim/src/bin/product.rs`) nor
+/// the panic probe (every core stage on opaque inputs,
 /// `firmware-sim/src/probe.rs`) links a panic path ([`check_no_panic`]),
 /// and runs the firmware under QEMU.
 pub fn build_and_run() -> Result<QemuRun> {
     build_thumb("firmware-sim")?;
-    for bin in [elf(), thumb_bin("panic-probe")] {
+    for bin in [elf(), product_elf(), thumb_bin("panic-probe")] {
         println!("{}", check_no_panic(&bin)?);
     }
     run_qemu(&elf())
@@ -262,7 +268,7 @@ pub fn compare(host: &str, qemu: &str) -> Result<usize> {
 }
 
 /// Parses `LENGTH = 2M` style values for FLASH and RAM from memory.x.
-fn budget() -> Result<(u64, u64)> {
+pub fn budget() -> Result<(u64, u64)> {
     let path = root().join("firmware-sim/memory.x");
     let text =
         std::fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
@@ -289,11 +295,16 @@ fn budget() -> Result<(u64, u64)> {
     Ok((length("FLASH")?, length("RAM")?))
 }
 
-/// Section sizes from `arm-none-eabi-size -A`, summed against memory.x.
-pub fn size_report() -> Result<String> {
-    let elf = elf();
-    let text = output(Command::new("arm-none-eabi-size").arg("-A").arg(&elf))?;
-    let (flash_budget, ram_budget) = budget()?;
+/// Bytes of an ELF in flash and in static RAM, and its section rows.
+pub struct Sizes {
+    pub flash: u64,
+    pub ram: u64,
+    pub rows: String,
+}
+
+/// Section sizes of `elf` from `arm-none-eabi-size -A`.
+pub fn sizes(elf: &std::path::Path) -> Result<Sizes> {
+    let text = output(Command::new("arm-none-eabi-size").arg("-A").arg(elf))?;
     let (mut flash, mut ram, mut rows) = (0u64, 0u64, String::new());
     for line in text.lines() {
         let mut it = line.split_whitespace();
@@ -312,6 +323,18 @@ pub fn size_report() -> Result<String> {
         flash += if in_flash { size } else { 0 };
         ram += if in_ram { size } else { 0 };
     }
+    Ok(Sizes { flash, ram, rows })
+}
+
+/// Section sizes of the firmware, summed against memory.x.
+pub fn size_report() -> Result<String> {
+    size_report_of(&elf())
+}
+
+/// Section sizes of a firmware-sim ELF, summed against memory.x.
+pub fn size_report_of(elf: &std::path::Path) -> Result<String> {
+    let Sizes { flash, ram, rows } = sizes(elf)?;
+    let (flash_budget, ram_budget) = budget()?;
     let pct = |a: u64, b: u64| a as f64 * 100.0 / b as f64;
     let report = format!(
         "{rows}  flash: {flash} / {flash_budget} B ({:.1}%)\n  RAM (static): {ram} / {ram_budget} B ({:.1}%), {} B left for the stack\n",

@@ -5,6 +5,7 @@ mod ci;
 mod data;
 mod firmware;
 mod fuzz;
+mod product;
 mod setup;
 mod util;
 
@@ -16,7 +17,7 @@ commands:
   ci          fmt, clippy, fetch-data, tests, no_std core build, firmware under QEMU vs host
   fetch-data  download the aloe (Debian opencv-doc) and motorcycle (scikit-image wheel)
               stereo pairs into the data cache
-  firmware    build the Cortex-M firmware and run it under QEMU mps2-an386
+  firmware    build the Cortex-M firmware and the product and run them under QEMU mps2-an386
   bench       measure and write docs/BENCHMARKS.md
   fuzz [N]    run every fuzz target of host/tests/fuzz.rs for N cases (default 100000)
   setup       install missing system packages / rustup components";
@@ -26,7 +27,16 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci::run(),
         Some("fetch-data") => data::fetch().map(|_| ()),
-        Some("firmware") => firmware::build_and_run().map(|_| ()),
+        Some("firmware") => firmware::build_and_run()
+            .and_then(|_| product::run())
+            .map(|p| {
+                println!(
+                    "{} product lines equal on host, QEMU and {}\n{}",
+                    p.lines,
+                    product::GOLDEN,
+                    p.report
+                )
+            }),
         Some("bench") => bench::run(),
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("setup") => setup::ensure_all(),

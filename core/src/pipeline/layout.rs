@@ -10,7 +10,7 @@
 //!
 //! The stages reuse each other's scratch: stereo's is free once its map is
 //! written, the CIELUV map once the completion has used it. Each buffer is
-//! rounded up to whole 8-byte words ([`super::arena`]).
+//! rounded up to whole 8-byte words (the private `arena` module).
 
 use super::arena::bytes;
 use super::PipelineParams;

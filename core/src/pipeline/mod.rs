@@ -340,7 +340,8 @@ pub trait Observer {
     fn enter(&mut self, _stage: Stage) {}
     /// A step of the stereo engine starts.
     fn stereo_step(&mut self, _step: crate::stereo::Step) {}
-    /// A step of figure-ground starts.
+    /// A step of figure-ground is done (figure-ground tells its steps as
+    /// they end; the stereo engine, as they start).
     fn segment_step(&mut self, _step: crate::segment::Step) {}
     /// The stereo engine's map.
     fn raw_disparity(&mut self, _map: &ImageView<'_, DisparityCell>) {}

@@ -60,7 +60,15 @@ pub(super) fn run<'w, S: RgbRows, O: Observer>(
     }
     let n = w * h;
     let k = usize::from(params.segment.max_objects);
-    let (kept, shared) = workspace.split_at_mut(layout::kept_bytes(w, h, params).div_ceil(8));
+    let workspace_len = workspace.len();
+    // Checked above; `split_at_mut` would link a panic path the optimiser
+    // cannot remove (run-time sizes).
+    let (kept, shared) = workspace
+        .split_at_mut_checked(layout::kept_bytes(w, h, params).div_ceil(8))
+        .ok_or(PipelineError::WorkspaceTooSmall {
+            needed,
+            got: workspace_len * 8,
+        })?;
     let mut a = Arena::new(kept);
     let edges: &'w mut [EdgeCell] = a.take(n)?;
     let disparity: &'w mut [DisparityCell] = a.take(n)?;
