@@ -8,6 +8,7 @@
 //!                  [--max-disp D] [--pool R] [--levels L] [--table FILE] [--json] --out DIR
 //! protogist train-dem --out FILE [--max-disp D --levels L]
 //! protogist gen-shapes --out DIR [--classes N --per-class M --seed S --size PX]
+//! protogist gen-rgbd --out DIR [--categories N --instances M --frames F --seed S]
 //! protogist train --dataset DIR --out model.json [--hidden H --epochs E]
 //!                 [--test-fraction F --seed S --gamma G]
 //! protogist eval --model model.json --dataset DIR --out DIR [--json]
@@ -88,6 +89,9 @@ pub enum Command {
     /// Generate seeded binary silhouettes of parametric shapes (PNG, object
     /// white on black), one subfolder per class.
     GenShapes(crate::classify::shapes::GenShapesOptions),
+    /// Render a synthetic stand-in for the RGB-D Object Dataset, in its
+    /// cropped layout (RGB, 16-bit depth in mm, mask, location).
+    GenRgbd(crate::rgbd::gen::GenRgbdOptions),
     /// Train the float network (section 4.4) on the shape vectors of an
     /// image-folder dataset; write the int8 model blob and its float JSON
     /// sidecar (`<out>.json`).
@@ -146,6 +150,7 @@ pub fn run(cli: Cli) -> Result<Summary> {
             &out,
         ),
         Some(Command::GenShapes(opts)) => crate::classify::shapes::gen_shapes(&opts),
+        Some(Command::GenRgbd(opts)) => crate::rgbd::gen::gen_rgbd(&opts),
         Some(Command::Train(opts)) => crate::classify::model_cmd::run_train(&opts),
         Some(Command::Eval(opts)) => crate::classify::model_cmd::run_eval(&opts),
         Some(Command::Quantize(opts)) => crate::classify::quant_cmd::run_quantize(&opts),

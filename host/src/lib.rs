@@ -23,6 +23,7 @@ pub mod io;
 pub mod panels;
 pub mod plot;
 pub mod reference;
+pub mod rgbd;
 pub mod run_cmd;
 pub mod stages;
 pub mod stereo_cmd;
