@@ -8,7 +8,8 @@
 //!   conditions of section 4.4;
 //! * [`experiment`]: `protogist experiment`, one network per condition,
 //!   float and int8, the table and the figures;
-//! * [`fig8`]: the seven-curve CMC, DET and ROC plots.
+//! * [`fig8`]: the seven-curve CMC, DET and ROC plots;
+//! * [`speed`]: `protogist train-speed`, GFLOP/s of the training products.
 
 pub mod experiment;
 pub mod features;
@@ -16,6 +17,7 @@ pub mod fig8;
 pub mod gen;
 pub mod loader;
 mod render;
+pub mod speed;
 
 use std::path::PathBuf;
 
