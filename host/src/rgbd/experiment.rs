@@ -49,7 +49,7 @@ pub struct ExperimentOptions {
     #[arg(long, default_value_t = 1000)]
     pub epochs: usize,
     /// Conditions, comma-separated (default: the paper's seven).
-    #[arg(long, value_enum, value_delimiter = ',')]
+    #[arg(long, alias = "features", value_enum, value_delimiter = ',')]
     pub conditions: Vec<Condition>,
     /// Weight of the MSE in MSE_REG (the paper: 0.2).
     #[arg(long, default_value_t = GAMMA)]
