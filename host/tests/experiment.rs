@@ -85,7 +85,7 @@ fn experiment_runs_end_to_end_and_writes_table_figures_and_models() {
         let m = Model::parse(&blob).unwrap();
         assert_eq!(
             (m.input_kind(), m.inputs(), m.classes()),
-            (kind, kind.len(), 3)
+            (kind, kind.input_len(), 3)
         );
     }
     // `eval` refuses an experiment blob of another kind than shape, with
@@ -148,10 +148,10 @@ fn experiment_runs_end_to_end_and_writes_table_figures_and_models() {
 }
 
 fn tiny_blob(c: Condition) -> Vec<u8> {
-    let net = Mlp::new(c.len(), 3, 2, 1);
+    let net = Mlp::new(c.input_len(), 3, 2, 1);
     let calib: Vec<Vec<i16>> = (0..4)
         .map(|i| {
-            (0..c.len())
+            (0..c.input_len())
                 .map(|j| ((i * 37 + j * 11) % 200) as i16 - 100)
                 .collect()
         })
@@ -176,7 +176,7 @@ fn blobs_record_their_input_kind_and_refuse_others() {
     for c in Condition::PAPER {
         let blob = tiny_blob(c);
         let m = Model::parse(&blob).unwrap();
-        assert_eq!((m.input_kind(), m.inputs()), (c.kind(), c.len()));
+        assert_eq!((m.input_kind(), m.inputs()), (c.kind(), c.input_len()));
         assert_eq!(blob[6], c.kind().code());
         assert_eq!(m.expect_input(c.kind()), Ok(()));
         let other = if c == Condition::Range {

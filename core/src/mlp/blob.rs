@@ -84,7 +84,7 @@ impl InputKind {
     }
 
     /// Input length (`SHAPE_LEN` for shape).
-    pub const fn len(self) -> usize {
+    pub const fn input_len(self) -> usize {
         const IMG: usize = 3600;
         match self {
             Self::Shape => crate::shape::SHAPE_LEN,
@@ -380,10 +380,10 @@ impl<'a> Model<'a> {
         if d == 0 || h == 0 || k == 0 || k > MAX_CLASSES {
             return Err(ModelError::BadDims);
         }
-        if kind != InputKind::Shape && d != kind.len() {
+        if kind != InputKind::Shape && d != kind.input_len() {
             return Err(ModelError::InputLength {
                 code: kind.code(),
-                expected: kind.len(),
+                expected: kind.input_len(),
                 got: d,
             });
         }

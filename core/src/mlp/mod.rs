@@ -120,9 +120,9 @@ impl core::fmt::Display for MlpError {
                 f,
                 "the model takes {} input ({} values), given {} ({} values)",
                 model.name(),
-                model.len(),
+                model.input_len(),
                 given.name(),
-                given.len()
+                given.input_len()
             ),
         }
     }

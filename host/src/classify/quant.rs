@@ -211,10 +211,10 @@ pub fn write_blob_as(
     kind: InputKind,
 ) -> Result<Vec<u8>, ClassifyError> {
     let (d, h, k) = q.dims;
-    if kind != InputKind::Shape && kind.len() != d {
+    if kind != InputKind::Shape && kind.input_len() != d {
         return Err(ClassifyError::DimensionMismatch {
             index: 0,
-            expected: kind.len(),
+            expected: kind.input_len(),
             got: d,
         });
     }

@@ -163,12 +163,12 @@ fn run_condition(
     for (r, &k) in train_y.iter().enumerate() {
         t[[r, k]] = 1.0;
     }
-    let mut net = Mlp::new(c.len(), opts.hidden, n, opts.seed);
+    let mut net = Mlp::new(c.input_len(), opts.hidden, n, opts.seed);
     let start = Instant::now();
     eprintln!(
         "{}: {} inputs, {} training images",
         c.name(),
-        c.len(),
+        c.input_len(),
         train_y.len()
     );
     let report = train(
@@ -209,7 +209,7 @@ fn run_condition(
     let r = ConditionResult {
         condition: c.name().into(),
         label: c.label().into(),
-        inputs: c.len(),
+        inputs: c.input_len(),
         float: fm,
         int8: im,
         final_perf: *report.perf.last().unwrap_or(&f64::NAN),

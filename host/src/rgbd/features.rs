@@ -91,7 +91,7 @@ pub enum Part {
 
 impl Part {
     /// Values of the part.
-    pub const fn len(self) -> usize {
+    pub const fn input_len(self) -> usize {
         match self {
             Self::Shape => SHAPE_LEN,
             Self::Colour3 => 3 * PIXELS,
@@ -127,12 +127,12 @@ impl Condition {
     }
 
     /// Input length.
-    pub const fn len(self) -> usize {
+    pub const fn input_len(self) -> usize {
         let p = self.parts();
         let mut n = 0;
         let mut i = 0;
         while i < p.len() {
-            n += p[i].len();
+            n += p[i].input_len();
             i += 1;
         }
         n
@@ -218,7 +218,7 @@ impl Features {
 
     /// The input vector of a condition (`I4F12` raw).
     pub fn input(&self, c: Condition) -> Vec<i16> {
-        let mut v = Vec::with_capacity(c.len());
+        let mut v = Vec::with_capacity(c.input_len());
         for &p in c.parts() {
             v.extend_from_slice(self.part(p));
         }
@@ -418,9 +418,9 @@ mod tests {
 
     #[test]
     fn condition_sizes_are_the_papers() {
-        let sizes: Vec<usize> = Condition::PAPER.iter().map(|c| c.len()).collect();
+        let sizes: Vec<usize> = Condition::PAPER.iter().map(|c| c.input_len()).collect();
         assert_eq!(sizes, [720, 3600, 3600, 3600, 3600, 4320, 11520]);
-        assert_eq!(Condition::Colour3.len(), 10800);
+        assert_eq!(Condition::Colour3.input_len(), 10800);
     }
 
     #[test]
