@@ -88,7 +88,7 @@ fn hsv(h: f64, s: f64, v: f64) -> V3 {
 /// One instance of category `c`, drawn from `rng`.
 pub fn instance(c: usize, rng: &mut SplitMix) -> Object {
     let mut r = |a: f64, b: f64| a + (b - a) * unit(rng);
-    let scale = r(0.8, 1.25);
+    let scale = r(0.7, 1.35);
     let hue = r(0.0, 1.0);
     let colour = hsv(hue, r(0.4, 0.9), r(0.5, 0.95));
     let colour2 = hsv((hue + r(0.2, 0.5)) % 1.0, r(0.3, 0.9), r(0.3, 0.9));
@@ -99,8 +99,8 @@ pub fn instance(c: usize, rng: &mut SplitMix) -> Object {
         Texture::Speckle,
     ][(r(0.0, 4.0) as usize).min(3)];
     let freq = r(25.0, 60.0);
-    let p1 = r(0.85, 1.2);
-    let p2 = r(0.85, 1.2);
+    let p1 = r(0.75, 1.3);
+    let p2 = r(0.75, 1.3);
     let s = |v: f64| v * scale;
     let part = |solid, at: V3| Part::new(solid, at.map(|v| v * scale), colour);
     let mut parts = match c % CATEGORIES.len() {

@@ -9,6 +9,7 @@
 //! * [`experiment`]: `protogist experiment`, one network per condition,
 //!   float and int8, the table and the figures;
 //! * [`fig8`]: the seven-curve CMC, DET and ROC plots;
+//! * [`render`]: the ray caster behind `gen-rgbd`;
 //! * [`speed`]: `protogist train-speed`, GFLOP/s of the training products.
 
 pub mod experiment;
@@ -16,7 +17,7 @@ pub mod features;
 pub mod fig8;
 pub mod gen;
 pub mod loader;
-mod render;
+pub mod render;
 pub mod speed;
 
 use std::path::PathBuf;
