@@ -94,6 +94,9 @@ pub struct Table1 {
     pub test: usize,
     /// Shape vectors from figure-ground, from the dataset mask, and none.
     pub shape_sources: [usize; 3],
+    /// Mean intersection over union of the figure-ground masks with the
+    /// dataset's masks (0 for a frame without figure-ground mask).
+    pub mask_iou: f64,
     /// Hidden units.
     pub hidden: usize,
     /// Epochs.
@@ -305,6 +308,8 @@ pub fn run_experiment(opts: &ExperimentOptions) -> Result<Summary> {
         train: n_train,
         test: n_test,
         shape_sources: sources,
+        mask_iou: feats.iter().map(|f| f64::from(f.mask_iou)).sum::<f64>()
+            / feats.len().max(1) as f64,
         hidden: opts.hidden,
         epochs: opts.epochs,
         gamma: opts.gamma,
@@ -326,8 +331,8 @@ pub fn run_experiment(opts: &ExperimentOptions) -> Result<Summary> {
     s.push(
         "shape vectors",
         format!(
-            "{} figure-ground, {} dataset mask, {} none",
-            sources[0], sources[1], sources[2]
+            "{} figure-ground (mean IoU with the dataset mask {:.2}), {} dataset mask, {} none",
+            sources[0], table.mask_iou, sources[1], sources[2]
         ),
     );
     for r in &table.conditions {
@@ -357,7 +362,7 @@ pub fn table1_markdown(t: &Table1) -> String {
     let mut s = format!(
         "# Table 1: {} categories, {} training and {} test images\n\n\
          Networks: 2 layers, log-sigmoid, {} hidden units, Rprop, {} epochs, MSE_REG γ = {}.\n\
-         Shape vectors: {} from figure-ground, {} from the dataset's mask, {} none.\n",
+         Shape vectors: {} from figure-ground (mean IoU with the dataset's mask {:.2}), {} from the dataset's mask, {} none.\n",
         t.classes,
         t.train,
         t.test,
@@ -365,6 +370,7 @@ pub fn table1_markdown(t: &Table1) -> String {
         t.epochs,
         t.gamma,
         t.shape_sources[0],
+        t.mask_iou,
         t.shape_sources[1],
         t.shape_sources[2]
     );

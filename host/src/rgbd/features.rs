@@ -21,7 +21,11 @@
 //! * **shape** `s^N`: the figure-ground steps of section 3 (core
 //!   `segment`, default parameters) on the crop at [`WORK`]×[`WORK`], with
 //!   disparity `D = round(FB / z)` from the depth ([`FB`]) and the
-//!   thresholded conspicuity `C`; the most salient object's mask goes to
+//!   thresholded conspicuity `C`, the crop set in a frame of [`PAD`]
+//!   background cells (its farthest depth, no conspicuity) so that, as in
+//!   a scene, the object is nearer than most of S (on the synthetic set
+//!   the masks' mean IoU with the dataset's rises from 0.26 to 0.37); the
+//!   most salient object's mask goes to
 //!   the core `shape` stage (720 values, already normalised). When
 //!   figure-ground finds no object, or its mask is degenerate, the
 //!   dataset's own mask stands in and the frame is counted
@@ -46,6 +50,8 @@ pub const SIDE: usize = 60;
 pub const PIXELS: usize = SIDE * SIDE;
 /// Side of the working frame of conspicuity and figure-ground.
 pub const WORK: usize = 120;
+/// Background cells around the crop in the figure-ground frame.
+pub const PAD: usize = 40;
 /// Focal length × baseline in px·m for `D = FB / z`: a Kinect's
 /// (570 px × 7.5 cm) at twice its resolution, so depth steps of a few cm
 /// are a few disparity levels.
@@ -191,6 +197,9 @@ pub struct Features {
     pub shape: Vec<i16>,
     /// Where `shape` came from.
     pub shape_source: ShapeSource,
+    /// Intersection over union of the figure-ground mask with the
+    /// dataset's mask (0 when figure-ground found nothing).
+    pub mask_iou: f32,
     /// `R^N`.
     pub range: Vec<i16>,
     /// `C^N`.
@@ -359,24 +368,41 @@ pub fn frame_features(item: &Item, f: &Frame, colour3: bool) -> Result<Features>
         .into_iter()
         .map(|v| v.unwrap_or(0.0))
         .collect();
-    let disparity: Vec<DisparityCell> = nearest(&f.depth, (w, h), WORK)
-        .into_iter()
-        .map(|z| {
-            if z == 0 {
-                DisparityCell::OFF
-            } else {
-                from_pixels((FB * 1000.0 / f64::from(z)).round().clamp(1.0, 254.0) as u8)
-            }
-        })
-        .collect();
+    // Figure-ground on the crop set in a frame of background (the
+    // crop's farthest depth, no conspicuity), [`PAD`] cells each side: the
+    // stage looks for objects nearer than their surroundings, and a crop
+    // is mostly object.
+    let to_d = |z: u16| from_pixels((FB * 1000.0 / f64::from(z)).round().clamp(1.0, 254.0) as u8);
+    let frame = WORK + 2 * PAD;
+    let mut disparity = vec![to_d(far); frame * frame];
+    let mut edges = vec![protogist::conspicuity::EdgeCell::OFF; frame * frame];
+    for (i, z) in nearest(&f.depth, (w, h), WORK).into_iter().enumerate() {
+        let at = (i / WORK + PAD) * frame + i % WORK + PAD;
+        disparity[at] = if z == 0 { DisparityCell::OFF } else { to_d(z) };
+        edges[at] = maps.edges[i];
+    }
     let seg = run_segment(
         &protogist::segment::SegmentParams::default(),
         &disparity,
-        &maps.edges,
-        WORK,
-        WORK,
+        &edges,
+        frame,
+        frame,
     )?;
-    let fg = (!seg.report.objects.is_empty()).then(|| seg.mask_u8(0));
+    let fg = (!seg.report.objects.is_empty()).then(|| {
+        let m = seg.mask_u8(0);
+        (0..WORK * WORK)
+            .map(|i| m[(i / WORK + PAD) * frame + i % WORK + PAD])
+            .collect::<Vec<u8>>()
+    });
+    let truth = nearest(&f.mask, (w, h), WORK);
+    let mask_iou = fg.as_ref().map_or(0.0, |m| {
+        let (mut inter, mut union) = (0u32, 0u32);
+        for (&a, &b) in m.iter().zip(&truth) {
+            inter += u32::from(a > 0 && b > 0);
+            union += u32::from(a > 0 || b > 0);
+        }
+        inter as f32 / union.max(1) as f32
+    });
     let mut shape = None;
     let mut source = ShapeSource::None;
     if let Some(m) = fg {
@@ -386,8 +412,7 @@ pub fn frame_features(item: &Item, f: &Frame, colour3: bool) -> Result<Features>
         }
     }
     if shape.is_none() {
-        let m = nearest(&f.mask, (w, h), WORK);
-        if let Some((_, raw)) = crate::classify::dataset::shape_inputs(&m, WORK, WORK)? {
+        if let Some((_, raw)) = crate::classify::dataset::shape_inputs(&truth, WORK, WORK)? {
             shape = Some(raw);
             source = ShapeSource::DatasetMask;
         }
@@ -395,6 +420,7 @@ pub fn frame_features(item: &Item, f: &Frame, colour3: bool) -> Result<Features>
     Ok(Features {
         shape: shape.unwrap_or_else(|| vec![0; SHAPE_LEN]),
         shape_source: source,
+        mask_iou,
         range: z_raw(&range),
         conspicuity: z_raw(&consp),
         luminance: z_raw(&lum),
