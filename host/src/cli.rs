@@ -8,6 +8,10 @@
 //!                  [--max-disp D] [--pool R] [--levels L] [--table FILE] [--json] --out DIR
 //! protogist train-dem --out FILE [--max-disp D --levels L]
 //! protogist gen-shapes --out DIR [--classes N --per-class M --seed S --size PX]
+//! protogist gen-rgbd --out DIR [--categories N --instances M --frames F --seed S]
+//! protogist experiment --dataset DIR --out DIR [--hidden H --epochs E]
+//!                      [--conditions LIST] [--json]
+//! protogist train-speed [--inputs D --hidden H --classes N --rows R]
 //! protogist train --dataset DIR --out model.json [--hidden H --epochs E]
 //!                 [--test-fraction F --seed S --gamma G]
 //! protogist eval --model model.json --dataset DIR --out DIR [--json]
@@ -107,6 +111,16 @@ pub enum Command {
     /// The end-to-end benchmark on a `gen-scenes` set: detection recall and
     /// precision, mask IoU, top-1/top-5 category and gist accuracy, time.
     GistEval(crate::gist::GistEvalOptions),
+    /// Render a synthetic stand-in for the RGB-D Object Dataset, in its
+    /// cropped layout (RGB, 16-bit depth in mm, mask, location).
+    GenRgbd(crate::rgbd::gen::GenRgbdOptions),
+    /// The paper's experiment (sections 4.2 to 5) on an RGB-D Object Dataset
+    /// folder: one network per input condition, float and int8; writes
+    /// Table 1 (Markdown, JSON) and Fig. 8 (CMC, DET, ROC as PNG and SVG).
+    Experiment(crate::rgbd::experiment::ExperimentOptions),
+    /// Time one training epoch's products (forward and backward GEMMs) and
+    /// print GFLOP/s and the projected time of the paper's training.
+    TrainSpeed(crate::rgbd::speed::TrainSpeedOptions),
     /// Train the float network (section 4.4) on the shape vectors of an
     /// image-folder dataset; write the int8 model blob and its float JSON
     /// sidecar (`<out>.json`).
@@ -233,6 +247,9 @@ pub fn run(cli: Cli) -> Result<Summary> {
         Some(Command::GenShapes(opts)) => crate::classify::shapes::gen_shapes(&opts),
         Some(Command::GenScenes(opts)) => crate::scenes::gen_scenes(&opts),
         Some(Command::GistEval(opts)) => crate::gist::gist_eval(&opts),
+        Some(Command::GenRgbd(opts)) => crate::rgbd::gen::gen_rgbd(&opts),
+        Some(Command::Experiment(opts)) => crate::rgbd::experiment::run_experiment(&opts),
+        Some(Command::TrainSpeed(opts)) => crate::rgbd::speed::run_train_speed(&opts),
         Some(Command::Train(opts)) => crate::classify::model_cmd::run_train(&opts),
         Some(Command::Eval(opts)) => crate::classify::model_cmd::run_eval(&opts),
         Some(Command::Quantize(opts)) => crate::classify::quant_cmd::run_quantize(&opts),

@@ -185,6 +185,9 @@ pub enum HostError {
         /// The serialiser's message.
         reason: String,
     },
+    /// An RGB-D Object Dataset that cannot be used.
+    #[error("RGB-D dataset: {0}")]
+    Rgbd(#[from] crate::rgbd::RgbdError),
     /// An output path exists and is not a directory.
     #[error("{} exists and is not a directory", .0.display())]
     NotADirectory(PathBuf),

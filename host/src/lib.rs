@@ -30,6 +30,7 @@ pub mod panels;
 pub mod plot;
 pub mod product;
 pub mod reference;
+pub mod rgbd;
 pub mod run_cmd;
 pub mod scenes;
 pub mod stages;

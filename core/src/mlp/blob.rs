@@ -15,6 +15,100 @@ pub const HEADER_LEN: usize = 40;
 pub const CRC_LEN: usize = 4;
 /// Input format 1: shape elements (`I4F12`, the core `shape` stage).
 pub const INPUT_I4F12: u8 = 1;
+
+/// What a model's input is: the blob's input code. Every kind is read as
+/// `I4F12` (`raw / 4096`). Code 1 (shape) is the original format and takes
+/// any length (720 in practice); codes 2 to 8 are the image conditions of
+/// the paper's section 4.4 and fix the length.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum InputKind {
+    /// Shape vector `s^N` (code 1, 720 values).
+    Shape,
+    /// Luminance `I_L^N`, 60×60 (code 2).
+    Luminance,
+    /// Colour `I_C^N` as an indexed image, 60×60 (code 3).
+    Colour,
+    /// Colour as three 60×60 planes, R, G, B (code 4).
+    Colour3,
+    /// Conspicuity `C^N`, 60×60 (code 5).
+    Conspicuity,
+    /// Range `R^N`, 60×60 (code 6).
+    Range,
+    /// `(s^N, R^N)`, 720 + 3600 (code 7).
+    ShapeRange,
+    /// `(s^N, R^N, C^N, I_L^N)`, 720 + 3·3600 (code 8).
+    ShapeRangeConspicuityLuminance,
+}
+
+impl InputKind {
+    /// Every kind, by code.
+    pub const ALL: [Self; 8] = [
+        Self::Shape,
+        Self::Luminance,
+        Self::Colour,
+        Self::Colour3,
+        Self::Conspicuity,
+        Self::Range,
+        Self::ShapeRange,
+        Self::ShapeRangeConspicuityLuminance,
+    ];
+
+    /// Its code in the blob header.
+    pub const fn code(self) -> u8 {
+        match self {
+            Self::Shape => INPUT_I4F12,
+            Self::Luminance => 2,
+            Self::Colour => 3,
+            Self::Colour3 => 4,
+            Self::Conspicuity => 5,
+            Self::Range => 6,
+            Self::ShapeRange => 7,
+            Self::ShapeRangeConspicuityLuminance => 8,
+        }
+    }
+
+    /// The kind of a code (`None` for an unknown one).
+    pub const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            1 => Some(Self::Shape),
+            2 => Some(Self::Luminance),
+            3 => Some(Self::Colour),
+            4 => Some(Self::Colour3),
+            5 => Some(Self::Conspicuity),
+            6 => Some(Self::Range),
+            7 => Some(Self::ShapeRange),
+            8 => Some(Self::ShapeRangeConspicuityLuminance),
+            _ => None,
+        }
+    }
+
+    /// Input length (`SHAPE_LEN` for shape).
+    pub const fn input_len(self) -> usize {
+        const IMG: usize = 3600;
+        match self {
+            Self::Shape => crate::shape::SHAPE_LEN,
+            Self::Colour3 => 3 * IMG,
+            Self::ShapeRange => crate::shape::SHAPE_LEN + IMG,
+            Self::ShapeRangeConspicuityLuminance => crate::shape::SHAPE_LEN + 3 * IMG,
+            _ => IMG,
+        }
+    }
+
+    /// The name `protogist train --features` and `experiment` use.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Shape => "shape",
+            Self::Luminance => "luminance",
+            Self::Colour => "colour",
+            Self::Colour3 => "colour3",
+            Self::Conspicuity => "conspicuity",
+            Self::Range => "range",
+            Self::ShapeRange => "shape-range",
+            Self::ShapeRangeConspicuityLuminance => "all",
+        }
+    }
+}
 /// Weight format 1: int8, symmetric, one scale per output channel, each
 /// stored excess-128 (byte `w + 128`, so `w = −127..=127` is `1..=255`).
 pub const WEIGHTS_I8_PER_CHANNEL: u8 = 1;
@@ -75,6 +169,15 @@ pub enum ModelError {
     },
     /// The metadata section is not UTF-8.
     BadMeta,
+    /// An image input kind whose length `d` is not the kind's.
+    InputLength {
+        /// The input code.
+        code: u8,
+        /// The kind's length.
+        expected: usize,
+        /// `d` in the header.
+        got: usize,
+    },
 }
 
 impl core::error::Error for ModelError {}
@@ -103,6 +206,14 @@ impl core::fmt::Display for ModelError {
             Self::BadRequant => write!(f, "a requantisation multiplier or shift is out of range"),
             Self::BadClassName { index } => write!(f, "class name {index} is bad"),
             Self::BadMeta => write!(f, "metadata is not UTF-8"),
+            Self::InputLength {
+                code,
+                expected,
+                got,
+            } => write!(
+                f,
+                "input code {code} takes {expected} values, the header says {got}"
+            ),
         }
     }
 }
@@ -143,6 +254,7 @@ const CRC_TABLE: [u32; 256] = {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Model<'a> {
     inputs: usize,
+    kind: InputKind,
     hidden: usize,
     classes: usize,
     input_multiplier: i32,
@@ -246,8 +358,11 @@ impl<'a> Model<'a> {
             return Err(ModelError::UnsupportedVersion(version));
         }
         let byte = |at: usize| blob.get(at).copied().unwrap_or(0);
+        let kind = InputKind::from_code(byte(6)).ok_or(ModelError::UnsupportedFormat {
+            field: "input",
+            code: byte(6),
+        })?;
         for (field, at, want) in [
-            ("input", 6, INPUT_I4F12),
             ("weights", 7, WEIGHTS_I8_PER_CHANNEL),
             ("hidden", 8, HIDDEN_U8),
             ("output", 9, OUTPUT_U16),
@@ -264,6 +379,13 @@ impl<'a> Model<'a> {
         let k = usize::from(le_u16(blob, 14));
         if d == 0 || h == 0 || k == 0 || k > MAX_CLASSES {
             return Err(ModelError::BadDims);
+        }
+        if kind != InputKind::Shape && d != kind.input_len() {
+            return Err(ModelError::InputLength {
+                code: kind.code(),
+                expected: kind.input_len(),
+                got: d,
+            });
         }
         let names_len = le_u32(blob, 32) as usize;
         let meta_len = le_u32(blob, 36) as usize;
@@ -317,6 +439,7 @@ impl<'a> Model<'a> {
         let meta = core::str::from_utf8(meta).map_err(|_| ModelError::BadMeta)?;
         Ok(Self {
             inputs: d,
+            kind,
             hidden: h,
             classes: k,
             input_multiplier,
@@ -337,6 +460,26 @@ impl<'a> Model<'a> {
     /// Input length (720 for shape vectors).
     pub const fn inputs(&self) -> usize {
         self.inputs
+    }
+
+    /// What the input is (the header's input code).
+    pub const fn input_kind(&self) -> InputKind {
+        self.kind
+    }
+
+    /// Checks that the model takes `kind`.
+    ///
+    /// # Errors
+    /// [`super::MlpError::InputKind`] naming both kinds.
+    pub const fn expect_input(&self, kind: InputKind) -> Result<(), super::MlpError> {
+        if self.kind.code() == kind.code() {
+            Ok(())
+        } else {
+            Err(super::MlpError::InputKind {
+                model: self.kind,
+                given: kind,
+            })
+        }
     }
 
     /// Hidden units.

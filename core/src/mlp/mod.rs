@@ -51,7 +51,7 @@ pub mod blob;
 pub mod logsig_table;
 pub mod requant;
 
-pub use blob::{crc32, Model, ModelError};
+pub use blob::{crc32, InputKind, Model, ModelError};
 
 use crate::fixed::isqrt_floor_u128;
 use crate::shape::ShapeElem;
@@ -81,6 +81,13 @@ pub enum MlpError {
         /// Elements given.
         got: usize,
     },
+    /// The input is of another kind than the model's.
+    InputKind {
+        /// What the model takes.
+        model: InputKind,
+        /// What was given.
+        given: InputKind,
+    },
     /// A class index (claim) out of range.
     ClassOutOfRange {
         /// The class.
@@ -109,6 +116,14 @@ impl core::fmt::Display for MlpError {
             Self::ClassOutOfRange { class, classes } => {
                 write!(f, "class {class} out of range for {classes} classes")
             }
+            Self::InputKind { model, given } => write!(
+                f,
+                "the model takes {} input ({} values), given {} ({} values)",
+                model.name(),
+                model.input_len(),
+                given.name(),
+                given.input_len()
+            ),
         }
     }
 }

@@ -404,6 +404,10 @@ pub fn evaluate_model(opts: &EvalOptions) -> Result<(EvalReport, String)> {
     let net = model.network(&side)?;
     let qm =
         protogist::mlp::Model::parse(&blob).map_err(|e| bad_model(&opts.model, model_error(e)))?;
+    // `eval` reads image-folder datasets of shape vectors: a model of another
+    // input kind (an `experiment` blob) is refused.
+    qm.expect_input(protogist::mlp::InputKind::Shape)
+        .map_err(super::ClassifyError::from)?;
     let names: Vec<&str> = (0..qm.classes()).filter_map(|c| qm.class_name(c)).collect();
     if names != model.classes || qm.hidden() != model.hidden {
         return Err(bad_model(

@@ -23,7 +23,7 @@ use super::metrics::Det;
 use super::mlp::Mlp;
 use super::ClassifyError;
 use protogist::mlp::blob::{
-    blob_len, crc32, Model, ModelError, HEADER_LEN, HIDDEN_U8, INPUT_I4F12, MAGIC, MAX_CLASSES,
+    blob_len, crc32, InputKind, Model, ModelError, HEADER_LEN, HIDDEN_U8, MAGIC, MAX_CLASSES,
     MAX_NAME_LEN, OUTPUT_U16, VERSION, WEIGHTS_I8_PER_CHANNEL,
 };
 use protogist::mlp::{forward, hidden_len, output_len, packed_len, scores, Scratch};
@@ -197,7 +197,27 @@ pub struct BlobExtras<'a> {
 /// [`ClassifyError`] for a name that is empty or longer than 64 bytes, or
 /// counts that do not match the dimensions.
 pub fn write_blob(q: &QuantNet, x: &BlobExtras<'_>) -> Result<Vec<u8>, ClassifyError> {
+    write_blob_as(q, x, InputKind::Shape)
+}
+
+/// [`write_blob`] for an input of `kind` (the header's input code).
+///
+/// # Errors
+/// As [`write_blob`]; [`ClassifyError::DimensionMismatch`] when an image
+/// kind's length is not the network's input length.
+pub fn write_blob_as(
+    q: &QuantNet,
+    x: &BlobExtras<'_>,
+    kind: InputKind,
+) -> Result<Vec<u8>, ClassifyError> {
     let (d, h, k) = q.dims;
+    if kind != InputKind::Shape && kind.input_len() != d {
+        return Err(ClassifyError::DimensionMismatch {
+            index: 0,
+            expected: kind.input_len(),
+            got: d,
+        });
+    }
     if x.names.len() != k {
         return Err(ClassifyError::LabelCount {
             outputs: k,
@@ -229,7 +249,7 @@ pub fn write_blob(q: &QuantNet, x: &BlobExtras<'_>) -> Result<Vec<u8>, ClassifyE
     let mut b = Vec::with_capacity(total);
     b.extend_from_slice(&MAGIC);
     b.extend_from_slice(&VERSION.to_le_bytes());
-    b.extend_from_slice(&[INPUT_I4F12, WEIGHTS_I8_PER_CHANNEL, HIDDEN_U8, OUTPUT_U16]);
+    b.extend_from_slice(&[kind.code(), WEIGHTS_I8_PER_CHANNEL, HIDDEN_U8, OUTPUT_U16]);
     for n in [d, h, k] {
         b.extend_from_slice(&(n as u16).to_le_bytes());
     }
@@ -384,32 +404,42 @@ pub fn quantize(
     names: &[String],
     meta: &str,
 ) -> Result<Vec<u8>, ClassifyError> {
+    quantize_as(net, calib, labels, names, meta, InputKind::Shape)
+}
+
+/// [`quantize`] for an input of `kind` (raw `I4F12` values of that kind).
+///
+/// # Errors
+/// As [`quantize`] and [`write_blob_as`].
+pub fn quantize_as(
+    net: &Mlp,
+    calib: &[Vec<i16>],
+    labels: &[usize],
+    names: &[String],
+    meta: &str,
+    kind: InputKind,
+) -> Result<Vec<u8>, ClassifyError> {
     let q = quantize_net(net, calib)?;
+    let write = |x: &BlobExtras<'_>| write_blob_as(&q, x, kind);
     let k = q.dims.2;
     let zeros = vec![0u16; k * k];
-    let draft = write_blob(
-        &q,
-        &BlobExtras {
-            templates: &zeros,
-            delta_q16: 0,
-            names,
-            meta,
-        },
-    )?;
+    let draft = write(&BlobExtras {
+        templates: &zeros,
+        delta_q16: 0,
+        names,
+        meta,
+    })?;
     let model = Model::parse(&draft).map_err(|_| ClassifyError::Empty {
         what: "a well-formed draft model",
     })?;
     let outputs = int_outputs(&model, calib)?;
     let templates = int_templates(&outputs, labels, k)?;
-    let with_templates = write_blob(
-        &q,
-        &BlobExtras {
-            templates: &templates,
-            delta_q16: 0,
-            names,
-            meta,
-        },
-    )?;
+    let with_templates = write(&BlobExtras {
+        templates: &templates,
+        delta_q16: 0,
+        names,
+        meta,
+    })?;
     let model = Model::parse(&with_templates).map_err(|_| ClassifyError::Empty {
         what: "a well-formed draft model",
     })?;
@@ -425,15 +455,12 @@ pub fn quantize(
     } else {
         0
     };
-    write_blob(
-        &q,
-        &BlobExtras {
-            templates: &templates,
-            delta_q16,
-            names,
-            meta,
-        },
-    )
+    write(&BlobExtras {
+        templates: &templates,
+        delta_q16,
+        names,
+        meta,
+    })
 }
 
 /// A Rust source file holding `blob` as `pub static MODEL: [u8; N]`.

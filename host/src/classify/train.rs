@@ -1,4 +1,6 @@
-//! Full-batch resilient backpropagation (section 4.4).
+//! Full-batch resilient backpropagation (section 4.4). The gradient is
+//! accumulated over blocks of [`BLOCK_ROWS`](super::mlp::BLOCK_ROWS) rows,
+//! so memory beyond the input matrix does not grow with the data set.
 //!
 //! **Variant: Rprop−, as MATLAB's `trainrp`.** Every parameter `w` keeps
 //! its own step `Δ` (initially `Δ0`) and the sign of its previous gradient
@@ -124,7 +126,7 @@ pub fn train(
     let mut perf = Vec::with_capacity(p.epochs + 1);
     let mut epochs_run = 0;
     for _ in 0..p.epochs {
-        let (f, _, mut g) = net.gradient(x, t, p.gamma);
+        let (f, _, mut g) = net.gradient_blocked(x, t, p.gamma, super::mlp::BLOCK_ROWS);
         perf.push(f);
         bar.set_message(format!("MSE_REG {f:.3e}"));
         if slices(&mut g).iter().all(|s| s.iter().all(|&v| v == 0.0)) {
