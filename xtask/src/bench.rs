@@ -38,6 +38,7 @@ pub fn run() -> Result<()> {
         stereo_motorcycle(&qemu.stdout),
         mlp_qemu(&qemu.stdout),
         mlp_host(),
+        train_speed(),
         gist::section(),
     ];
     let mut doc = String::from(
@@ -583,6 +584,62 @@ fn scratch(stdout: &str) -> Section {
 
 /// `protogist ARGS` parsed as its `--json` report (`None`: the run or the
 /// JSON failed).
+/// This machine's single-precision peak, GFLOP/s: cores x clock x 32
+/// flops per cycle with FMA (two 256-bit FMA pipes), 16 without; an
+/// estimate from /proc/cpuinfo.
+fn sp_peak_gflops() -> Option<f64> {
+    let info = std::fs::read_to_string("/proc/cpuinfo").ok()?;
+    let mhz: f64 = info
+        .lines()
+        .find(|l| l.starts_with("cpu MHz"))?
+        .split(':')
+        .nth(1)?
+        .trim()
+        .parse()
+        .ok()?;
+    let fma = info
+        .lines()
+        .any(|l| l.starts_with("flags") && l.contains(" fma"));
+    let cores = std::thread::available_parallelism().ok()?.get() as f64;
+    Some(cores * mhz / 1e3 * if fma { 32.0 } else { 16.0 })
+}
+
+/// Training speed of the experiment's largest network (issue 21 §5).
+fn train_speed() -> Section {
+    let args = ["train-speed"];
+    let body = match protogist(&args) {
+        Ok(out) => {
+            let gflops = out
+                .lines()
+                .find(|l| l.trim_start().starts_with("throughput"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse::<f64>().ok());
+            let peak = sp_peak_gflops();
+            let share = match (gflops, peak) {
+                (Some(g), Some(p)) => format!(
+                    "**{g:.1} GFLOP/s, {:.1} % of this machine's single-precision peak \
+                     (about {p:.0} GFLOP/s: cores x clock x 32 flops per cycle)**; the \
+                     network trains in f64 (matrixmultiply's threaded GEMM, all cores).",
+                    100.0 * g / p
+                ),
+                _ => "throughput not read".to_owned(),
+            };
+            format!(
+                "`protogist train-speed`: the forward and backward products of one Rprop gradient of the \
+                 11520-2000-51 network (the experiment's largest condition) over one \
+                 block of rows, and the paper's epoch and training projected from it \
+                 (docs/EXPERIMENT.md).\n\n```\n{}\n```\n\n{share}\n",
+                out.trim_end()
+            )
+        }
+        Err(e) => format!("`protogist train-speed` failed: {e}\n"),
+    };
+    Section {
+        title: "Training speed (the experiment's largest network)",
+        body,
+    }
+}
+
 fn protogist_json(args: &[&str]) -> Option<serde_json::Value> {
     protogist(args)
         .ok()
