@@ -65,7 +65,10 @@ fn run_with_gt_disparity_finds_the_object_and_reports_it() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    let objects = report["objects"].as_array().unwrap();
+    // The GT-disparity chain's objects; core's pipeline (its own stereo)
+    // is reported beside them.
+    assert!(report["objects"].is_array());
+    let objects = report["reference"]["objects"].as_array().unwrap();
     assert_eq!(objects.len(), 1);
     let o0 = &objects[0];
     assert_eq!(o0["shape_vector"].as_array().unwrap().len(), 720);
@@ -94,9 +97,10 @@ fn run_with_gt_disparity_finds_the_object_and_reports_it() {
     for panel in [
         "a_left",
         "b_disparity",
-        "i_object_mask",
-        "j_segregated_object",
-        "shape_vector_0",
+        "objects",
+        "reference_i_object_mask",
+        "reference_j_segregated_object",
+        "reference_shape_vector_0",
     ] {
         assert!(out.join(format!("{panel}.png")).is_file(), "{panel}");
     }
@@ -113,7 +117,7 @@ fn run_rejects_bad_input_and_leaves_no_output() {
     let outs = out.display().to_string();
     let cases: [(&[&str], &str); 3] = [
         (&["--right", &p("small.png")], "right is 40x30"),
-        (&["--right", &p("r.png"), "--objects", "0"], "max_objects"),
+        (&["--right", &p("r.png"), "--objects", "0"], "--objects"),
         (
             &["--right", &p("r.png"), "--gt-disparity", &p("small.png")],
             "ground truth",
