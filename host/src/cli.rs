@@ -21,9 +21,10 @@
 //!                     [--mode reference|gt-disparity] [--json] --out DIR
 //! ```
 
-use crate::demo::{finish, run_demo, DemoOptions};
+use crate::demo::{run_demo, DemoOptions};
 use crate::error::{HostError, Result};
 use crate::io;
+use crate::output::finish;
 use crate::panels::{rgb_from, Panel};
 use crate::reference::stereo::DemParams;
 use crate::stages::run_conspicuity;
@@ -308,7 +309,7 @@ pub fn preflight(cmd: &Command, limit: u64) -> Result<()> {
                 let params = DemParams {
                     max_disp: opts
                         .max_disp
-                        .unwrap_or_else(|| crate::run_cmd::default_max_disp(w)),
+                        .unwrap_or_else(|| crate::product::default_max_disp(w)),
                     ..DemParams::default()
                 };
                 l::check_stereo(&params, w, h, limit)?;

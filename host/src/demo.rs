@@ -18,9 +18,6 @@ use protogist::synth::{render_disparity, render_left, render_mask, render_right,
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// Columns of the overview montage.
-const OVERVIEW_COLUMNS: usize = 4;
-
 /// Options of the demo.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DemoOptions {
@@ -141,7 +138,7 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
     // completion, figure-ground, shape vectors and categories.
     let params = PipelineParams::DEFAULT
         .with_objects(4)
-        .with_max_disp(crate::run_cmd::default_max_disp(w));
+        .with_max_disp(crate::product::default_max_disp(w));
     let tables = crate::product::tables_for(&params)?;
     let run = crate::product::run_frame(
         &params,
@@ -194,7 +191,7 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
     // The result as the board would draw it: boxes and categories.
     out.push(run.objects_panel(&scene.left));
 
-    finish(&opts.out, out, &mut summary, start)?;
+    crate::output::finish(&opts.out, out, &mut summary, start)?;
     Ok(summary)
 }
 
@@ -209,50 +206,4 @@ fn mask_iou(a: &[bool], gt: &[u8]) -> f64 {
     } else {
         i as f64 / u as f64
     }
-}
-
-/// Adds the overview montage to `panels`, writes them all into `dir`, and
-/// appends the closing summary lines (time and output directory).
-///
-/// # Errors
-/// As [`crate::io::write_panels`].
-pub fn finish(
-    dir: &std::path::Path,
-    panels: Vec<Panel>,
-    summary: &mut Summary,
-    start: Instant,
-) -> Result<()> {
-    finish_with(crate::output::Output::dir(dir), panels, summary, start)
-}
-
-/// As [`finish`], the panels committed with the other files of `out` (an
-/// [`Output::dir`](crate::output::Output::dir) result, such as a report) as
-/// one result.
-///
-/// # Errors
-/// As [`crate::output::Output::commit`].
-pub fn finish_with(
-    mut out: crate::output::Output,
-    mut panels: Vec<Panel>,
-    summary: &mut Summary,
-    start: Instant,
-) -> Result<()> {
-    let overview = panels::montage(&panels, OVERVIEW_COLUMNS);
-    panels.push(Panel::new("overview", overview));
-    out.add_panels(&panels)?;
-    let dir = out.folder().map(std::path::Path::to_path_buf);
-    let written = out.commit()?;
-    let pngs = written
-        .iter()
-        .filter(|p| p.extension().is_some_and(|e| e == "png"))
-        .count();
-    summary.push(
-        "total time",
-        format!("{:.1} ms", start.elapsed().as_secs_f64() * 1e3),
-    );
-    summary.push(
-        "output",
-        format!("{} ({pngs} PNG files)", dir.unwrap_or_default().display()),
-    );
-    Ok(())
 }

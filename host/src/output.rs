@@ -297,6 +297,55 @@ impl Drop for Lock {
     }
 }
 
+/// Columns of the overview montage.
+const OVERVIEW_COLUMNS: usize = 4;
+
+/// Adds the overview montage to `panels`, writes them all into `dir`, and
+/// appends the closing summary lines (time and output directory).
+///
+/// # Errors
+/// As [`crate::io::write_panels`].
+pub fn finish(
+    dir: &std::path::Path,
+    panels: Vec<crate::panels::Panel>,
+    summary: &mut crate::summary::Summary,
+    start: std::time::Instant,
+) -> crate::error::Result<()> {
+    finish_with(crate::output::Output::dir(dir), panels, summary, start)
+}
+
+/// As [`finish`], the panels committed with the other files of `out` (an
+/// [`Output::dir`](crate::output::Output::dir) result, such as a report) as
+/// one result.
+///
+/// # Errors
+/// As [`crate::output::Output::commit`].
+pub fn finish_with(
+    mut out: crate::output::Output,
+    mut panels: Vec<crate::panels::Panel>,
+    summary: &mut crate::summary::Summary,
+    start: std::time::Instant,
+) -> crate::error::Result<()> {
+    let overview = crate::panels::montage(&panels, OVERVIEW_COLUMNS);
+    panels.push(crate::panels::Panel::new("overview", overview));
+    out.add_panels(&panels)?;
+    let dir = out.folder().map(std::path::Path::to_path_buf);
+    let written = out.commit()?;
+    let pngs = written
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "png"))
+        .count();
+    summary.push(
+        "total time",
+        format!("{:.1} ms", start.elapsed().as_secs_f64() * 1e3),
+    );
+    summary.push(
+        "output",
+        format!("{} ({pngs} PNG files)", dir.unwrap_or_default().display()),
+    );
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

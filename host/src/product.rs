@@ -25,6 +25,12 @@ pub const DEFAULT_TABLES: [&[u8]; 3] = [
     include_bytes!("../../firmware-sim/data/dem_c2f_l2.bin"),
 ];
 
+/// The default largest disparity at a working width: a fifth of it, less
+/// 1 (31 at 160 px, the firmware's 32 disparities).
+pub fn default_max_disp(width: usize) -> u8 {
+    u8::try_from((width / 5).saturating_sub(1).max(1)).unwrap_or(u8::MAX)
+}
+
 /// The stereo point's decoder tables, level 0 first: the bundled ones when
 /// they fit, else trained (seconds per level).
 ///

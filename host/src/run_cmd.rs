@@ -8,7 +8,7 @@
 
 use crate::error::{HostError, Result};
 use crate::panels::{rgb_from, Panel};
-use crate::product::{run_frame, tables_for};
+use crate::product::{default_max_disp, run_frame, tables_for};
 use crate::reference::stereo::DemParams;
 use crate::stages::{run_complete, run_conspicuity, run_segment, run_shape};
 use crate::stereo_cmd::{decoder_for, disparity_panel, load_pair};
@@ -71,11 +71,6 @@ fn gt_cell(v: Option<f32>) -> DisparityCell {
         .into()
 }
 
-/// The default largest disparity at a working width: a fifth of it, less
-/// 1 (31 at 160 px, the firmware's 32 disparities).
-pub fn default_max_disp(width: usize) -> u8 {
-    u8::try_from((width / 5).saturating_sub(1).max(1)).unwrap_or(u8::MAX)
-}
 
 /// Runs core's pipeline (and, when asked, the f32 chain), and writes the
 /// panels and `report.json`.
@@ -218,7 +213,7 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
     }
     let mut out = crate::output::Output::dir(&opts.out);
     out.add_json("report.json", &report)?;
-    crate::demo::finish_with(out, panels, &mut s, start)?;
+    crate::output::finish_with(out, panels, &mut s, start)?;
     Ok(s)
 }
 

@@ -2,10 +2,10 @@
 //! named operating point on a pair, with optional ground truth, and the
 //! decoder table.
 
-use crate::demo::finish;
 use crate::error::{HostError, Result};
 use crate::ground_truth::{gt_at, load_gt, metrics, GtMap, Metrics};
 use crate::io;
+use crate::output::finish;
 use crate::panels::{rgb_from, Panel};
 use crate::reference::stereo::table::{DemTable, DEFAULT_TABLE};
 use crate::reference::stereo::{self as dem, Decoder, DemParams, StereoError};

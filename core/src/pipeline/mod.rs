@@ -18,20 +18,29 @@
 //! reusing the scratch of the stages before ([`layout`]).
 //!
 //! ```
-//! use protogist::image::{ImageView, Rgb8};
+//! use protogist::image::{ImageView, ImageViewMut, Rgb8};
 //! use protogist::pipeline::{workspace_words, Pipeline, PipelineParams};
-//! # fn run(tables: [&[u8]; 3], model: &[u8], l: &[Rgb8], r: &[Rgb8])
-//! #     -> Result<(), protogist::pipeline::PipelineError> {
+//! # use protogist::synth::{render_left, render_right, SceneSpec};
+//! # let tables: [&[u8]; 3] = [
+//! #     include_bytes!("../../../firmware-sim/data/dem_c2f_l0.bin"),
+//! #     include_bytes!("../../../firmware-sim/data/dem_c2f_l1.bin"),
+//! #     include_bytes!("../../../firmware-sim/data/dem_c2f_l2.bin"),
+//! # ];
+//! # let model: &[u8] = include_bytes!("../../../host/data/shapes_model.bin");
 //! let (w, h) = (160, 120);
+//! # let (mut l, mut r) = (vec![Rgb8::default(); w * h], vec![Rgb8::default(); w * h]);
+//! # render_left(&SceneSpec::demo(w, h), &mut ImageViewMut::packed(&mut l, w, h)?).unwrap();
+//! # render_right(&SceneSpec::demo(w, h), &mut ImageViewMut::packed(&mut r, w, h)?).unwrap();
 //! let params = PipelineParams::DEFAULT.with_objects(4);
 //! let pipeline = Pipeline::new(&params, &tables, model)?;
 //! let mut ws = vec![0u64; workspace_words(w, h, &params)];
-//! let frame = pipeline.run(&ImageView::packed(l, w, h)?, &ImageView::packed(r, w, h)?, &mut ws)?;
+//! let frame = pipeline.run(&ImageView::packed(&l, w, h)?, &ImageView::packed(&r, w, h)?, &mut ws)?;
 //! for o in frame.objects() {
 //!     let best = o.top().first().map(|r| pipeline.class_name(r.class));
 //!     println!("{:?} at {:?}, disparity {} px: {:?}", best, o.bbox, o.delta, o.identity);
 //! }
-//! # Ok(()) }
+//! # assert_eq!(frame.objects().len(), 1);
+//! # Ok::<(), protogist::pipeline::PipelineError>(())
 //! ```
 //!
 //! Intermediate maps go to an [`Observer`] ([`Pipeline::run_observed`]),

@@ -144,7 +144,7 @@ pub fn core_params(shared: &Shared<'_>, width: usize) -> protogist::pipeline::Pi
         segment: shared.segment,
         ..protogist::pipeline::PipelineParams::DEFAULT
     }
-    .with_max_disp(crate::run_cmd::default_max_disp(width))
+    .with_max_disp(crate::product::default_max_disp(width))
 }
 
 /// A GT disparity in px as a cell (OFF when unknown or out of range).
