@@ -71,7 +71,6 @@ fn gt_cell(v: Option<f32>) -> DisparityCell {
         .into()
 }
 
-
 /// Runs core's pipeline (and, when asked, the f32 chain), and writes the
 /// panels and `report.json`.
 ///
