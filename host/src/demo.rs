@@ -3,7 +3,7 @@
 //!
 //! Each stage contributes panels and summary lines; a new stage is one more
 //! block in [`run_demo`]. Everything is rendered in memory first, and only
-//! then written by [`finish`], so a failure leaves no half-written output.
+//! then written by [`crate::output::finish`], so a failure leaves no half-written output.
 
 use crate::error::{HostError, Result};
 use crate::panels::{self, Panel};
