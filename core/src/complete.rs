@@ -48,12 +48,17 @@ pub struct CompleteParams {
     pub min_trusted: u32,
 }
 
+impl CompleteParams {
+    /// Guard 1, one trusted cell per median.
+    pub const DEFAULT: Self = Self {
+        guard: 1,
+        min_trusted: 1,
+    };
+}
+
 impl Default for CompleteParams {
     fn default() -> Self {
-        Self {
-            guard: 1,
-            min_trusted: 1,
-        }
+        Self::DEFAULT
     }
 }
 

@@ -52,13 +52,12 @@ pub fn check_memory(what: &str, need: u64, limit: u64) -> Result<()> {
 /// Bytes the f32 disparity energy model plans for a `w x h` pair (upper
 /// bound, see the module documentation).
 pub fn dem_bytes(params: &DemParams, w: usize, h: usize) -> u64 {
-    let channels = 1u64;
     let levels = u64::from(params.levels);
     let carriers = u64::from(params.carriers);
     let disparities = u64::from(params.max_disp) + 1;
     let sgm = matches!(params.aggregation, Aggregation::Sgm { .. });
     // f32 planes per pixel.
-    let responses = 2 * channels * (levels * carriers * 2 + 2);
+    let responses = 2 * (levels * carriers * 2 + 2);
     let scores = 2 * disparities * if sgm { 4 } else { 1 };
     let maps = 16;
     (w as u64) * (h as u64) * 4 * (responses + scores + maps)

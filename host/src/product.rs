@@ -5,7 +5,8 @@
 
 use crate::error::{HostError, Result};
 use crate::panels::{self, Panel};
-use crate::reference::stereo::{c2f::level_params, DemParams};
+use crate::reference::stereo::c2f::level_params;
+use crate::stereo_cmd::engine::reference_of;
 use crate::stereo_cmd::table_for;
 use protogist::conspicuity::{EdgeCell, Luv};
 use protogist::disparity::DisparityCell;
@@ -51,21 +52,8 @@ pub fn tables_for(params: &PipelineParams) -> Result<Vec<Vec<u8>>> {
             .map(|b| b.to_vec())
             .collect());
     }
-    let d = &s.dem;
-    let reference = DemParams {
-        max_disp: d.max_disp,
-        carriers: d.carriers,
-        levels: d.levels,
-        wavelength: d.wavelength,
-        sigma_per_wavelength: d.sigma_per_wavelength,
-        radius: d.radius,
-        shift_step: d.shift_step,
-        pool_radius: d.pool_radius,
-        min_energy: d.min_energy,
-        min_margin: d.min_margin,
-        lr_tolerance: d.lr_tolerance,
-        ..DemParams::default()
-    };
+    // The same mapping as `protogist stereo --engine reference`.
+    let (reference, _) = reference_of(s);
     (0..params.tables())
         .map(|k| Ok(table_for(&level_params(&reference, k), None)?.to_bytes()))
         .collect()

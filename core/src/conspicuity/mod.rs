@@ -230,12 +230,17 @@ pub struct EdgeParams {
     pub threshold_percent: u8,
 }
 
+impl EdgeParams {
+    /// Two smoothing passes and the paper's 10 % threshold.
+    pub const DEFAULT: Self = Self {
+        smooth: SmoothParams { iterations: 2 },
+        threshold_percent: 10,
+    };
+}
+
 impl Default for EdgeParams {
     fn default() -> Self {
-        Self {
-            smooth: SmoothParams::default(),
-            threshold_percent: 10,
-        }
+        Self::DEFAULT
     }
 }
 

@@ -51,13 +51,13 @@ pub mod layout;
 mod run;
 
 use crate::complete::{CompleteError, CompleteParams};
-use crate::conspicuity::{ConspicuityError, EdgeCell, EdgeParams, Luv, LuvTables, SmoothParams};
+use crate::conspicuity::{ConspicuityError, EdgeCell, EdgeParams, Luv, LuvTables};
 use crate::disparity::DisparityCell;
 use crate::image::{ImageError, ImageView};
 use crate::mlp::{blob::Model, Identity, MlpError, ModelError, Ranked};
 use crate::segment::{
-    BitView, BoundingBox, Detection, Disk, DisparityRange, PsiMean, Ratio, SegmentBuffers,
-    SegmentError, SegmentParams,
+    BitView, BoundingBox, Detection, DisparityRange, Ratio, SegmentBuffers, SegmentError,
+    SegmentParams,
 };
 use crate::shape::{Centroid, ShapeElem, ShapeError, SHAPE_LEN};
 use crate::stereo::c2f::{C2f, C2fParams, MAX_COARSE};
@@ -114,28 +114,9 @@ impl PipelineParams {
     /// classes.
     pub const PAPER: Self = Self {
         stereo: STEREO_DEFAULT,
-        edges: EdgeParams {
-            smooth: SmoothParams { iterations: 2 },
-            threshold_percent: 10,
-        },
-        complete: CompleteParams {
-            guard: 1,
-            min_trusted: 1,
-        },
-        segment: SegmentParams {
-            top_bottom_strip: Ratio::new(1, 6),
-            left_strip: Ratio::new(1, 8),
-            fg_low: Ratio::new(1, 10),
-            fg_high: Ratio::new(2, 1),
-            range: Ratio::new(2, 5),
-            exponent: 1,
-            psi_mean: PsiMean::Region,
-            disk: Disk::Cross,
-            refine_dilations: 4,
-            closing_steps: 4,
-            min_area: Ratio::new(1, 5),
-            max_objects: 1,
-        },
+        edges: EdgeParams::DEFAULT,
+        complete: CompleteParams::DEFAULT,
+        segment: SegmentParams::PAPER,
         delta_q16: None,
         model: ModelCapacity {
             hidden: 2048,

@@ -148,24 +148,28 @@ pub struct SegmentParams {
 
 impl Default for SegmentParams {
     fn default() -> Self {
-        Self {
-            top_bottom_strip: Ratio::new(1, 6),
-            left_strip: Ratio::new(1, 8),
-            fg_low: Ratio::new(1, 10),
-            fg_high: Ratio::new(2, 1),
-            range: Ratio::new(2, 5),
-            exponent: 1,
-            psi_mean: PsiMean::Region,
-            disk: Disk::Cross,
-            refine_dilations: 4,
-            closing_steps: 4,
-            min_area: Ratio::new(1, 5),
-            max_objects: 1,
-        }
+        Self::PAPER
     }
 }
 
 impl SegmentParams {
+    /// The paper's values (A = 1, ψ̄ over the region, which the paper
+    /// leaves open), one object.
+    pub const PAPER: Self = Self {
+        top_bottom_strip: Ratio::new(1, 6),
+        left_strip: Ratio::new(1, 8),
+        fg_low: Ratio::new(1, 10),
+        fg_high: Ratio::new(2, 1),
+        range: Ratio::new(2, 5),
+        exponent: 1,
+        psi_mean: PsiMean::Region,
+        disk: Disk::Cross,
+        refine_dilations: 4,
+        closing_steps: 4,
+        min_area: Ratio::new(1, 5),
+        max_objects: 1,
+    };
+
     /// Checks the parameters.
     ///
     /// # Errors
