@@ -287,7 +287,7 @@ pub fn preflight(cmd: &Command, limit: u64) -> Result<()> {
             let point = protogist::stereo::c2f::C2fParams::from_name(&opts.point);
             match (&opts.engine, point) {
                 (crate::stereo_cmd::Engine::Reference, Some(p)) => {
-                    let (mut dem, _) = crate::stereo_cmd::engine::reference_of(&p);
+                    let mut dem = crate::dem_tables::params_of(&p);
                     dem.max_disp = opts.max_disp;
                     l::check_stereo(&dem, w, h, limit)
                 }

@@ -158,7 +158,7 @@ pub enum HostError {
     },
     /// A scene set (`gen-scenes`) that cannot be used.
     #[error("{0}")]
-    Scene(#[from] crate::scenes::load::SceneError),
+    Scene(#[from] SceneError),
     /// A run that would need more memory than the limit.
     #[error("{what} needs about {need_mib} MiB, over the limit of {limit_mib} MiB (raise it with --max-memory MIB)")]
     TooMuchMemory {
@@ -205,3 +205,35 @@ impl HostError {
 
 /// Result of host operations.
 pub type Result<T, E = HostError> = std::result::Result<T, E>;
+
+/// Why a scene set cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// `index.json` unreadable as an index, or of another format.
+    #[error("scene index {}: {reason}", path.display())]
+    Index {
+        /// The index file.
+        path: PathBuf,
+        /// What is wrong (one line).
+        reason: String,
+    },
+    /// A scene file that disagrees with the truth or the index.
+    #[error("scene {}: {reason}", path.display())]
+    Truth {
+        /// The file at fault.
+        path: PathBuf,
+        /// What is wrong (one line).
+        reason: String,
+    },
+    /// A class of the scenes that the model does not know.
+    #[error("model {} has no class {class:?} of the scenes ({})", model.display(), index.display())]
+    ModelClasses {
+        /// The model file.
+        model: PathBuf,
+        /// The scenes' index.
+        index: PathBuf,
+        /// The first class missing from the model.
+        class: String,
+    },
+}

@@ -133,12 +133,12 @@ pub fn segment_eval(
 /// [`EVAL_MAX_DISP`], its decoder trained now (seeded, about 2 s).
 ///
 /// # Errors
-/// As [`crate::stereo_cmd::decoder_for`].
+/// As [`crate::dem_tables::decoder_for`].
 pub fn eval_dem() -> Result<(DemParams, Decoder)> {
     let params = DemParams {
         max_disp: EVAL_MAX_DISP,
         ..DemParams::default()
     };
-    let decoder = crate::stereo_cmd::decoder_for(&params, None)?;
+    let decoder = crate::dem_tables::decoder_for(&params, None)?;
     Ok((params, decoder))
 }

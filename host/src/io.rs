@@ -1,5 +1,5 @@
-//! Image loading, exact area-average downscaling and all-or-nothing PNG
-//! output.
+//! Image loading and exact area-average downscaling (writing is
+//! [`crate::output`]'s).
 //!
 //! The downscaler is written here rather than taken from a resizing crate:
 //! the common "box" filters (Pillow's and `fast_image_resize`'s) weight a
@@ -9,11 +9,10 @@
 //! integers, and rounds once.
 
 use crate::error::{HostError, Result};
-use crate::panels::Panel;
 use image::{ImageReader, RgbImage};
 use protogist::image::Rgb8;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Largest input image accepted, in pixels (checked from the header,
 /// before anything is decoded): 2^26, 67 Mpx, about 200 MB as 8-bit RGB.
@@ -203,33 +202,6 @@ pub fn to_core_rgb(img: &RgbImage) -> Vec<Rgb8> {
         .collect()
 }
 
-/// Creates `dir` (and its parents) if needed.
-///
-/// # Errors
-/// [`HostError::NotADirectory`] when `dir` is a file, [`HostError::Io`] when
-/// it cannot be created.
-pub fn ensure_dir(dir: &Path) -> Result<()> {
-    if dir.exists() && !dir.is_dir() {
-        return Err(HostError::NotADirectory(dir.to_path_buf()));
-    }
-    fs::create_dir_all(dir).map_err(|e| HostError::io(dir, e))
-}
-
-/// Writes every panel as `DIR/{name}.png`, all or nothing: one
-/// [`Output`](crate::output::Output) result (see [`crate::output`]).
-/// Returns the final paths.
-///
-/// # Errors
-/// [`HostError::Encode`] or [`HostError::Io`]; `dir` is then left without
-/// any panel of this call.
-pub fn write_panels(dir: &Path, panels: &[Panel]) -> Result<Vec<PathBuf>> {
-    let mut out = crate::output::Output::dir(dir);
-    out.add_panels(panels)?;
-    out.commit()
-}
-
-pub use crate::output::write_atomic;
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -345,19 +317,5 @@ mod tests {
             working_size(10, 10, 0),
             Err(HostError::ZeroDimension { name: "width" })
         ));
-    }
-
-    #[test]
-    fn a_failed_write_leaves_no_panel_of_the_run() {
-        let dir = tempfile::tempdir().unwrap();
-        let img = image::DynamicImage::ImageRgb8(RgbImage::new(2, 2));
-        let panels = [
-            Panel::new("first", img.clone()),
-            // A name inside a missing sub-directory fails on write.
-            Panel::new("missing/second", img),
-        ];
-        assert!(write_panels(dir.path(), &panels).is_err());
-        let left: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
-        assert!(left.is_empty(), "{left:?}");
     }
 }

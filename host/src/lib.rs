@@ -6,9 +6,11 @@
 //!
 //! The CLI side: [`cli`] parses and dispatches, [`demo`] runs the synthetic
 //! scene, [`stages`] runs the core stages step by step and turns their maps
-//! into [`panels`], [`io`] loads, downscales and writes images, [`summary`]
+//! into [`panels`], [`io`] loads and downscales images, [`output`] writes results all or nothing, [`summary`]
 //! is what gets printed, and [`error`] is the one error type of them all.
-//! [`stereo_cmd`] runs the DEM reference on a pair and scores it against
+//! [`product`] runs core's pipeline on a [`pair`] for `run`, the demo and
+//! the evaluations; [`dem_tables`] picks the disparity decoder tables.
+//! [`stereo_cmd`] runs the stereo stage alone and scores it against
 //! [`ground_truth`]. [`classify`] holds the classification rules, the
 //! performance measures and plots of the paper's sections 4.1 and 5.1, and
 //! the development silhouettes of `protogist gen-shapes`. [`scenes`] renders
@@ -18,6 +20,7 @@
 pub mod canvas;
 pub mod classify;
 pub mod cli;
+pub mod dem_tables;
 pub mod demo;
 pub mod error;
 pub mod eval;
@@ -26,6 +29,7 @@ pub mod ground_truth;
 pub mod io;
 pub mod limits;
 pub mod output;
+pub mod pair;
 pub mod panels;
 pub mod plot;
 pub mod product;

@@ -142,7 +142,7 @@ impl Output {
     /// [`HostError::Locked`] when a concurrent writer holds the lock.
     pub fn commit(self) -> Result<Vec<PathBuf>> {
         if let Some(d) = &self.dir {
-            crate::io::ensure_dir(d)?;
+            ensure_dir(d)?;
         }
         let Some((first, _)) = self.files.first() else {
             return Ok(Vec::new());
@@ -297,6 +297,31 @@ impl Drop for Lock {
     }
 }
 
+/// Creates `dir` (and its parents) if needed.
+///
+/// # Errors
+/// [`HostError::NotADirectory`] when `dir` is a file, [`HostError::Io`] when
+/// it cannot be created.
+pub fn ensure_dir(dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(HostError::NotADirectory(dir.to_path_buf()));
+    }
+    fs::create_dir_all(dir).map_err(|e| HostError::io(dir, e))
+}
+
+/// Writes every panel as `DIR/{name}.png`, all or nothing: one
+/// [`Output`] result .
+/// Returns the final paths.
+///
+/// # Errors
+/// [`HostError::Encode`] or [`HostError::Io`]; `dir` is then left without
+/// any panel of this call.
+pub fn write_panels(dir: &Path, panels: &[Panel]) -> Result<Vec<PathBuf>> {
+    let mut out = Output::dir(dir);
+    out.add_panels(panels)?;
+    out.commit()
+}
+
 /// Columns of the overview montage.
 const OVERVIEW_COLUMNS: usize = 4;
 
@@ -304,7 +329,7 @@ const OVERVIEW_COLUMNS: usize = 4;
 /// appends the closing summary lines (time and output directory).
 ///
 /// # Errors
-/// As [`crate::io::write_panels`].
+/// As [`write_panels`].
 pub fn finish(
     dir: &std::path::Path,
     panels: Vec<crate::panels::Panel>,
@@ -440,5 +465,19 @@ mod tests {
             .unwrap();
         write_atomic(&dir.path().join("f"), b"ok").unwrap();
         assert_eq!(names(dir.path()), ["f"]);
+    }
+
+    #[test]
+    fn a_failed_write_leaves_no_panel_of_the_run() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = image::DynamicImage::ImageRgb8(image::RgbImage::new(2, 2));
+        let panels = [
+            Panel::new("first", img.clone()),
+            // A name inside a missing sub-directory fails on write.
+            Panel::new("missing/second", img),
+        ];
+        assert!(write_panels(dir.path(), &panels).is_err());
+        let left: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
+        assert!(left.is_empty(), "{left:?}");
     }
 }

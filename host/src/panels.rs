@@ -4,6 +4,7 @@
 //! [`luv_to_srgb`] is plain f32 and is not part of any stage.
 
 use crate::error::{HostError, Result};
+use crate::ground_truth::GtMap;
 use embedded_graphics::prelude::*;
 use embedded_graphics::primitives::Rectangle;
 use image::{DynamicImage, GrayImage, Rgb, RgbImage};
@@ -275,6 +276,38 @@ const CAPTION_TEXT: Rgb<u8> = Rgb([235, 235, 235]);
 
 fn coord(v: u32) -> i32 {
     i32::try_from(v).unwrap_or(i32::MAX)
+}
+
+/// Disparity colour-mapped with turbo over `0..=max`, OFF black.
+pub fn disparity_panel(d: &[Option<f32>], w: usize, h: usize, max: f32) -> RgbImage {
+    RgbImage::from_fn(w as u32, h as u32, |x, y| {
+        match d[y as usize * w + x as usize] {
+            Some(v) => {
+                let c =
+                    colorous::TURBO.eval_continuous(f64::from((v / max.max(1.0)).clamp(0.0, 1.0)));
+                Rgb([c.r, c.g, c.b])
+            }
+            None => Rgb([0, 0, 0]),
+        }
+    })
+}
+
+/// Error map: black no GT, blue no estimate, green ≤ 1 px, yellow ≤ 2,
+/// orange ≤ 4, red above.
+pub fn error_panel(est: &[Option<f32>], gt: &GtMap) -> RgbImage {
+    RgbImage::from_fn(gt.width as u32, gt.height as u32, |x, y| {
+        let p = y as usize * gt.width + x as usize;
+        Rgb(match (est[p], gt.data[p]) {
+            (_, None) => [0, 0, 0],
+            (None, Some(_)) => [0, 0, 160],
+            (Some(e), Some(g)) => match (e - g).abs() {
+                v if v <= 1.0 => [0, 190, 0],
+                v if v <= 2.0 => [230, 210, 0],
+                v if v <= 4.0 => [240, 120, 0],
+                _ => [220, 0, 0],
+            },
+        })
+    })
 }
 
 #[cfg(test)]

@@ -3,11 +3,10 @@
 //! the evaluations call [`run_frame`], so the desktop computes what the
 //! board computes, bit for bit.
 
+use crate::dem_tables::{params_of, table_for};
 use crate::error::{HostError, Result};
 use crate::panels::{self, Panel};
 use crate::reference::stereo::c2f::level_params;
-use crate::stereo_cmd::engine::reference_of;
-use crate::stereo_cmd::table_for;
 use protogist::conspicuity::{EdgeCell, Luv};
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
@@ -53,7 +52,7 @@ pub fn tables_for(params: &PipelineParams) -> Result<Vec<Vec<u8>>> {
             .collect());
     }
     // The same mapping as `protogist stereo --engine reference`.
-    let (reference, _) = reference_of(s);
+    let reference = params_of(s);
     (0..params.tables())
         .map(|k| Ok(table_for(&level_params(&reference, k), None)?.to_bytes()))
         .collect()

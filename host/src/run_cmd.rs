@@ -6,12 +6,14 @@
 //! or given ground truth with `--gt-disparity`) and prints its agreement
 //! with core's.
 
+use crate::dem_tables::decoder_for;
 use crate::error::{HostError, Result};
+use crate::pair::load_pair;
+use crate::panels::disparity_panel;
 use crate::panels::{rgb_from, Panel};
 use crate::product::{default_max_disp, run_frame, tables_for};
 use crate::reference::stereo::DemParams;
 use crate::stages::{run_complete, run_conspicuity, run_segment, run_shape};
-use crate::stereo_cmd::{decoder_for, disparity_panel, load_pair};
 use crate::summary::Summary;
 use protogist::complete::CompleteParams;
 use protogist::conspicuity::{EdgeParams, LuvTables};
@@ -241,7 +243,7 @@ struct ReferenceRun {
 /// completion, segmentation and shape.
 fn reference_chain(
     opts: &RunOptions,
-    pair: &crate::stereo_cmd::Pair,
+    pair: &crate::pair::Pair,
     max_disp: u8,
     s: &mut Summary,
 ) -> Result<ReferenceRun> {

@@ -567,7 +567,7 @@ impl DemResult {
         let (w, h) = (self.width, self.height);
         vec![Panel::new(
             "b_disparity",
-            crate::stereo_cmd::disparity_panel(&self.disparity_f32, w, h, self.max_gt),
+            crate::panels::disparity_panel(&self.disparity_f32, w, h, self.max_gt),
         )]
     }
 

@@ -2,15 +2,14 @@
 //! named operating point on a pair, with optional ground truth, and the
 //! decoder table.
 
-use crate::error::{HostError, Result};
-use crate::ground_truth::{gt_at, load_gt, metrics, GtMap, Metrics};
-use crate::io;
+use crate::error::Result;
+use crate::ground_truth::{metrics, Metrics};
 use crate::output::finish;
-use crate::panels::{rgb_from, Panel};
-use crate::reference::stereo::table::{DemTable, DEFAULT_TABLE};
-use crate::reference::stereo::{self as dem, Decoder, DemParams, StereoError};
+use crate::pair::load_pair;
+use crate::panels::{disparity_panel, error_panel, rgb_from, Panel};
+use crate::reference::stereo::table::DemTable;
+use crate::reference::stereo::{self as dem, DemParams, StereoError};
 use crate::summary::Summary;
-use image::{Rgb, RgbImage};
 use protogist::disparity::DisparityCell;
 use protogist::stereo::c2f::C2fParams;
 use std::path::{Path, PathBuf};
@@ -96,50 +95,6 @@ impl StereoOptions {
     }
 }
 
-/// The decoder for `params`: `table` if given (it must match), else the
-/// built-in default table when it matches, else trained now. A trained
-/// decoder goes through the integer table, so every path decodes with the
-/// weights core will hold.
-///
-/// # Errors
-/// [`HostError::Io`], [`HostError::Table`] for a bad table,
-/// [`HostError::Stereo`] when it was trained for other parameters.
-pub fn decoder_for(params: &DemParams, table: Option<&Path>) -> Result<Decoder> {
-    Ok(table_for(params, table)?.to_decoder())
-}
-
-/// The integer table behind [`decoder_for`] (the same choice and checks):
-/// what core's engines parse.
-///
-/// # Errors
-/// As [`decoder_for`].
-pub fn table_for(params: &DemParams, table: Option<&Path>) -> Result<DemTable> {
-    let parse = |bytes: &[u8], path: &Path| {
-        DemTable::parse(bytes).map_err(|source| HostError::Table {
-            path: path.to_path_buf(),
-            source,
-        })
-    };
-    let t = match table {
-        Some(path) => parse(
-            &std::fs::read(path).map_err(|e| HostError::io(path, e))?,
-            path,
-        )?,
-        None => match DemTable::parse(DEFAULT_TABLE) {
-            Ok(t) if t.layout == dem::layout_of(params) => t,
-            _ => DemTable::from_decoder(&dem::train(params)),
-        },
-    };
-    if t.layout != dem::layout_of(params) {
-        return Err(StereoError::DecoderMismatch {
-            got: t.layout.max_disp,
-            expected: params.max_disp,
-        }
-        .into());
-    }
-    Ok(t)
-}
-
 /// `protogist train-dem`: trains for `params` and writes the table.
 ///
 /// # Errors
@@ -166,38 +121,6 @@ pub fn run_train_dem(params: &DemParams, out: &Path) -> Result<Summary> {
     Ok(s)
 }
 
-/// Disparity colour-mapped with turbo over `0..=max`, OFF black.
-pub fn disparity_panel(d: &[Option<f32>], w: usize, h: usize, max: f32) -> RgbImage {
-    RgbImage::from_fn(w as u32, h as u32, |x, y| {
-        match d[y as usize * w + x as usize] {
-            Some(v) => {
-                let c =
-                    colorous::TURBO.eval_continuous(f64::from((v / max.max(1.0)).clamp(0.0, 1.0)));
-                Rgb([c.r, c.g, c.b])
-            }
-            None => Rgb([0, 0, 0]),
-        }
-    })
-}
-
-/// Error map: black no GT, blue no estimate, green ≤ 1 px, yellow ≤ 2,
-/// orange ≤ 4, red above.
-pub fn error_panel(est: &[Option<f32>], gt: &GtMap) -> RgbImage {
-    RgbImage::from_fn(gt.width as u32, gt.height as u32, |x, y| {
-        let p = y as usize * gt.width + x as usize;
-        Rgb(match (est[p], gt.data[p]) {
-            (_, None) => [0, 0, 0],
-            (None, Some(_)) => [0, 0, 160],
-            (Some(e), Some(g)) => match (e - g).abs() {
-                v if v <= 1.0 => [0, 190, 0],
-                v if v <= 2.0 => [230, 210, 0],
-                v if v <= 4.0 => [240, 120, 0],
-                _ => [220, 0, 0],
-            },
-        })
-    })
-}
-
 fn push_metrics(s: &mut Summary, name: &str, m: &Metrics) {
     let f = |v: [f64; 3]| format!("{:.1} / {:.1} / {:.1}", v[0], v[1], v[2]);
     s.push(
@@ -221,89 +144,6 @@ fn metrics_json(m: &Metrics) -> serde_json::Value {
         "bad4_all": m.bad_all[2],
         "mae": m.mae,
         "density": m.density,
-    })
-}
-
-/// A stereo pair (and its optional ground truth) at the working size.
-#[derive(Clone, Debug)]
-pub struct Pair {
-    /// Input size `(width, height)`.
-    pub input_size: (u32, u32),
-    /// Working width.
-    pub width: usize,
-    /// Working height.
-    pub height: usize,
-    /// Left view, packed.
-    pub left: Vec<protogist::image::Rgb8>,
-    /// Right view, packed.
-    pub right: Vec<protogist::image::Rgb8>,
-    /// Ground-truth disparity in px of the working size, when given.
-    pub gt: Option<GtMap>,
-}
-
-/// Loads a pair and optional GT, checks their sizes, and area-downscales all
-/// to `max_width` (GT disparities scale with the images).
-///
-/// # Errors
-/// [`HostError`] for unreadable files, a pair of different sizes, GT of
-/// another size, or a zero width.
-pub fn load_pair(
-    left: &Path,
-    right: &Path,
-    gt: Option<&Path>,
-    gt_scale: f32,
-    max_width: u32,
-) -> Result<Pair> {
-    if max_width == 0 {
-        return Err(HostError::ZeroDimension { name: "width" });
-    }
-    let (left, right) = (io::load_rgb(left)?, io::load_rgb(right)?);
-    let (ow, oh) = left.dimensions();
-    if right.dimensions() != (ow, oh) {
-        let (rw, rh) = right.dimensions();
-        return Err(StereoError::SizeMismatch {
-            left: (ow as usize, oh as usize),
-            right: (rw as usize, rh as usize),
-        }
-        .into());
-    }
-    let gt_full = match gt {
-        Some(path) => {
-            let g = load_gt(path, gt_scale)?;
-            if (g.width, g.height) != (ow as usize, oh as usize) {
-                return Err(HostError::GroundTruthSize {
-                    path: path.to_path_buf(),
-                    expected: (ow as usize, oh as usize),
-                    got: (g.width, g.height),
-                });
-            }
-            Some(g)
-        }
-        None => None,
-    };
-    let (w, h) = io::working_size(ow, oh, max_width)?;
-    let scale = |img: image::RgbImage| {
-        if (w, h) == (ow, oh) {
-            img
-        } else {
-            io::area_downscale(&img, w, h)
-        }
-    };
-    let (lp, rp) = (
-        io::to_core_rgb(&scale(left)),
-        io::to_core_rgb(&scale(right)),
-    );
-    let (w, h) = (w as usize, h as usize);
-    Ok(Pair {
-        input_size: (ow, oh),
-        width: w,
-        height: h,
-        left: lp,
-        right: rp,
-        gt: match (gt_full, gt) {
-            (Some(g), Some(path)) => Some(gt_at(&g, w, h, path)?),
-            _ => None,
-        },
     })
 }
 

@@ -5,6 +5,7 @@
 //! fetch-data`).
 
 use protogist::image::{ImageView, Rgb8};
+use protogist_host::dem_tables::decoder_for;
 use protogist_host::reference::stereo::c2f::{
     level_max_disp, level_params, stereo_c2f, windows_from,
 };
@@ -16,7 +17,6 @@ use protogist_host::reference::stereo::train::random_dot_pair;
 use protogist_host::reference::stereo::{
     self as dem, stereo_planes, stereo_planes_in, DemParams, DisparityMapsF, Windows,
 };
-use protogist_host::stereo_cmd::decoder_for;
 use protogist_tests::{aloe_files, stereo_options, SGM_P1, SGM_P2, SGM_PATHS};
 
 fn default_decoder() -> dem::Decoder {

@@ -20,7 +20,7 @@ use std::sync::{Mutex, OnceLock};
 /// The reference's parameters for `p` (what `protogist stereo --engine
 /// reference` runs).
 fn host_params(p: &C2fParams) -> dem::DemParams {
-    protogist_host::stereo_cmd::engine::reference_of(p).0
+    protogist_host::dem_tables::params_of(p)
 }
 
 /// The decoder tables of every level of `p` (trained once per layout).

@@ -33,6 +33,7 @@ pub mod metrics;
 pub mod mlp;
 pub mod model;
 pub mod model_cmd;
+mod plot_style;
 mod plot_text;
 pub mod plots;
 pub mod probit;

@@ -18,7 +18,7 @@ use super::quant::{int_outputs, int_scores, model_error, quantize, score_sets};
 use super::rules::{evaluate, ranked, Evaluation, Templates};
 use super::train::{train, TrainParams};
 use crate::error::{HostError, Result};
-use crate::io::ensure_dir;
+use crate::output::ensure_dir;
 use crate::summary::Summary;
 use ndarray::Array2;
 use protogist::shape::SHAPE_LEN;

@@ -1,7 +1,7 @@
 //! The text of the CMC, DET and ROC plots: margins, tick labels, axis
 //! titles and the legend, laid out in the pixels of the built-in mono fonts.
 
-use super::plots::{Chart, Curve, PlotKind, DET_RANGE, GRID_DARK, MAGENTA};
+use super::plot_style::{Chart, Curve, PlotKind, DET_RANGE, GRID_DARK, MAGENTA};
 use super::probit::probit;
 use crate::canvas::{font_for, text_width, HAnchor, TextMark, VAnchor, TEXT};
 use embedded_graphics::mono_font::MonoFont;

@@ -10,7 +10,7 @@ use super::dataset::load_dataset;
 use super::model::{bad_model, parse_sidecar, ModelKind};
 use super::quant::{emit_rust, model_error, quantize};
 use crate::error::{HostError, Result};
-use crate::io::ensure_dir;
+use crate::output::ensure_dir;
 use crate::output::Output;
 use crate::summary::Summary;
 use protogist::mlp::Model;

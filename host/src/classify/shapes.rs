@@ -21,7 +21,7 @@
 pub use super::families::{Family, ShapeClass, CLASSES, SIZE_RANGE};
 use super::mlp::{unit, SplitMix};
 use crate::error::{HostError, Result};
-use crate::io::{ensure_dir, write_atomic};
+use crate::output::{ensure_dir, write_atomic};
 use crate::summary::Summary;
 use image::GrayImage;
 use std::f64::consts::PI;

@@ -16,7 +16,7 @@ pub mod overview;
 pub mod score;
 
 use crate::error::{HostError, Result};
-use crate::io::{ensure_dir, write_atomic};
+use crate::output::{ensure_dir, write_atomic};
 use crate::reference::stereo::DemParams;
 use crate::scenes::load::{check_classes, load_set, Scene};
 use crate::summary::Summary;
@@ -91,14 +91,14 @@ pub struct Report {
 /// search range of 31 px per 160 px of width (the scenes reach 28).
 ///
 /// # Errors
-/// As [`crate::stereo_cmd::decoder_for`].
+/// As [`crate::dem_tables::decoder_for`].
 pub fn reference_dem(width: usize) -> Result<(DemParams, crate::reference::stereo::Decoder)> {
     let max_disp = (31 * width).div_ceil(160).min(usize::from(u8::MAX));
     let params = DemParams {
         max_disp: u8::try_from(max_disp).unwrap_or(u8::MAX),
         ..DemParams::default()
     };
-    let decoder = crate::stereo_cmd::decoder_for(&params, None)?;
+    let decoder = crate::dem_tables::decoder_for(&params, None)?;
     Ok((params, decoder))
 }
 

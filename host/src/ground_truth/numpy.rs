@@ -238,12 +238,12 @@ mod tests {
         image::RgbImage::new(3, 2).save(&img).unwrap();
         let ok = d.join("ok.npy");
         std::fs::write(&ok, npy(&[2, 3], Order::C, &VALUES)).unwrap();
-        let pair = crate::stereo_cmd::load_pair(&img, &img, Some(&ok), 1.0, 3).unwrap();
+        let pair = crate::pair::load_pair(&img, &img, Some(&ok), 1.0, 3).unwrap();
         assert_eq!(pair.gt.unwrap().data, EXPECTED);
         // 3 rows x 2 columns: the transposed size.
         let bad = d.join("bad.npz");
         std::fs::write(&bad, npz(&[("arr_0.npy", npy(&[3, 2], Order::C, &VALUES))])).unwrap();
-        let err = crate::stereo_cmd::load_pair(&img, &img, Some(&bad), 1.0, 3).unwrap_err();
+        let err = crate::pair::load_pair(&img, &img, Some(&bad), 1.0, 3).unwrap_err();
         assert!(
             matches!(
                 err,

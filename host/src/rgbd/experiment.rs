@@ -24,7 +24,7 @@ use crate::classify::quant::{int_outputs, int_scores, model_error, quantize_as, 
 use crate::classify::rules::{evaluate, Templates};
 use crate::classify::train::{train, TrainParams};
 use crate::error::{HostError, Result};
-use crate::io::{ensure_dir, write_atomic};
+use crate::output::{ensure_dir, write_atomic};
 use crate::summary::Summary;
 use indicatif::{ProgressBar, ProgressStyle};
 use ndarray::Array2;

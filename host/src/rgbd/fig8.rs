@@ -14,7 +14,7 @@ use crate::classify::metrics::Det;
 use crate::classify::plots::{cmc_points, render_png, render_svg, Curve, PlotKind, MAGENTA};
 use crate::classify::probit::probit;
 use crate::error::{HostError, Result};
-use crate::io::{ensure_dir, write_atomic};
+use crate::output::{ensure_dir, write_atomic};
 use embedded_graphics::mono_font::{ascii::FONT_6X10, MonoTextStyle};
 use embedded_graphics::pixelcolor::Rgb888;
 use embedded_graphics::prelude::*;

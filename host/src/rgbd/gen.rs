@@ -30,7 +30,7 @@
 use super::render::{render, rot_x, rot_z, Object, Part, Render, Solid, Texture, View, V3};
 use crate::classify::mlp::{unit, SplitMix};
 use crate::error::{HostError, Result};
-use crate::io::ensure_dir;
+use crate::output::ensure_dir;
 use crate::summary::Summary;
 use rayon::prelude::*;
 use std::f64::consts::PI;

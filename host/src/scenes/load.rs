@@ -13,37 +13,7 @@ use std::path::{Path, PathBuf};
 /// map inside its mask, px.
 pub const DISPARITY_TOLERANCE: f64 = 1e-3;
 
-/// Why a scene set cannot be used.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum SceneError {
-    /// `index.json` unreadable as an index, or of another format.
-    #[error("scene index {}: {reason}", path.display())]
-    Index {
-        /// The index file.
-        path: PathBuf,
-        /// What is wrong (one line).
-        reason: String,
-    },
-    /// A scene file that disagrees with the truth or the index.
-    #[error("scene {}: {reason}", path.display())]
-    Truth {
-        /// The file at fault.
-        path: PathBuf,
-        /// What is wrong (one line).
-        reason: String,
-    },
-    /// A class of the scenes that the model does not know.
-    #[error("model {} has no class {class:?} of the scenes ({})", model.display(), index.display())]
-    ModelClasses {
-        /// The model file.
-        model: PathBuf,
-        /// The scenes' index.
-        index: PathBuf,
-        /// The first class missing from the model.
-        class: String,
-    },
-}
+pub use crate::error::SceneError;
 
 fn truth_error(path: &Path, reason: impl Into<String>) -> HostError {
     SceneError::Truth {

@@ -32,7 +32,7 @@ pub mod render;
 use crate::classify::families::CLASSES;
 use crate::classify::shapes::class_dir;
 use crate::error::{HostError, Result};
-use crate::io::{ensure_dir, write_atomic};
+use crate::output::{ensure_dir, write_atomic};
 use crate::summary::Summary;
 use image::GrayImage;
 use rayon::prelude::*;

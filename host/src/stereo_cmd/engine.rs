@@ -6,12 +6,12 @@
 //! level and phase refinement).
 //!
 //! Both decode with the same integer weights: the per-level tables are
-//! trained (or taken from the built-in table) by [`super::table_for`].
+//! trained (or taken from the built-in table) by [`crate::dem_tables::table_for`].
 
-use super::{decoder_for, table_for};
+use crate::dem_tables::{decoder_for, params_of, table_for};
 use crate::error::{HostError, Result};
 use crate::reference::stereo::c2f::level_params;
-use crate::reference::stereo::{self as dem, Aggregation, DemParams, DisparityMapsF};
+use crate::reference::stereo::{self as dem, DemParams, DisparityMapsF};
 use crate::storage::C2fStorage;
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
@@ -114,41 +114,16 @@ pub fn plan(point: &str, max_disp: u8, lr: Option<Lr>) -> Result<Plan> {
     })
 }
 
-/// The reference's parameters and search for the engine's `e`: levels 1,
-/// no pooling, SGM with `e`'s penalties and paths, `LeftRight::Off` as a
-/// negative tolerance (no check), `Derived` as `lr_from_left`.
+/// The reference's parameters ([`crate::dem_tables::params_of`]) and
+/// search for the engine's `e`.
 pub fn reference_of(e: &C2fParams) -> (DemParams, Search) {
-    let d = &e.dem;
-    let params = DemParams {
-        max_disp: d.max_disp,
-        carriers: d.carriers,
-        levels: d.levels,
-        wavelength: d.wavelength,
-        sigma_per_wavelength: d.sigma_per_wavelength,
-        radius: d.radius,
-        shift_step: d.shift_step,
-        pool_radius: d.pool_radius,
-        min_energy: d.min_energy,
-        min_margin: d.min_margin,
-        lr_tolerance: match e.left_right {
-            LeftRight::Off => -1.0,
-            LeftRight::Read | LeftRight::Derived => d.lr_tolerance,
-        },
-        lr_from_left: e.left_right == LeftRight::Derived,
-        aggregation: Aggregation::Sgm {
-            p1: e.p1,
-            p2: e.p2,
-            paths: e.paths,
-        },
-        ..DemParams::default()
-    };
     let search = Search {
         levels: usize::from(e.coarse),
         radius: usize::from(e.radius),
         band: e.band.map(usize::from),
         finest: usize::from(e.finest),
     };
-    (params, search)
+    (params_of(e), search)
 }
 
 /// What one run gave.
