@@ -98,7 +98,7 @@ impl StereoOptions {
 /// `protogist train-dem`: trains for `params` and writes the table.
 ///
 /// # Errors
-/// [`HostError::Stereo`] for bad parameters, [`HostError::Io`].
+/// [`HostError::Stereo`](crate::error::HostError::Stereo) for bad parameters, [`HostError::Io`](crate::error::HostError::Io).
 pub fn run_train_dem(params: &DemParams, out: &Path) -> Result<Summary> {
     params.check()?;
     let start = Instant::now();
@@ -160,7 +160,7 @@ fn cells_f32(cells: &[DisparityCell]) -> Vec<Option<f32>> {
 /// writes the panels and, with GT, the error map and metrics.
 ///
 /// # Errors
-/// [`HostError`] for unreadable or mismatched inputs, bad GT, an unknown
+/// [`HostError`](crate::error::HostError) for unreadable or mismatched inputs, bad GT, an unknown
 /// point, parameters the engine rejects, or an unwritable output
 /// directory.
 pub fn run_stereo(opts: &StereoOptions) -> Result<Summary> {
