@@ -359,13 +359,17 @@ fn f405_report(
             .and_then(|l| l.split_whitespace().nth(nth)?.parse::<u64>().ok())
             .ok_or(format!("the F405 product printed no `{prefix}` line"))
     };
+    let size = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("product ")?.split_whitespace().next())
+        .ok_or("the F405 product printed no `product WxH` line")?;
     let stack = number("stack peak ", 2)?;
     let total = number("instr total ", 2)?;
     let capture = number("instr stage capture ", 3)?;
     let ram = elf.ram + stack;
     let pct = |a: u64, b: u64| a as f64 * 100.0 / b as f64;
     let r = format!(
-        "product ELF for the STM32F405 (firmware-sim --features f405, 128x96, K = 4, QEMU \
+        "product ELF for the STM32F405 (firmware-sim --features f405, {size}, K = 4, QEMU \
          netduinoplus2, memory-f405-qemu.x):\n\
          \x20 flash {} B of {} B ({:.0} %)\n\
          \x20 RAM: static {} B + stack peak {} B = {} B of {} B ({:.0} %)\n\
@@ -445,7 +449,8 @@ stack peak 39524 bytes
 
     #[test]
     fn f405_report_fails_when_the_stack_meets_the_statics() {
-        let out = "instr stage capture 100\ninstr total 1000\nstack peak 30000 bytes\n";
+        let out = "product 128x96 K=4 searches=1 objects=1\ninstr stage capture 100\n\
+                   instr total 1000\nstack peak 30000 bytes\n";
         let elf = |ram| Sizes {
             flash: 500_000,
             ram,
@@ -457,6 +462,7 @@ stack peak 39524 bytes
             "{r}"
         );
         assert!(r.contains("1,000 total, 900 without"), "{r}");
+        assert!(r.contains("--features f405, 128x96, K = 4"), "{r}");
         let e = f405_report(out, &elf(170_000), (1 << 20, 192 * 1024)).unwrap_err();
         assert!(
             e.contains("does not fit") && e.contains("200,000 B of 196,608 B"),
