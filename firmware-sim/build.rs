@@ -1,5 +1,5 @@
 //! Link setup for bare-metal (thumb*) builds; for every build, the two
-//! seeded benchmark networks of `src/mlp_run.rs` (see `bench_blob`).
+//! seeded benchmark networks of `src/bench/mlp_run.rs` (see `bench_blob`).
 
 use std::{env, fs, path::PathBuf};
 

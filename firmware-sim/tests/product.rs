@@ -86,7 +86,7 @@ fn the_demo_objects_are_the_golden_list() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("golden/demo_objects.txt");
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
         let header = "# The product's objects on the demo scene (160x120, K = 4, RGB565 pair):\n\
-                      # `cargo run -p firmware-sim --bin product` and the QEMU run must print these lines.\n\
+                      # `cargo run -p firmware-sim --release` and the QEMU run must print these lines.\n\
                       # Regenerate: UPDATE_GOLDEN=1 cargo test -p firmware-sim --test product\n";
         let body: String = compared(&out).iter().map(|l| format!("{l}\n")).collect();
         std::fs::write(&path, format!("{header}{body}")).unwrap();
