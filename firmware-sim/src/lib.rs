@@ -4,7 +4,7 @@
 //! runs core's pipeline on a stereo pair from a [`stereo_camera`] on a
 //! Cortex-M under QEMU and on the desktop, printing the same objects.
 //! The bench firmware (`src/bin/bench/`, the stage harnesses of
-//! [`bench`]) measures the stages one by one; the panic probe
+//! [`bench`](mod@bench)) measures the stages one by one; the panic probe
 //! (`src/bin/panic-probe.rs`, [`probe`]) exists to be linked.
 #![no_std]
 #![forbid(unsafe_code)]
