@@ -6,7 +6,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::setup::{rustup_has_thumb, THUMB};
-use crate::util::{host_cargo, output, root, run, Result};
+use crate::util::{host_cargo, output, root, Result};
 
 const QEMU_TIMEOUT: Duration = Duration::from_secs(300);
 /// Lines that must be bit-identical between the host and the QEMU run.
@@ -127,52 +127,71 @@ pub fn overflows(linker_output: &str) -> Vec<(String, u64)> {
 }
 
 /// Builds the product for the STM32F405 (`--features f405`, 128x96,
-/// `memory-f405-qemu.x`).
+/// `memory-f405-qemu.x`) into its own target directory.
 ///
 /// # Errors
 /// [`FirmwareError::Overflow`] when the linker cannot fit it (the largest
 /// overflow it names), else [`FirmwareError::Build`].
 pub fn build_f405() -> std::result::Result<PathBuf, FirmwareError> {
-    let mut cmd = thumb_cargo(
-        &[
-            "-p",
-            "firmware-sim",
-            "--bin",
-            "firmware-sim",
-            "--features",
-            "f405",
-        ],
-        F405_TARGET_DIR,
-    );
-    let what = format!("{cmd:?}");
-    println!("$ {what}");
+    let args = [
+        "-p",
+        "firmware-sim",
+        "--bin",
+        "firmware-sim",
+        "--features",
+        "f405",
+    ];
+    let what = "the product for the STM32F405 (firmware-sim --features f405, 128x96)";
+    build_checked(&args, F405_TARGET_DIR, Machine::Netduinoplus2, what)?;
+    Ok(f405_elf())
+}
+
+/// `cargo build --profile firmware` for thumbv7em: rustup's prebuilt target if it
+/// is installed, else Debian's toolchain with `-Zbuild-std=core`; the
+/// mps2-an386 build (`memory.x`).
+///
+/// # Errors
+/// [`FirmwareError::Overflow`] when an ELF does not fit `memory.x`, else
+/// [`FirmwareError::Build`].
+pub fn build_thumb(package: &str) -> std::result::Result<(), FirmwareError> {
+    let what = format!("{package} for mps2-an386");
+    build_checked(&["-p", package], "target/thumb", Machine::Mps2An386, &what)
+}
+
+/// Runs a thumbv7em build of `args` into `target_dir`, linked with
+/// `machine`'s map, passing its output through; a linker overflow becomes
+/// a typed [`FirmwareError::Overflow`] naming `what`.
+fn build_checked(
+    args: &[&str],
+    target_dir: &str,
+    machine: Machine,
+    what: &str,
+) -> std::result::Result<(), FirmwareError> {
+    let mut cmd = thumb_cargo(args, target_dir);
+    let line = format!("{cmd:?}");
+    println!("$ {line}");
     let out = cmd
         .stdin(Stdio::null())
+        .stdout(Stdio::inherit())
         .output()
         .map_err(|e| FirmwareError::Build(format!("cannot start cargo: {e}")))?;
     let stderr = String::from_utf8_lossy(&out.stderr);
     eprint!("{stderr}");
     if out.status.success() {
-        return Ok(f405_elf());
+        return Ok(());
     }
     match overflows(&stderr).into_iter().max_by_key(|o| o.1) {
         Some((region, by)) => Err(FirmwareError::Overflow {
-            elf: "the product for the STM32F405 (firmware-sim --features f405, 128x96)".into(),
-            map: Machine::Netduinoplus2.memory_map(),
+            elf: what.to_string(),
+            map: machine.memory_map(),
             region,
             by,
         }),
         None => Err(FirmwareError::Build(format!(
-            "`{what}` failed ({})",
+            "`{line}` failed ({})",
             out.status
         ))),
     }
-}
-
-/// `cargo build --profile firmware` for thumbv7em: rustup's prebuilt target if it
-/// is installed, else Debian's toolchain with `-Zbuild-std=core`.
-pub fn build_thumb(package: &str) -> Result<()> {
-    run(&mut thumb_cargo(&["-p", package], "target/thumb"))
 }
 
 /// The `cargo build --profile firmware` command for thumbv7em with `args`
