@@ -1,5 +1,5 @@
 //! Link setup for bare-metal (thumb*) builds; for every build, the two
-//! seeded benchmark networks of `src/mlp_run.rs` (see `bench_blob`).
+//! seeded benchmark networks of `src/bench/mlp_run.rs` (see `bench_blob`).
 
 use std::{env, fs, path::PathBuf};
 
@@ -51,8 +51,21 @@ fn bench_blob(hidden: u16) -> Vec<u8> {
     b
 }
 
+/// The linker script of the memory map: mps2-an386's, or with the `f405`
+/// feature QEMU netduinoplus2's STM32F405 (`memory-f405.x` is the real
+/// part's map, for a board build).
+fn memory_map() -> &'static str {
+    if env::var_os("CARGO_FEATURE_F405").is_some() {
+        "memory-f405-qemu.x"
+    } else {
+        "memory.x"
+    }
+}
+
 fn main() {
-    println!("cargo:rerun-if-changed=memory.x");
+    for map in ["memory.x", "memory-f405.x", "memory-f405-qemu.x"] {
+        println!("cargo:rerun-if-changed={map}");
+    }
     println!("cargo:rerun-if-changed=build.rs");
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     for h in [256u16, 2000] {
@@ -63,7 +76,8 @@ fn main() {
     if !target.starts_with("thumb") {
         return;
     }
-    fs::copy("memory.x", out.join("memory.x")).expect("copy memory.x to OUT_DIR");
+    // cortex-m-rt's link.x includes `memory.x` by that name.
+    fs::copy(memory_map(), out.join("memory.x")).expect("copy the memory map to OUT_DIR");
     println!("cargo:rustc-link-search={}", out.display());
     // cortex-m-rt's link.x includes memory.x; gcc must not add its own crt0.
     println!("cargo:rustc-link-arg-bins=-Tlink.x");

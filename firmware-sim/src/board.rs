@@ -1,7 +1,15 @@
-//! The board support of the product binary (`src/bin/product.rs`) on QEMU
-//! mps2-an386: SysTick instruction counting, the FPGAIO LED, the stack
-//! high-water mark, the panic handler. `src/mcu.rs` has the same for the
-//! bench firmware.
+//! The board support of both firmware binaries (the product,
+//! `src/main.rs`, and the bench, `src/bin/bench/`): SysTick instruction
+//! counting, the status LED, the stack high-water mark, the exit and the
+//! panic handler.
+//!
+//! Two machines: QEMU mps2-an386 (`memory.x`; LED0 of the FPGAIO) and,
+//! with the `f405` feature, the STM32F405 of QEMU netduinoplus2
+//! (`memory-f405-qemu.x`; the Netduino Plus 2's LED on PA10). SysTick runs
+//! on the core clock on both: under `-icount shift=0` QEMU retires one
+//! instruction per virtual nanosecond, so [`start_counting`] measures the
+//! ticks per instruction with a delay loop of known length instead of
+//! trusting a clock rate.
 
 use core::fmt::Write;
 use core::num::NonZeroU64;
@@ -61,31 +69,49 @@ pub fn start_counting(
     cortex_m::asm::delay(CAL_DELAY);
     // Non-zero by type: the conversion divides by it.
     let cal_ticks = NonZeroU64::new(ticks.now() - t0).unwrap_or(NonZeroU64::MIN);
+    let per_tick_x100 = CAL_INSTRUCTIONS * 100 / cal_ticks;
     writeln!(
         out,
-        "calib instructions={CAL_INSTRUCTIONS} ticks={cal_ticks}"
+        "calib instructions={CAL_INSTRUCTIONS} ticks={cal_ticks} instructions_per_tick={}.{:02}",
+        per_tick_x100 / 100,
+        per_tick_x100 % 100
     )?;
     Ok(move |t: u64| t * CAL_INSTRUCTIONS / cal_ticks)
 }
 
-/// mps2 FPGAIO LED0 (bit 0 of the LED register at 0x4002_8000).
-pub struct Mps2Led;
+/// The status LED: LED0 of the mps2 FPGAIO (bit 0 of the register at
+/// 0x4002_8000), or with `f405` the Netduino Plus 2's LED on PA10 (GPIOA's
+/// BSRR at 0x4002_0018; QEMU 7.2 does not model the F405's GPIO and
+/// ignores the write).
+pub struct Led;
 
-const FPGAIO_LED: *mut u32 = 0x4002_8000 as *mut u32;
-
-impl Mps2Led {
+#[cfg(not(feature = "f405"))]
+impl Led {
     #[allow(unsafe_code)]
     fn write(on: bool) {
+        const FPGAIO_LED: *mut u32 = 0x4002_8000 as *mut u32;
         // SAFETY: FPGAIO LED register of mps2-an385/an386, a plain R/W MMIO word.
         unsafe { core::ptr::write_volatile(FPGAIO_LED, u32::from(on)) }
     }
 }
 
-impl ErrorType for Mps2Led {
+#[cfg(feature = "f405")]
+impl Led {
+    #[allow(unsafe_code)]
+    fn write(on: bool) {
+        const GPIOA_BSRR: *mut u32 = 0x4002_0018 as *mut u32;
+        const PA10: u32 = 1 << 10;
+        // SAFETY: GPIOA's bit set/reset register of the STM32F405, a
+        // write-only MMIO word: bit n sets pin n, bit n + 16 resets it.
+        unsafe { core::ptr::write_volatile(GPIOA_BSRR, if on { PA10 } else { PA10 << 16 }) }
+    }
+}
+
+impl ErrorType for Led {
     type Error = core::convert::Infallible;
 }
 
-impl OutputPin for Mps2Led {
+impl OutputPin for Led {
     fn set_low(&mut self) -> Result<(), Self::Error> {
         Self::write(false);
         Ok(())

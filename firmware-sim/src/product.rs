@@ -22,14 +22,19 @@ use crate::pg::pipeline::{
     self, layout, workspace_bytes, Frame, Observer, Pipeline, PipelineError, PipelineParams, Stage,
 };
 use crate::pg::segment::{Step as SegmentStep, STAT_FRAC_BITS};
+use crate::pg::stereo::phase::{PhaseKernel, SafePhase};
 use crate::pg::stereo::Step as StereoStep;
 use crate::stereo_camera::{pair_len, StereoCamera};
 use crate::Ticks;
 
-/// Frame width the product runs.
-pub const WIDTH: usize = 160;
-/// Frame height the product runs.
-pub const HEIGHT: usize = 120;
+/// Frame width the product runs: 160 on the mps2-an386 build, 128 (the
+/// Delft board's frame) with the `f405` feature.
+pub const WIDTH: usize = if cfg!(feature = "f405") { 128 } else { 160 };
+/// Frame height the product runs: 120, or 96 with the `f405` feature.
+pub const HEIGHT: usize = if cfg!(feature = "f405") { 96 } else { 120 };
+/// The frame sizes whose RAM plans the product reports
+/// ([`write_ram_plans`]): the mps2-an386 build's and the F405's.
+pub const PLANNED: [(usize, usize); 2] = [(160, 120), (128, 96)];
 /// Objects searched per frame (K).
 pub const OBJECTS: u8 = 4;
 /// The pipeline's parameters: core's defaults with K = [`OBJECTS`].
@@ -270,16 +275,18 @@ pub struct FrameSummary {
     pub total: u64,
 }
 
-/// The product: a stereo camera, the pipeline and a status LED.
-pub struct Product<'a, C, P> {
+/// The product: a stereo camera, the pipeline and a status LED; `K` is
+/// the pipeline's stereo phase step ([`Pipeline::with_kernel`]: the
+/// board's assembly one, the same bits as the portable [`SafePhase`]).
+pub struct Product<'a, C, P, K = SafePhase> {
     camera: C,
     led: P,
-    pipeline: Pipeline<'a>,
+    pipeline: Pipeline<'a, K>,
 }
 
-impl<'a, C: StereoCamera, P: OutputPin> Product<'a, C, P> {
+impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel> Product<'a, C, P, K> {
     /// The product around a set-up pipeline.
-    pub fn new(camera: C, led: P, pipeline: Pipeline<'a>) -> Self {
+    pub fn new(camera: C, led: P, pipeline: Pipeline<'a, K>) -> Self {
         Self {
             camera,
             led,
@@ -288,7 +295,7 @@ impl<'a, C: StereoCamera, P: OutputPin> Product<'a, C, P> {
     }
 
     /// The pipeline.
-    pub fn pipeline(&self) -> &Pipeline<'a> {
+    pub fn pipeline(&self) -> &Pipeline<'a, K> {
         &self.pipeline
     }
 
@@ -424,9 +431,9 @@ impl fmt::Display for Fixed {
 ///
 /// # Errors
 /// When `out` fails.
-pub fn write_frame(
+pub fn write_frame<K: PhaseKernel>(
     out: &mut impl Write,
-    p: &Pipeline<'_>,
+    p: &Pipeline<'_, K>,
     frame: &Frame<'_>,
 ) -> Result<u32, fmt::Error> {
     let (w, h) = frame.size();
@@ -549,4 +556,14 @@ pub fn write_ram_plan(out: &mut impl Write, width: usize, height: usize) -> fmt:
         r.workspace,
         r.total()
     )
+}
+
+/// [`write_ram_plan`] at each of [`PLANNED`].
+///
+/// # Errors
+/// When `out` fails.
+pub fn write_ram_plans(out: &mut impl Write) -> fmt::Result {
+    PLANNED
+        .iter()
+        .try_for_each(|&(w, h)| write_ram_plan(out, w, h))
 }

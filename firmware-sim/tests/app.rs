@@ -1,15 +1,13 @@
-//! Host tests of the firmware application with mock pins and delays.
+//! Host tests of the bench firmware's application with mock pins and delays.
 
 use std::convert::Infallible;
 
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
-use firmware_sim::app::write_ipp;
+use firmware_sim::bench::{App, AppError, Buffers};
 use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, EdgeCell, Luv};
 use firmware_sim::pg::image::Rgb8;
-use firmware_sim::{
-    App, AppError, Buffers, Camera, CameraError, CameraErrorKind, NoTicks, SimCamera,
-};
+use firmware_sim::{write_ipp, Camera, CameraError, CameraErrorKind, NoTicks, SimCamera};
 
 const W: usize = 64;
 const H: usize = 48;
@@ -126,7 +124,7 @@ fn run_reports_blinks_and_delays() {
     assert!(!led.high, "LED is off between frames");
     assert_eq!(
         delay.total_ns,
-        2 * u64::from(firmware_sim::app::BLINK_MS) * 1_000_000
+        2 * u64::from(firmware_sim::bench::app::BLINK_MS) * 1_000_000
     );
 }
 

@@ -9,10 +9,14 @@
 
 use std::convert::Infallible;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use embedded_hal::digital::{ErrorType, OutputPin};
+
+use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::{ImageViewMut, Rgb8};
 use firmware_sim::pg::pipeline::{Pipeline, PipelineError, RgbRows};
+use firmware_sim::pg::stereo::phase::{phase_row3, PhaseKernel};
 use firmware_sim::pg::synth::{render_left, render_mask, render_right, SceneSpec};
 use firmware_sim::product::{
     is_compared, Product, ProductError, FRAME_LEN, HEIGHT, MODEL, PARAMS, TABLES, WIDTH,
@@ -82,7 +86,7 @@ fn the_demo_objects_are_the_golden_list() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("golden/demo_objects.txt");
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
         let header = "# The product's objects on the demo scene (160x120, K = 4, RGB565 pair):\n\
-                      # `cargo run -p firmware-sim --bin product` and the QEMU run must print these lines.\n\
+                      # `cargo run -p firmware-sim --release` and the QEMU run must print these lines.\n\
                       # Regenerate: UPDATE_GOLDEN=1 cargo test -p firmware-sim --test product\n";
         let body: String = compared(&out).iter().map(|l| format!("{l}\n")).collect();
         std::fs::write(&path, format!("{header}{body}")).unwrap();
@@ -93,6 +97,45 @@ fn the_demo_objects_are_the_golden_list() {
         compared(&golden).iter().any(|l| l.starts_with("object 0 ")),
         "the golden list has the demo's object"
     );
+}
+
+/// The portable phase step, counting its rows and the cells it refines.
+struct CountingPhase;
+
+static PHASE_ROWS: AtomicUsize = AtomicUsize::new(0);
+static PHASE_REFINED: AtomicUsize = AtomicUsize::new(0);
+
+impl PhaseKernel for CountingPhase {
+    fn phase_row3(
+        max_disp: u8,
+        lambda_q8: i32,
+        zl: &[[i16; 2]],
+        zr: &[[i16; 2]],
+        cells: &mut [DisparityCell],
+    ) -> usize {
+        let n = phase_row3(max_disp, lambda_q8, zl, zr, cells);
+        PHASE_ROWS.fetch_add(1, Ordering::Relaxed);
+        PHASE_REFINED.fetch_add(n, Ordering::Relaxed);
+        n
+    }
+}
+
+#[test]
+fn the_pipeline_runs_the_kernel_it_is_given() {
+    // As the board runs its assembly phase step: every row of the
+    // refinement goes through the kernel, and the objects are the golden
+    // list's (the portable pipeline's).
+    let p = Pipeline::<CountingPhase>::with_kernel(&PARAMS, &TABLES, MODEL).unwrap();
+    let mut product = Product::new(SimStereoCamera::new(), MockLed::default(), p);
+    let (mut frame, mut ws) = (vec![0u16; FRAME_LEN], vec![0u64; WORKSPACE_WORDS]);
+    let mut out = String::new();
+    product
+        .frame((WIDTH, HEIGHT), &mut frame, &mut ws, &mut NoTicks, &mut out)
+        .unwrap();
+    assert_eq!(PHASE_ROWS.load(Ordering::Relaxed), HEIGHT);
+    assert!(PHASE_REFINED.load(Ordering::Relaxed) > WIDTH);
+    let (portable, _) = report(SimStereoCamera::new());
+    assert_eq!(compared(&out), compared(&portable));
 }
 
 #[test]

@@ -2,12 +2,12 @@
 //! and `half` after `full`): each runs in `full`'s buffers, gives its own
 //! map, and reports itself.
 
+use firmware_sim::bench::stereo_run::{self, len, StereoResult, POINTS};
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::pg::stereo::c2f::C2fBuffers;
 use firmware_sim::pg::stereo::phase::PhaseBuffers;
 use firmware_sim::pg::stereo::phase::SafePhase;
-use firmware_sim::stereo_run::{self, len, StereoResult, POINTS};
 use firmware_sim::NoTicks;
 
 /// The phase refinement's buffers: RGB row, grey row, responses, map row.

@@ -1,4 +1,4 @@
-//! Cortex-M builds (thumbv7em), QEMU runs and the memory budget.
+//! Cortex-M builds (thumbv7em), QEMU runs and the memory budgets.
 
 use std::io::Read;
 use std::path::PathBuf;
@@ -6,54 +6,219 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::setup::{rustup_has_thumb, THUMB};
-use crate::util::{host_cargo, output, root, run, Result};
+use crate::util::{host_cargo, output, root, Result};
 
 const QEMU_TIMEOUT: Duration = Duration::from_secs(300);
 /// Lines that must be bit-identical between the host and the QEMU run.
 const COMPARED_PREFIXES: [&str; 2] = ["checksum ", "edges "];
 
-pub fn elf() -> PathBuf {
-    thumb_bin("firmware-sim")
+/// The bench firmware's ELF (`firmware-sim/src/bin/bench/`).
+pub fn bench_elf() -> PathBuf {
+    thumb_bin("bench")
 }
 
-/// The product's ELF (`firmware-sim/src/bin/product.rs`).
+/// The product's ELF for mps2-an386 (`firmware-sim/src/main.rs`, the
+/// crate's default binary).
 pub fn product_elf() -> PathBuf {
-    thumb_bin("product")
+    thumb_bin("firmware-sim")
 }
 
 /// The ELF of one firmware-sim binary of the thumbv7em build.
 fn thumb_bin(name: &str) -> PathBuf {
-    root()
-        .join("target/thumb")
-        .join(THUMB)
-        .join("firmware")
-        .join(name)
+    thumb_dir("target/thumb").join(name)
+}
+
+fn thumb_dir(target_dir: &str) -> PathBuf {
+    root().join(target_dir).join(THUMB).join("firmware")
+}
+
+/// A QEMU machine the firmware runs on, with its memory map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Machine {
+    /// mps2-an386 (Cortex-M4, 4 MB code and data SSRAM), linked with
+    /// `memory.x`: every binary, the product at 160x120.
+    Mps2An386,
+    /// netduinoplus2 (the STM32F405: 1 MB flash, 192 KB SRAM), linked with
+    /// `memory-f405-qemu.x`: the product at 128x96 (the `f405` feature).
+    Netduinoplus2,
+}
+
+impl Machine {
+    /// QEMU's `-machine` name.
+    pub fn qemu_name(self) -> &'static str {
+        match self {
+            Self::Mps2An386 => "mps2-an386",
+            Self::Netduinoplus2 => "netduinoplus2",
+        }
+    }
+
+    /// The linker script of the machine's map, in firmware-sim/.
+    pub fn memory_map(self) -> &'static str {
+        match self {
+            Self::Mps2An386 => "memory.x",
+            Self::Netduinoplus2 => "memory-f405-qemu.x",
+        }
+    }
+}
+
+/// The product's ELF for the STM32F405 (QEMU netduinoplus2): the default
+/// binary with the `f405` feature, in its own target directory so that it
+/// does not replace the mps2-an386 build's.
+pub fn f405_elf() -> PathBuf {
+    thumb_dir(F405_TARGET_DIR).join("firmware-sim")
+}
+
+const F405_TARGET_DIR: &str = "target/thumb-f405";
+
+/// Why a firmware build or run failed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FirmwareError {
+    /// The linker could not fit the ELF into a region of its memory map.
+    Overflow {
+        /// The binary.
+        elf: String,
+        /// Its memory map (firmware-sim/…).
+        map: &'static str,
+        /// The region, e.g. `RAM`.
+        region: String,
+        /// Bytes beyond the region's end.
+        by: u64,
+    },
+    /// The build failed otherwise; the command and its status.
+    Build(String),
+}
+
+impl std::fmt::Display for FirmwareError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Overflow {
+                elf,
+                map,
+                region,
+                by,
+            } => write!(
+                f,
+                "{elf} does not fit firmware-sim/{map}: region {region} overflowed by {by} bytes"
+            ),
+            Self::Build(what) => f.write_str(what),
+        }
+    }
+}
+
+impl From<FirmwareError> for String {
+    fn from(e: FirmwareError) -> Self {
+        e.to_string()
+    }
+}
+
+/// The overflows GNU ld reports (``region `RAM' overflowed by 74064
+/// bytes``), as (region, bytes).
+pub fn overflows(linker_output: &str) -> Vec<(String, u64)> {
+    linker_output
+        .lines()
+        .filter_map(|l| {
+            let rest = l.split("region `").nth(1)?;
+            let (region, rest) = rest.split_once('\'')?;
+            let by = rest.strip_prefix(" overflowed by ")?;
+            let by = by.split_whitespace().next()?.parse().ok()?;
+            Some((region.to_string(), by))
+        })
+        .collect()
+}
+
+/// Builds the product for the STM32F405 (`--features f405`, 128x96,
+/// `memory-f405-qemu.x`) into its own target directory.
+///
+/// # Errors
+/// [`FirmwareError::Overflow`] when the linker cannot fit it (the largest
+/// overflow it names), else [`FirmwareError::Build`].
+pub fn build_f405() -> std::result::Result<PathBuf, FirmwareError> {
+    let args = [
+        "-p",
+        "firmware-sim",
+        "--bin",
+        "firmware-sim",
+        "--features",
+        "f405",
+    ];
+    let what = "the product for the STM32F405 (firmware-sim --features f405, 128x96)";
+    build_checked(&args, F405_TARGET_DIR, Machine::Netduinoplus2, what)?;
+    Ok(f405_elf())
 }
 
 /// `cargo build --profile firmware` for thumbv7em: rustup's prebuilt target if it
-/// is installed, else Debian's toolchain with `-Zbuild-std=core`.
-pub fn build_thumb(package: &str) -> Result<()> {
+/// is installed, else Debian's toolchain with `-Zbuild-std=core`; the
+/// mps2-an386 build (`memory.x`).
+///
+/// # Errors
+/// [`FirmwareError::Overflow`] when an ELF does not fit `memory.x`, else
+/// [`FirmwareError::Build`].
+pub fn build_thumb(package: &str) -> std::result::Result<(), FirmwareError> {
+    let what = format!("{package} for mps2-an386");
+    build_checked(&["-p", package], "target/thumb", Machine::Mps2An386, &what)
+}
+
+/// Runs a thumbv7em build of `args` into `target_dir`, linked with
+/// `machine`'s map, passing its output through; a linker overflow becomes
+/// a typed [`FirmwareError::Overflow`] naming `what`.
+fn build_checked(
+    args: &[&str],
+    target_dir: &str,
+    machine: Machine,
+    what: &str,
+) -> std::result::Result<(), FirmwareError> {
+    let mut cmd = thumb_cargo(args, target_dir);
+    let line = format!("{cmd:?}");
+    println!("$ {line}");
+    let out = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::inherit())
+        .output()
+        .map_err(|e| FirmwareError::Build(format!("cannot start cargo: {e}")))?;
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    eprint!("{stderr}");
+    if out.status.success() {
+        return Ok(());
+    }
+    match overflows(&stderr).into_iter().max_by_key(|o| o.1) {
+        Some((region, by)) => Err(FirmwareError::Overflow {
+            elf: what.to_string(),
+            map: machine.memory_map(),
+            region,
+            by,
+        }),
+        None => Err(FirmwareError::Build(format!(
+            "`{line}` failed ({})",
+            out.status
+        ))),
+    }
+}
+
+/// The `cargo build --profile firmware` command for thumbv7em with `args`
+/// into `target_dir` (see [`build_thumb`]).
+fn thumb_cargo(args: &[&str], target_dir: &str) -> Command {
     let common = [
         "build",
         "--locked",
-        "-p",
-        package,
         "--profile",
         "firmware",
         "--target",
         THUMB,
         "--target-dir",
     ];
-    let target_dir = root().join("target/thumb");
+    let target_dir = root().join(target_dir);
     if rustup_has_thumb() {
         println!("using rustup's {THUMB} target");
-        return run(host_cargo().args(common).arg(&target_dir));
+        let mut cmd = host_cargo();
+        cmd.args(common).arg(&target_dir).args(args);
+        return cmd;
     }
     println!("rustup has no {THUMB} target: using Debian's cargo with -Zbuild-std=core");
     let mut cmd = Command::new("/usr/bin/cargo");
     cmd.current_dir(root())
         .args(common)
         .arg(&target_dir)
+        .args(args)
         .arg("-Zbuild-std=core")
         .env("RUSTC_BOOTSTRAP", "1")
         .env("RUSTC", "/usr/bin/rustc")
@@ -61,7 +226,7 @@ pub fn build_thumb(package: &str) -> Result<()> {
         .env_remove("RUSTUP_TOOLCHAIN")
         .env_remove("RUSTC_WRAPPER")
         .env_remove("CARGO_TARGET_DIR");
-    run(&mut cmd)
+    cmd
 }
 
 pub struct QemuRun {
@@ -69,22 +234,29 @@ pub struct QemuRun {
     pub secs: f64,
 }
 
-/// Runs an ELF on mps2-an386 with semihosting; fails unless it exits with success.
-pub fn run_qemu(elf: &std::path::Path) -> Result<QemuRun> {
+/// Runs an ELF on `machine` with semihosting; fails unless it exits with
+/// success. Both machines are Cortex-M4s.
+pub fn run_qemu(machine: Machine, elf: &std::path::Path) -> Result<QemuRun> {
     let mut cmd = Command::new("qemu-system-arm");
-    cmd.args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
-        .args([
-            "-semihosting-config",
-            "enable=on,target=native",
-            "-icount",
-            "shift=0",
-            "-kernel",
-        ])
-        .arg(elf)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit());
-    println!("$ qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic -semihosting-config enable=on,target=native -icount shift=0 -kernel {}", elf.display());
+    cmd.args([
+        "-machine",
+        machine.qemu_name(),
+        "-cpu",
+        "cortex-m4",
+        "-nographic",
+    ])
+    .args([
+        "-semihosting-config",
+        "enable=on,target=native",
+        "-icount",
+        "shift=0",
+        "-kernel",
+    ])
+    .arg(elf)
+    .stdin(Stdio::null())
+    .stdout(Stdio::piped())
+    .stderr(Stdio::inherit());
+    println!("$ qemu-system-arm -machine {} -cpu cortex-m4 -nographic -semihosting-config enable=on,target=native -icount shift=0 -kernel {}", machine.qemu_name(), elf.display());
     let start = Instant::now();
     let mut child = cmd
         .spawn()
@@ -127,17 +299,17 @@ pub fn run_qemu(elf: &std::path::Path) -> Result<QemuRun> {
     })
 }
 
-/// Builds firmware-sim for thumbv7em, checks that neither the firmware,
-/// the product (core's pipeline, `firmware-sim/src/bin/product.rs`) nor
+/// Builds firmware-sim for thumbv7em, checks that neither the product
+/// (core's pipeline, `firmware-sim/src/main.rs`), the bench firmware nor
 /// the panic probe (every core stage on opaque inputs,
 /// `firmware-sim/src/probe.rs`) links a panic path ([`check_no_panic`]),
-/// and runs the firmware under QEMU.
+/// and runs the bench firmware under QEMU mps2-an386.
 pub fn build_and_run() -> Result<QemuRun> {
     build_thumb("firmware-sim")?;
-    for bin in [elf(), product_elf(), thumb_bin("panic-probe")] {
+    for bin in [product_elf(), bench_elf(), thumb_bin("panic-probe")] {
         println!("{}", check_no_panic(&bin)?);
     }
-    run_qemu(&elf())
+    run_qemu(Machine::Mps2An386, &bench_elf())
 }
 
 /// Symbols whose presence in the linked ELF means a panic is reachable:
@@ -225,7 +397,7 @@ pub fn check_no_panic(elf: &std::path::Path) -> Result<String> {
     Err(msg)
 }
 
-/// Output of the host build of firmware-sim.
+/// Output of the host build of the bench firmware.
 pub fn host_output() -> Result<String> {
     let out = output(host_cargo().args([
         "run",
@@ -234,6 +406,8 @@ pub fn host_output() -> Result<String> {
         "-p",
         "firmware-sim",
         "--release",
+        "--bin",
+        "bench",
     ]))?;
     print!("{out}");
     Ok(out)
@@ -269,14 +443,20 @@ pub fn compare(host: &str, qemu: &str) -> Result<usize> {
 
 /// Parses `LENGTH = 2M` style values for FLASH and RAM from memory.x.
 pub fn budget() -> Result<(u64, u64)> {
-    let path = root().join("firmware-sim/memory.x");
+    budget_of(Machine::Mps2An386)
+}
+
+/// FLASH and RAM lengths of `machine`'s memory map.
+pub fn budget_of(machine: Machine) -> Result<(u64, u64)> {
+    let name = machine.memory_map();
+    let path = root().join("firmware-sim").join(name);
     let text =
         std::fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
     let length = |region: &str| -> Result<u64> {
         let line = text
             .lines()
             .find(|l| l.trim_start().starts_with(region) && l.contains("LENGTH"))
-            .ok_or(format!("memory.x has no {region} region"))?;
+            .ok_or(format!("{name} has no {region} region"))?;
         let v = line
             .split("LENGTH")
             .nth(1)
@@ -290,7 +470,7 @@ pub fn budget() -> Result<(u64, u64)> {
         };
         num.parse::<u64>()
             .map(|n| n * mult)
-            .map_err(|_| format!("memory.x: cannot parse LENGTH '{v}'"))
+            .map_err(|_| format!("{name}: cannot parse LENGTH '{v}'"))
     };
     Ok((length("FLASH")?, length("RAM")?))
 }
@@ -326,9 +506,9 @@ pub fn sizes(elf: &std::path::Path) -> Result<Sizes> {
     Ok(Sizes { flash, ram, rows })
 }
 
-/// Section sizes of the firmware, summed against memory.x.
+/// Section sizes of the bench firmware, summed against memory.x.
 pub fn size_report() -> Result<String> {
-    size_report_of(&elf())
+    size_report_of(&bench_elf())
 }
 
 /// Section sizes of a firmware-sim ELF, summed against memory.x.
@@ -380,6 +560,29 @@ mod tests {
 0000f60e <__rustc::rust_begin_unwind>:
    f630:\tf7ed f8a9 \tb.n\tf65a <__rustc::rust_begin_unwind+0x4c>
 ";
+
+    #[test]
+    fn overflows_reads_gnu_ld_regions() {
+        let ld = "ld: x section `.bss' will not fit in region `RAM'\n\
+                  ld: region `RAM' overflowed by 74064 bytes\n\
+                  ld: region `FLASH' overflowed by 12 bytes\n\
+                  collect2: error: ld returned 1 exit status\n";
+        assert_eq!(
+            overflows(ld),
+            [("RAM".to_string(), 74064), ("FLASH".to_string(), 12)]
+        );
+        assert!(overflows("error: could not compile `firmware-sim`").is_empty());
+        let e = FirmwareError::Overflow {
+            elf: "p".into(),
+            map: "memory-f405-qemu.x",
+            region: "RAM".into(),
+            by: 74064,
+        };
+        assert_eq!(
+            String::from(e),
+            "p does not fit firmware-sim/memory-f405-qemu.x: region RAM overflowed by 74064 bytes"
+        );
+    }
 
     #[test]
     fn panic_symbols_finds_the_entry_points_only() {

@@ -17,7 +17,8 @@ commands:
   ci          fmt, clippy, fetch-data, tests, no_std core build, firmware under QEMU vs host
   fetch-data  download the aloe (Debian opencv-doc) and motorcycle (scikit-image wheel)
               stereo pairs into the data cache
-  firmware    build the Cortex-M firmware and the product and run them under QEMU mps2-an386
+  firmware    build the product and the bench firmware, run them under QEMU mps2-an386,
+              and the product for the STM32F405 under QEMU netduinoplus2
   bench       measure and write docs/BENCHMARKS.md
   fuzz [N]    run every fuzz target of host/tests/fuzz.rs for N cases (default 100000)
   setup       install missing system packages / rustup components";
@@ -29,13 +30,15 @@ fn main() -> ExitCode {
         Some("fetch-data") => data::fetch().map(|_| ()),
         Some("firmware") => firmware::build_and_run()
             .and_then(|_| product::run())
-            .map(|p| {
+            .and_then(|p| {
                 println!(
                     "{} product lines equal on host, QEMU and {}\n{}",
                     p.lines,
                     product::GOLDEN,
                     p.report
-                )
+                );
+                println!("-- the product for the STM32F405 on QEMU netduinoplus2:");
+                product::run_f405(&p.qemu.stdout).map(|r| println!("{r}"))
             }),
         Some("bench") => bench::run(),
         Some("fuzz") => fuzz::run(&args[1..]),

@@ -1,10 +1,14 @@
-//! The product firmware (`firmware-sim/src/bin/product.rs`, core's
-//! pipeline on the board): its QEMU run against the host run and the
-//! committed golden list, and its RAM, flash and instructions against the
-//! STM32F405's budgets.
+//! The product firmware (`firmware-sim/src/main.rs`, core's pipeline on
+//! the board): its QEMU mps2-an386 run (160x120) against the host run and
+//! the committed golden list, its RAM, flash and instructions against the
+//! STM32F405's budgets, and its F405 build (128x96) on QEMU netduinoplus2
+//! ([`run_f405`]).
 
 use crate::bench::Section;
-use crate::firmware::{budget, product_elf, run_qemu, sizes, QemuRun, Sizes};
+use crate::firmware::{
+    budget, budget_of, build_f405, check_no_panic, product_elf, run_qemu, sizes, FirmwareError,
+    Machine, QemuRun, Sizes,
+};
 use crate::util::{host_cargo, output, root, Result};
 
 /// Lines that must be equal on the host, under QEMU and in the golden list.
@@ -27,13 +31,12 @@ pub struct ProductRun {
     pub report: String,
 }
 
-/// Runs the product ELF (built by `firmware::build_and_run`) under QEMU
-/// and on the host; fails unless their `product`, `object` and
-/// `objects-checksum` lines are equal to each other and to [`GOLDEN`].
-pub fn run() -> Result<ProductRun> {
-    let qemu = run_qemu(&product_elf())?;
+/// The product's host run (`cargo run -p firmware-sim --release`, with
+/// `features` if any).
+fn host_run(features: &[&str]) -> Result<String> {
     println!("-- host run of the product:");
-    let host = output(host_cargo().args([
+    let mut cmd = host_cargo();
+    cmd.args([
         "run",
         "--locked",
         "--quiet",
@@ -41,9 +44,22 @@ pub fn run() -> Result<ProductRun> {
         "firmware-sim",
         "--release",
         "--bin",
-        "product",
-    ]))?;
+        "firmware-sim",
+    ]);
+    if !features.is_empty() {
+        cmd.arg("--features").arg(features.join(","));
+    }
+    let host = output(&mut cmd)?;
     print!("{host}");
+    Ok(host)
+}
+
+/// Runs the product ELF (built by `firmware::build_and_run`) under QEMU
+/// and on the host; fails unless their `product`, `object` and
+/// `objects-checksum` lines are equal to each other and to [`GOLDEN`].
+pub fn run() -> Result<ProductRun> {
+    let qemu = run_qemu(Machine::Mps2An386, &product_elf())?;
+    let host = host_run(&[])?;
     let lines = compare("host", &host, "QEMU", &qemu.stdout)?;
     let path = root().join(GOLDEN);
     let golden =
@@ -125,7 +141,7 @@ pub fn report(stdout: &str, elf: &Sizes, ram_budget: u64) -> Result<String> {
         }
     };
     let mut r = format!(
-        "product ELF (firmware-sim/src/bin/product.rs, 160x120, K = 4, RGB565 pair):\n\
+        "product ELF (firmware-sim/src/main.rs, 160x120, K = 4, RGB565 pair, mps2-an386):\n\
          \x20 flash {} B: {} of the F405's 1 MB\n\
          \x20 RAM: static {} B + stack peak {} B = {} B\n\
          \x20   against memory.x ({} KB, the mps2-an386 run): {}\n\
@@ -234,7 +250,7 @@ pub fn bench_section(run: &ProductRun) -> Section {
     Section {
         title: "The product on the board (core's pipeline)",
         body: format!(
-            "`firmware-sim/src/bin/product.rs`: one frame of the simulated stereo camera (the demo \
+            "`firmware-sim/src/main.rs`: one frame of the simulated stereo camera (the demo \
              scene as an RGB565 pair) through `protogist::pipeline` at 160x120 with K = 4, built \
              with `--profile firmware` for thumbv7em-none-eabihf and run under \
              `qemu-system-arm -machine mps2-an386 -icount shift=0`. Its {} object lines are equal \
@@ -245,6 +261,137 @@ pub fn bench_section(run: &ProductRun) -> Section {
             run.lines, run.report
         ),
     }
+}
+
+/// The product at 128x96 for the STM32F405: built with `--features f405`
+/// against `memory-f405-qemu.x` (192 KB of RAM), checked for panic paths,
+/// run under QEMU netduinoplus2 and on the host (equal `product`, `object`
+/// and `objects-checksum` lines); its report says flash, static RAM plus
+/// the stack peak against 192 KB, and the instructions (SysTick, as on
+/// mps2-an386). `mps2_stdout` is the mps2-an386 run's, whose 128x96
+/// `ram-plan` line names the buffers when the build does not fit.
+///
+/// # Errors
+/// A typed [`FirmwareError::Overflow`] (with the plan's buffers) when the
+/// linker cannot fit the ELF; an error when the static RAM plus the stack
+/// peak exceed 192 KB, or when the runs differ.
+pub fn run_f405(mps2_stdout: &str) -> Result<String> {
+    let elf = match build_f405() {
+        Ok(elf) => elf,
+        Err(e @ FirmwareError::Overflow { .. }) => {
+            return Err(format!("{e}\n{}", f405_plan(mps2_stdout)?));
+        }
+        Err(e) => return Err(e.into()),
+    };
+    println!("{}", check_no_panic(&elf)?);
+    let qemu = run_qemu(Machine::Netduinoplus2, &elf)?;
+    let host = host_run(&["f405"])?;
+    let lines = compare("host", &host, "QEMU netduinoplus2", &qemu.stdout)?;
+    let elf_sizes = sizes(&elf)?;
+    let (flash_budget, ram_budget) = budget_of(Machine::Netduinoplus2)?;
+    let r = f405_report(&qemu.stdout, &elf_sizes, (flash_budget, ram_budget))?;
+    Ok(format!(
+        "{lines} product lines equal on host and QEMU netduinoplus2 (QEMU run {:.1} s)\n{r}",
+        qemu.secs
+    ))
+}
+
+/// The 128x96 RAM plan of the product's report, buffer by buffer, against
+/// the F405's 192 KB.
+fn f405_plan(stdout: &str) -> Result<String> {
+    let plan = stdout
+        .lines()
+        .find(|l| l.starts_with("ram-plan 128x96 "))
+        .ok_or("the product printed no 128x96 ram-plan")?;
+    let get = |k: &str| field(plan, k).ok_or(format!("no {k}= in `{plan}`"));
+    let (total, workspace, frames) = (get("total")?, get("workspace")?, get("frames")?);
+    let kept = get("kept")?;
+    let phases = [
+        ("colour", get("colour")?),
+        ("stereo", get("stereo")?),
+        ("objects", get("objects")?),
+    ];
+    let mut r = format!(
+        "the 128x96 RAM plan (statics, before the stack): {} B against the F405's {} B, {} B over:\n\
+         \x20 RGB565 pair {} B + workspace {} B = kept maps {} B (edge map C, disparity, K masks \
+         and shape vectors) + the largest phase of the shared region:\n",
+        grouped(total),
+        grouped(F405_RAM),
+        grouped(total.saturating_sub(F405_RAM)),
+        grouped(frames),
+        grouped(workspace),
+        grouped(kept),
+    );
+    let largest = phases.iter().map(|p| p.1).max().unwrap_or(0);
+    for (name, bytes) in phases {
+        let fit = frames + kept + bytes;
+        r.push_str(&format!(
+            "    {name:<8} {:>9} B{}: pair + kept + {name} = {} B, {}\n",
+            grouped(bytes),
+            if bytes == largest { " (largest)" } else { "" },
+            grouped(fit),
+            if fit <= F405_RAM {
+                format!("{} B under 192 KB", grouped(F405_RAM - fit))
+            } else {
+                format!("{} B over 192 KB", grouped(fit - F405_RAM))
+            }
+        ));
+    }
+    r.push_str(&format!(
+        "    the colour phase: CIELUV map {} B, labelling and region tables {} B, edge map {} B",
+        grouped(get("luv")?),
+        grouped(get("labelling")?),
+        grouped(get("edge-map")?)
+    ));
+    Ok(r)
+}
+
+/// The F405 run's flash, RAM and instructions against the part's budgets.
+fn f405_report(
+    stdout: &str,
+    elf: &Sizes,
+    (flash_budget, ram_budget): (u64, u64),
+) -> Result<String> {
+    let number = |prefix: &str, nth: usize| {
+        stdout
+            .lines()
+            .find(|l| l.starts_with(prefix))
+            .and_then(|l| l.split_whitespace().nth(nth)?.parse::<u64>().ok())
+            .ok_or(format!("the F405 product printed no `{prefix}` line"))
+    };
+    let size = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("product ")?.split_whitespace().next())
+        .ok_or("the F405 product printed no `product WxH` line")?;
+    let stack = number("stack peak ", 2)?;
+    let total = number("instr total ", 2)?;
+    let capture = number("instr stage capture ", 3)?;
+    let ram = elf.ram + stack;
+    let pct = |a: u64, b: u64| a as f64 * 100.0 / b as f64;
+    let r = format!(
+        "product ELF for the STM32F405 (firmware-sim --features f405, {size}, K = 4, QEMU \
+         netduinoplus2, memory-f405-qemu.x):\n\
+         \x20 flash {} B of {} B ({:.0} %)\n\
+         \x20 RAM: static {} B + stack peak {} B = {} B of {} B ({:.0} %)\n\
+         \x20 instructions per frame (QEMU -icount, SysTick): {} total, {} without the simulated \
+         camera's rendering\n",
+        grouped(elf.flash),
+        grouped(flash_budget),
+        pct(elf.flash, flash_budget),
+        grouped(elf.ram),
+        grouped(stack),
+        grouped(ram),
+        grouped(ram_budget),
+        pct(ram, ram_budget),
+        grouped(total),
+        grouped(total - capture.min(total)),
+    );
+    if ram > ram_budget || elf.flash > flash_budget {
+        return Err(format!(
+            "the F405 product does not fit: the stack would run into the statics\n{r}"
+        ));
+    }
+    Ok(r)
 }
 
 #[cfg(test)]
@@ -275,6 +422,53 @@ stack peak 39524 bytes
         let e = compare("golden", &moved, "QEMU", OUT).unwrap_err();
         assert!(e.contains("box=65") && e.contains("box=64"), "{e}");
         assert!(compare("host", "ipp x\n", "QEMU", OUT).is_err());
+    }
+
+    #[test]
+    fn f405_plan_names_every_phase_against_192_kb() {
+        let r = f405_plan(OUT).unwrap();
+        assert!(
+            r.contains("270,648 B against the F405's 196,608 B, 74,040 B over"),
+            "{r}"
+        );
+        // pair 49,152 + kept 61,056 + colour 160,440 = 270,648.
+        assert!(
+            r.contains(
+                "colour     160,440 B (largest): pair + kept + colour = 270,648 B, 74,040 B over"
+            ),
+            "{r}"
+        );
+        // + stereo 53,800 = 164,008, 32,600 under.
+        assert!(
+            r.contains("stereo      53,800 B: pair + kept + stereo = 164,008 B, 32,600 B under"),
+            "{r}"
+        );
+        assert!(r.contains("CIELUV map 73,728 B"), "{r}");
+        assert!(f405_plan("ram-plan 160x120 total=1\n").is_err());
+    }
+
+    #[test]
+    fn f405_report_fails_when_the_stack_meets_the_statics() {
+        let out = "product 128x96 K=4 searches=1 objects=1\ninstr stage capture 100\n\
+                   instr total 1000\nstack peak 30000 bytes\n";
+        let elf = |ram| Sizes {
+            flash: 500_000,
+            ram,
+            rows: String::new(),
+        };
+        let r = f405_report(out, &elf(160_000), (1 << 20, 192 * 1024)).unwrap();
+        assert!(
+            r.contains("static 160,000 B + stack peak 30,000 B = 190,000 B of 196,608 B"),
+            "{r}"
+        );
+        assert!(r.contains("1,000 total, 900 without"), "{r}");
+        assert!(r.contains("--features f405, 128x96, K = 4"), "{r}");
+        let e = f405_report(out, &elf(170_000), (1 << 20, 192 * 1024)).unwrap_err();
+        assert!(
+            e.contains("does not fit") && e.contains("200,000 B of 196,608 B"),
+            "{e}"
+        );
+        assert!(f405_report("instr total 1\n", &elf(1), (1, 1)).is_err());
     }
 
     #[test]

@@ -61,6 +61,7 @@ use crate::segment::{
 };
 use crate::shape::{Centroid, ShapeElem, ShapeError, SHAPE_LEN};
 use crate::stereo::c2f::{C2f, C2fParams, MAX_COARSE};
+use crate::stereo::phase::{PhaseKernel, SafePhase};
 use crate::stereo::{DemTable, StereoError, TableError};
 use core::fmt;
 
@@ -457,11 +458,14 @@ impl<'w> Frame<'w> {
 }
 
 /// The set-up pipeline: checked parameters, stereo kernels, colour
-/// tables, the parsed decoder tables and model.
+/// tables, the parsed decoder tables and model. `K` is the stereo phase
+/// refinement's row step ([`PhaseKernel`]): the portable [`SafePhase`]
+/// from [`Pipeline::new`], a target's own (e.g. the firmware's assembly
+/// one) from [`Pipeline::with_kernel`]; the same bits either way.
 #[derive(Clone, Debug)]
-pub struct Pipeline<'a> {
+pub struct Pipeline<'a, K = SafePhase> {
     params: PipelineParams,
-    c2f: C2f,
+    c2f: C2f<K>,
     luv: LuvTables,
     tables: heapless::Vec<DemTable<'a>, { MAX_COARSE + 1 }>,
     model: Model<'a>,
@@ -470,7 +474,8 @@ pub struct Pipeline<'a> {
 
 impl<'a> Pipeline<'a> {
     /// Checks `params`, parses the decoder tables (level 0 first) and the
-    /// model blob, and sets up the stereo kernels (one-time setup).
+    /// model blob, and sets up the stereo kernels (one-time setup), with
+    /// the portable phase step [`SafePhase`].
     ///
     /// # Errors
     /// [`PipelineError::BadParams`] (K not in 1..=8, …),
@@ -478,6 +483,21 @@ impl<'a> Pipeline<'a> {
     /// [`PipelineError::Model`], [`PipelineError::ModelMismatch`], and the
     /// stereo engine's [`StereoError::BadParams`].
     pub fn new(
+        params: &PipelineParams,
+        tables: &[&'a [u8]],
+        model: &'a [u8],
+    ) -> Result<Self, PipelineError> {
+        Self::with_kernel(params, tables, model)
+    }
+}
+
+impl<'a, K: PhaseKernel> Pipeline<'a, K> {
+    /// [`Pipeline::new`] with the stereo phase refinement's row step by
+    /// kernel `K` (e.g. the firmware's assembly one).
+    ///
+    /// # Errors
+    /// As [`Pipeline::new`].
+    pub fn with_kernel(
         params: &PipelineParams,
         tables: &[&'a [u8]],
         model: &'a [u8],
@@ -490,7 +510,7 @@ impl<'a> Pipeline<'a> {
         if params.edges.threshold_percent > 100 {
             return Err(PipelineError::BadParams("edge threshold above 100 %"));
         }
-        let c2f = C2f::new(&params.stereo)?;
+        let c2f = C2f::with_kernel(&params.stereo)?;
         if tables.len() != params.tables() {
             return Err(PipelineError::TableCount {
                 expected: params.tables(),

@@ -15,7 +15,7 @@ use crate::segment::{
 };
 use crate::shape::{shape_vector_bits, RadialProfile, ShapeError, ShapeVector, SHAPE_LEN};
 use crate::stereo::c2f::{self, C2fBuffers};
-use crate::stereo::phase::{self, PhaseBuffers};
+use crate::stereo::phase::{self, PhaseBuffers, PhaseKernel};
 use crate::stereo::{Probe, Step};
 
 /// Passes the stereo engine's steps to the observer.
@@ -40,8 +40,8 @@ impl<O: Observer> SegmentObserver for SegmentSteps<'_, O> {
     }
 }
 
-pub(super) fn run<'w, S: RgbRows, O: Observer>(
-    p: &Pipeline<'_>,
+pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel>(
+    p: &Pipeline<'_, K>,
     left: &S,
     right: &S,
     workspace: &'w mut [u64],

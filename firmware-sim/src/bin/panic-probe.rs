@@ -148,8 +148,8 @@ fn main() {
         b,
         W,
         H,
-        firmware_sim::stereo_run::TABLES,
-        firmware_sim::mlp_run::SHIPPED,
+        firmware_sim::bench::stereo_run::TABLES,
+        firmware_sim::bench::mlp_run::SHIPPED,
     );
     println!("panic-probe {W}x{H}: scene {ok:?}, stages ok {bits:#013b}");
 }

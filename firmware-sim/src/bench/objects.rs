@@ -175,6 +175,6 @@ pub fn write_result(out: &mut impl core::fmt::Write, r: &ObjectResult) -> core::
 
 // The object stages take the conspicuity map the app computed last.
 const _: () = {
-    let (w, h) = crate::FRAME_SIZES[crate::FRAME_SIZES.len() - 1];
+    let (w, h) = super::FRAME_SIZES[super::FRAME_SIZES.len() - 1];
     assert!(w == OBJ_WIDTH && h == OBJ_HEIGHT);
 };

@@ -7,12 +7,13 @@ use std::time::Instant;
 
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
-use firmware_sim::objects;
+use firmware_sim::bench::objects;
+use firmware_sim::bench::{App, Buffers, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
 use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, EdgeCell, Luv};
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::Rgb8;
 use firmware_sim::pg::stereo::phase::SafePhase;
-use firmware_sim::{App, Buffers, SimCamera, Ticks, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
+use firmware_sim::{SimCamera, Ticks};
 
 /// Counts LED toggles instead of driving hardware.
 #[derive(Default)]
@@ -90,28 +91,28 @@ pub fn run() -> ExitCode {
         match r {
             Ok(line) => print!("{line}"),
             Err(e) => {
-                eprintln!("firmware-sim: object stages: {e:?}");
+                eprintln!("bench: object stages: {e:?}");
                 return ExitCode::FAILURE;
             }
         }
     }
     if result.is_ok() {
         if let Err(e) = run_stereo() {
-            eprintln!("firmware-sim: stereo stage: {e}");
+            eprintln!("bench: stereo stage: {e}");
             return ExitCode::FAILURE;
         }
     }
     match run_mlp() {
         Ok(lines) => print!("{lines}"),
         Err(e) => {
-            eprintln!("firmware-sim: classifier: {e:?}");
+            eprintln!("bench: classifier: {e:?}");
             return ExitCode::FAILURE;
         }
     }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("firmware-sim: {e}");
+            eprintln!("bench: {e}");
             ExitCode::FAILURE
         }
     }
@@ -141,8 +142,8 @@ fn run_objects(edges: &[EdgeCell]) -> Result<String, objects::ObjectError> {
 
 /// The stereo stage on the 160x120 demo pair, as on the board.
 fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
+    use firmware_sim::bench::stereo_run::{self, len};
     use firmware_sim::pg::image::Rgb8;
-    use firmware_sim::stereo_run::{self, len};
     let (mut grey, mut rgb, mut z, mut col) = (
         vec![0u16; len::GREY],
         vec![Rgb8::new(0, 0, 0); len::RGB],
@@ -201,8 +202,8 @@ fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
 }
 
 /// The classifier's checksum lines and host nanoseconds per inference.
-fn run_mlp() -> Result<String, firmware_sim::mlp_run::MlpRunError> {
-    use firmware_sim::mlp_run::{self, len, MlpBuffers};
+fn run_mlp() -> Result<String, firmware_sim::bench::mlp_run::MlpRunError> {
+    use firmware_sim::bench::mlp_run::{self, len, MlpBuffers};
     let (mut mask, mut input) = (vec![0u8; len::MASK], vec![0u32; len::INPUT]);
     let (mut hidden, mut output) = (vec![0u8; len::HIDDEN], vec![0u16; len::OUTPUT]);
     let mut bufs = MlpBuffers {

@@ -31,7 +31,7 @@ use crate::Ticks;
 pub struct Aligned<T: ?Sized>(pub T);
 
 /// The shipped model.
-pub static SHIPPED: &[u8] = &Aligned(*include_bytes!("../../host/data/shapes_model.bin")).0;
+pub static SHIPPED: &[u8] = &Aligned(*include_bytes!("../../../host/data/shapes_model.bin")).0;
 /// The 720x256x10 benchmark network.
 pub static BENCH_256: &[u8] = &Aligned(*include_bytes!(concat!(
     env!("OUT_DIR"),

@@ -69,9 +69,9 @@ const _: () = {
 
 /// The decoder tables of levels 0, 1 and 2.
 pub const TABLES: [&[u8]; 3] = [
-    include_bytes!("../data/dem_c2f_l0.bin"),
-    include_bytes!("../data/dem_c2f_l1.bin"),
-    include_bytes!("../data/dem_c2f_l2.bin"),
+    include_bytes!("../../data/dem_c2f_l0.bin"),
+    include_bytes!("../../data/dem_c2f_l1.bin"),
+    include_bytes!("../../data/dem_c2f_l2.bin"),
 ];
 
 /// Buffer lengths at [`WIDTH`] x [`HEIGHT`] for [`PARAMS`].
@@ -393,21 +393,21 @@ pub fn write_report(
 ) -> fmt::Result {
     write_result(out, r)?;
     for (name, &t) in STEP_NAMES.iter().zip(&r.steps) {
-        crate::app::write_ipp(out, name, WIDTH, HEIGHT, to_instructions(t))?;
+        crate::write_ipp(out, name, WIDTH, HEIGHT, to_instructions(t))?;
     }
-    crate::app::write_ipp(out, "stereo-setup", WIDTH, HEIGHT, to_instructions(r.setup))?;
-    crate::app::write_ipp(
+    crate::write_ipp(out, "stereo-setup", WIDTH, HEIGHT, to_instructions(r.setup))?;
+    crate::write_ipp(
         out,
         "stereo-camera-within-levels",
         WIDTH,
         HEIGHT,
         to_instructions(r.camera),
     )?;
-    crate::app::write_ipp(out, "stereo", WIDTH, HEIGHT, to_instructions(r.total))?;
+    crate::write_ipp(out, "stereo", WIDTH, HEIGHT, to_instructions(r.total))?;
     // The engine alone: the frames are the engine's input, and a camera's
     // DMA would leave them in memory (the renders are deterministic, so the
     // difference is exact).
-    crate::app::write_ipp(
+    crate::write_ipp(
         out,
         "stereo-engine",
         WIDTH,

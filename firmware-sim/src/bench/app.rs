@@ -1,4 +1,5 @@
-//! The firmware application: capture, conspicuity, checksum, report.
+//! The bench firmware's application: capture, conspicuity, checksum,
+//! report, frame after frame.
 
 use core::fmt::{self, Write};
 
@@ -9,22 +10,7 @@ use crate::camera::Camera;
 use crate::pg::checksum::Fnv1a;
 use crate::pg::conspicuity::{self, ConspicuityError, EdgeCell, EdgeParams, Luv, LuvTables};
 use crate::pg::image::{ImageError, ImageView, ImageViewMut, Rgb8};
-
-/// A monotonic counter read around each step (SysTick on the MCU, nothing on the host).
-pub trait Ticks {
-    /// Current count; only differences are meaningful.
-    fn now(&mut self) -> u64;
-}
-
-/// A [`Ticks`] that always reads 0 (no timing).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct NoTicks;
-
-impl Ticks for NoTicks {
-    fn now(&mut self) -> u64 {
-        0
-    }
-}
+use crate::Ticks;
 
 /// Ticks spent in each step of one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -260,17 +246,4 @@ pub fn write_checksum(out: &mut impl Write, r: &FrameResult) -> fmt::Result {
         r.width, r.height, r.checksum
     )?;
     writeln!(out, "edges {}x{} on={}", r.width, r.height, r.on_count)
-}
-
-/// `ipp STEP WxH X.Y`: instructions per pixel with one decimal, without float formatting.
-pub fn write_ipp(
-    out: &mut impl Write,
-    step: &str,
-    w: usize,
-    h: usize,
-    instructions: u64,
-) -> fmt::Result {
-    let pixels = (w as u64 * h as u64).max(1);
-    let tenths = (instructions * 10 + pixels / 2) / pixels;
-    writeln!(out, "ipp {step} {w}x{h} {}.{}", tenths / 10, tenths % 10)
 }

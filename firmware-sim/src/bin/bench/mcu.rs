@@ -1,88 +1,29 @@
-//! Bare-metal run on QEMU mps2-an386 (Cortex-M4, 25 MHz SYSCLK).
-//!
-//! SysTick runs on the core clock; under `-icount shift=0` QEMU advances virtual
-//! time 1 ns per instruction, so one tick is 40 instructions. The firmware
-//! measures that ratio itself (a `cortex_m::asm::delay` loop of known length)
-//! and prints instructions per pixel for each step.
+//! The bench firmware on QEMU mps2-an386 (Cortex-M4, 25 MHz SYSCLK): every
+//! stage harness of [`firmware_sim::bench`] in turn, counted in
+//! instructions by the board's SysTick ([`crate::board`]), with the
+//! assembly kernels of [`crate::dsp`].
 
 use core::fmt::Write;
-use core::num::NonZeroU64;
-use core::panic::PanicInfo;
-use core::sync::atomic::{AtomicU32, Ordering};
 
-use cortex_m::peripheral::{syst::SystClkSource, Peripherals, SYST};
+use cortex_m::peripheral::Peripherals;
 use cortex_m::singleton;
-use cortex_m_rt::{entry, exception};
-use cortex_m_semihosting::{debug, hio};
+use cortex_m_rt::entry;
+use cortex_m_semihosting::hio;
 use embedded_hal::delay::DelayNs;
-use embedded_hal::digital::{ErrorType, OutputPin};
-use firmware_sim::app::write_ipp;
-use firmware_sim::objects::{self, len};
+use firmware_sim::bench::objects::{self, len};
+use firmware_sim::bench::{App, Buffers, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
 use firmware_sim::pg::conspicuity::{luv_len, row_scratch_len, scratch_bytes, EdgeCell, Luv};
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::Rgb8;
-use firmware_sim::{App, Buffers, SimCamera, Ticks, FRAME_SIZES, MAX_HEIGHT, MAX_WIDTH};
+use firmware_sim::{write_ipp, SimCamera};
+
+use crate::board::{self, Led, SysTicks};
 
 const PIXELS: usize = MAX_WIDTH * MAX_HEIGHT;
 const LUV_LEN: usize = luv_len(MAX_WIDTH, MAX_HEIGHT);
 const ROWS_LEN: usize = row_scratch_len(MAX_WIDTH);
-/// SysTick is 24 bits wide.
-const RELOAD: u32 = 0x00FF_FFFF;
 /// mps2-an386 SYSCLK is 25 MHz: 40 ns per cycle.
 const NS_PER_CYCLE: u32 = 40;
-/// `asm::delay(n)` runs n + 1 iterations of `subs; bne`: 2n + 2 instructions.
-const CAL_DELAY: u32 = 2_000_000;
-const CAL_INSTRUCTIONS: u64 = 2 * CAL_DELAY as u64 + 2;
-
-static WRAPS: AtomicU32 = AtomicU32::new(0);
-
-#[exception]
-fn SysTick() {
-    WRAPS.fetch_add(1, Ordering::Relaxed);
-}
-
-/// 64-bit SysTick count (wraps are counted by the exception).
-struct SysTicks;
-
-impl Ticks for SysTicks {
-    fn now(&mut self) -> u64 {
-        loop {
-            let before = WRAPS.load(Ordering::Acquire);
-            let current = SYST::get_current();
-            if WRAPS.load(Ordering::Acquire) == before {
-                return u64::from(before) * (u64::from(RELOAD) + 1) + u64::from(RELOAD - current);
-            }
-        }
-    }
-}
-
-/// mps2 FPGAIO LED0 (bit 0 of the LED register at 0x4002_8000).
-struct Mps2Led;
-
-const FPGAIO_LED: *mut u32 = 0x4002_8000 as *mut u32;
-
-impl Mps2Led {
-    #[allow(unsafe_code)]
-    fn write(on: bool) {
-        // SAFETY: FPGAIO LED register of mps2-an385/an386, a plain R/W MMIO word.
-        unsafe { core::ptr::write_volatile(FPGAIO_LED, u32::from(on)) }
-    }
-}
-
-impl ErrorType for Mps2Led {
-    type Error = core::convert::Infallible;
-}
-
-impl OutputPin for Mps2Led {
-    fn set_low(&mut self) -> Result<(), Self::Error> {
-        Self::write(false);
-        Ok(())
-    }
-    fn set_high(&mut self) -> Result<(), Self::Error> {
-        Self::write(true);
-        Ok(())
-    }
-}
 
 /// Busy-wait delay at the 25 MHz core clock.
 struct CycleDelay;
@@ -93,56 +34,11 @@ impl DelayNs for CycleDelay {
     }
 }
 
-/// Deepest stack use so far: cortex-m-rt (`paint-stack`) fills the stack region
-/// with 0xCCCC_CCCC at reset; count the words from the top that were overwritten.
-#[allow(unsafe_code)]
-fn stack_peak_bytes() -> usize {
-    extern "C" {
-        static _stack_start: u32;
-        static _stack_end: u32;
-    }
-    // Taking the address of an extern static needs no `unsafe`.
-    let (top, bottom) = (
-        core::ptr::addr_of!(_stack_start) as usize,
-        core::ptr::addr_of!(_stack_end) as usize,
-    );
-    let mut addr = bottom;
-    // SAFETY: [_stack_end, _stack_start) is RAM reserved for the stack; reads are aligned words.
-    while addr < top
-        && unsafe { core::ptr::read_volatile(addr as *const u32) } == cortex_m_rt::STACK_PAINT_VALUE
-    {
-        addr += 4;
-    }
-    top - addr
-}
-
-fn start_systick(syst: &mut SYST) {
-    syst.set_clock_source(SystClkSource::Core);
-    syst.set_reload(RELOAD);
-    syst.clear_current();
-    syst.enable_interrupt();
-    syst.enable_counter();
-    // The current value reads 0 until the first reload; start from a loaded counter.
-    while SYST::get_current() == 0 {}
-}
-
 fn run(out: &mut impl Write) -> Result<(), &'static str> {
     let mut cp = Peripherals::take().ok_or("core peripherals already taken")?;
-    start_systick(&mut cp.SYST);
+    let to_instructions =
+        board::start_counting(&mut cp.SYST, out).map_err(|_| "semihosting write failed")?;
     let mut ticks = SysTicks;
-
-    let t0 = ticks.now();
-    cortex_m::asm::delay(CAL_DELAY);
-    // Non-zero by type: the conversions below divide by it.
-    let cal_ticks = NonZeroU64::new(ticks.now() - t0).unwrap_or(NonZeroU64::MIN);
-    let per_tick_x100 = CAL_INSTRUCTIONS * 100 / cal_ticks;
-    writeln!(
-        out,
-        "calib instructions={CAL_INSTRUCTIONS} ticks={cal_ticks} instructions_per_tick={}.{:02}",
-        per_tick_x100 / 100,
-        per_tick_x100 % 100
-    )
-    .map_err(|_| "semihosting write failed")?;
 
     // Working memory lives in .bss, so the linker checks it against memory.x.
     let rgb = singleton!(: [Rgb8; PIXELS] = [Rgb8 { r: 0, g: 0, b: 0 }; PIXELS])
@@ -159,8 +55,7 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
         conspicuity,
     };
 
-    let to_instructions = |t: u64| t * CAL_INSTRUCTIONS / cal_ticks;
-    let mut app = App::new(SimCamera::new(), Mps2Led, CycleDelay);
+    let mut app = App::new(SimCamera::new(), Led, CycleDelay);
     app.run(&FRAME_SIZES, &mut bufs, &mut ticks, out, |r, out| {
         let (w, h) = (r.width, r.height);
         write_ipp(out, "capture", w, h, to_instructions(r.ticks.capture))?;
@@ -215,7 +110,8 @@ fn run(out: &mut impl Write) -> Result<(), &'static str> {
         .map_err(|_| "semihosting write failed")?;
     run_stereo(out, &mut ticks, &to_instructions)?;
     run_mlp(out, &mut ticks, &to_instructions)?;
-    writeln!(out, "stack peak {} bytes", stack_peak_bytes()).map_err(|_| "semihosting write failed")
+    writeln!(out, "stack peak {} bytes", board::stack_peak_bytes())
+        .map_err(|_| "semihosting write failed")
 }
 
 /// The stereo stage on the 160x120 demo pair (row-streamed: only its
@@ -225,11 +121,11 @@ fn run_stereo(
     ticks: &mut SysTicks,
     to_instructions: &impl Fn(u64) -> u64,
 ) -> Result<(), &'static str> {
+    use firmware_sim::bench::stereo_run::{self, len, Words, ZCell};
     use firmware_sim::pg::disparity::DisparityCell;
     use firmware_sim::pg::image::Rgb8;
     use firmware_sim::pg::stereo::c2f::C2fBuffers;
     use firmware_sim::pg::stereo::phase::PhaseBuffers;
-    use firmware_sim::stereo_run::{self, len, Words, ZCell};
     const BLACK: Rgb8 = Rgb8::new(0, 0, 0);
     let mut bufs = C2fBuffers {
         grey: singleton!(: [u16; len::GREY] = [0; len::GREY]).ok_or("stereo grey taken")?,
@@ -273,7 +169,7 @@ fn run_mlp(
     ticks: &mut SysTicks,
     to_instructions: &dyn Fn(u64) -> u64,
 ) -> Result<(), &'static str> {
-    use firmware_sim::mlp_run::{self, len, macs, MlpBuffers};
+    use firmware_sim::bench::mlp_run::{self, len, macs, MlpBuffers};
     let mut bufs = MlpBuffers {
         mask: singleton!(: [u8; len::MASK] = [0; len::MASK]).ok_or("mlp mask taken")?,
         input: singleton!(: [u32; len::INPUT] = [0; len::INPUT]).ok_or("mlp input taken")?,
@@ -303,32 +199,15 @@ fn run_mlp(
 
 #[entry]
 fn main() -> ! {
-    let status = match hio::hstdout() {
+    let ok = match hio::hstdout() {
         Ok(mut out) => match run(&mut out) {
-            Ok(()) => debug::EXIT_SUCCESS,
+            Ok(()) => true,
             Err(e) => {
                 let _ = writeln!(out, "error: {e}");
-                debug::EXIT_FAILURE
+                false
             }
         },
-        Err(()) => debug::EXIT_FAILURE,
+        Err(()) => false,
     };
-    debug::exit(status);
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-/// Required by `no_std`, and never linked in: `cargo xtask firmware` fails
-/// if the ELF contains it or any of `core`'s panic functions (no panic is
-/// reachable; firmware-sim/README.md, "No panic path").
-#[panic_handler]
-fn panic(info: &PanicInfo) -> ! {
-    if let Ok(mut err) = hio::hstderr() {
-        let _ = writeln!(err, "panic: {info}");
-    }
-    debug::exit(debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
+    board::exit(ok)
 }
