@@ -12,12 +12,7 @@ mod gist;
 
 use crate::data::data_root;
 use crate::firmware::{build_and_run, size_report};
-use crate::util::{host_cargo, output, root, run as run_cmd, Result};
-
-pub struct Section {
-    pub title: &'static str,
-    pub body: String,
-}
+use crate::util::{host_cargo, output, root, run as run_cmd, Result, Section};
 
 const NOT_YET: &str = "not yet measured";
 

@@ -4,12 +4,11 @@
 //! STM32F405's budgets, and its F405 build (128x96) on QEMU netduinoplus2
 //! ([`run_f405`]).
 
-use crate::bench::Section;
 use crate::firmware::{
     budget, budget_of, build_f405, check_no_panic, product_elf, run_qemu, sizes, FirmwareError,
     Machine, QemuRun, Sizes,
 };
-use crate::util::{host_cargo, output, root, Result};
+use crate::util::{host_cargo, output, root, Result, Section};
 
 /// Lines that must be equal on the host, under QEMU and in the golden list.
 const COMPARED_PREFIXES: [&str; 3] = ["product ", "object ", "objects-checksum "];

@@ -129,3 +129,9 @@ pub fn test_totals(text: &str) -> (u64, u64, u64) {
     }
     totals
 }
+
+/// One section of docs/BENCHMARKS.md: a title and its Markdown body.
+pub struct Section {
+    pub title: &'static str,
+    pub body: String,
+}
