@@ -33,6 +33,7 @@ pub mod metrics;
 pub mod mlp;
 pub mod model;
 pub mod model_cmd;
+pub mod pipeline_data;
 mod plot_text;
 pub mod plots;
 pub mod probit;

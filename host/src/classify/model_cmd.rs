@@ -8,11 +8,12 @@
 //! `model.bin.json` ([`sidecar_path`]), the float network with its class
 //! names, training parameters and split. `eval` reads both.
 
-use super::dataset::{load_dataset, stratified_split, Dataset};
+use super::dataset::{load_dataset, stratified_split, Sample};
 use super::eval_set::{eval_set, outputs as eval_outputs};
 use super::metrics::{cmc, Det};
 use super::mlp::{Mlp, GAMMA};
 use super::model::{bad_model, ModelFile, MODEL_FORMAT};
+use super::pipeline_data::{harvest_split, int8_top1, training_samples, PipelineTraining};
 use super::plots::{add_plot, cmc_points, Curve, PlotKind, ORANGE, SHAPE_BLUE};
 use super::quant::{int_outputs, int_scores, model_error, quantize, score_sets};
 use super::rules::{evaluate, ranked, Evaluation, Templates};
@@ -56,6 +57,18 @@ pub struct TrainOptions {
     pub gamma: f64,
 }
 
+/// `protogist train`'s command line: [`TrainOptions`] and the pipeline
+/// options.
+#[derive(Clone, Debug, PartialEq, clap::Args)]
+pub struct TrainCommand {
+    /// Dataset, network and split.
+    #[command(flatten)]
+    pub train: TrainOptions,
+    /// Training on the pipeline's masks.
+    #[command(flatten)]
+    pub pipeline: PipelineTraining,
+}
+
 /// Input features of the network.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Features {
@@ -89,24 +102,33 @@ pub struct EvalOptions {
     pub json: bool,
 }
 
-fn inputs(ds: &Dataset, pick: impl Fn(usize) -> bool) -> (Array2<f64>, Vec<usize>) {
-    let rows: Vec<usize> = (0..ds.samples.len()).filter(|&i| pick(i)).collect();
-    let mut x = Array2::zeros((rows.len(), SHAPE_LEN));
+fn inputs(samples: &[Sample]) -> (Array2<f64>, Vec<usize>) {
+    let mut x = Array2::zeros((samples.len(), SHAPE_LEN));
     let mut labels = vec![];
-    for (r, &i) in rows.iter().enumerate() {
-        for (j, &v) in ds.samples[i].x.iter().enumerate() {
+    for (r, s) in samples.iter().enumerate() {
+        for (j, &v) in s.x.iter().enumerate() {
             x[[r, j]] = f64::from(v);
         }
-        labels.push(ds.samples[i].label);
+        labels.push(s.label);
     }
     (x, labels)
 }
 
-/// `protogist train`.
+/// `protogist train` on clean silhouettes.
 ///
 /// # Errors
 /// Bad arguments, dataset and I/O errors, all typed.
 pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
+    run_train_with(opts, &PipelineTraining::default())
+}
+
+/// `protogist train`, on the pipeline's masks with
+/// `pipeline.through_pipeline` (module [`super::pipeline_data`]).
+///
+/// # Errors
+/// Bad arguments, dataset and I/O errors, a class of which no pipeline
+/// mask was kept, all typed.
+pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Result<Summary> {
     let start = Instant::now();
     let arg = |name, reason: String| HostError::InvalidArgument { name, reason };
     if opts.hidden == 0 {
@@ -125,11 +147,40 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
     if !(0.0..=1.0).contains(&opts.gamma) || opts.gamma == 0.0 {
         return Err(arg("gamma", format!("{} is outside (0, 1]", opts.gamma)));
     }
+    let record = pipeline.record();
+    if let Some(r) = &record {
+        if !(1..=super::pipeline_data::MAX_VIEWS).contains(&r.views) {
+            return Err(arg(
+                "views",
+                format!(
+                    "{} is outside 1..={}",
+                    r.views,
+                    super::pipeline_data::MAX_VIEWS
+                ),
+            ));
+        }
+    }
     let ds = load_dataset(&opts.dataset)?;
     let labels: Vec<usize> = ds.samples.iter().map(|s| s.label).collect();
     let n = ds.classes.len();
     let is_test = stratified_split(&labels, n, opts.test_fraction, opts.seed);
-    let (x, y) = inputs(&ds, |i| !is_test[i]);
+    let clean_split = |test: bool| -> Vec<Sample> {
+        ds.samples
+            .iter()
+            .zip(&is_test)
+            .filter(|(_, &t)| t == test)
+            .map(|(s, _)| s.clone())
+            .collect()
+    };
+    let (train_set, harvests) = match &record {
+        Some(r) => {
+            let (set, h) = training_samples(&opts.dataset, &ds, &is_test, r, opts.seed, true)?;
+            let held = harvest_split(&opts.dataset, &ds, &is_test, true, r, opts.seed, true)?;
+            (set, Some((h, held)))
+        }
+        None => (clean_split(false), None),
+    };
+    let (x, y) = inputs(&train_set);
     let mut t = Array2::zeros((y.len(), n));
     for (r, &c) in y.iter().enumerate() {
         t[[r, c]] = 1.0;
@@ -176,17 +227,12 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
         b2: net.b2.to_vec(),
         blob_crc32: None,
         templates: Some(train_templates(&out, &y, n)?),
+        pipeline: record,
     };
     if let Some(parent) = opts.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         ensure_dir(parent)?;
     }
-    let calib: Vec<Vec<i16>> = ds
-        .samples
-        .iter()
-        .zip(&is_test)
-        .filter(|(_, &t)| !t)
-        .map(|(s, _)| s.shape.clone())
-        .collect();
+    let calib: Vec<Vec<i16>> = train_set.iter().map(|s| s.shape.clone()).collect();
     let blob = quantize(
         &net,
         &calib,
@@ -223,6 +269,22 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
             opts.seed
         ),
     );
+    if let (Some(r), Some((h, held))) = (&record, &harvests) {
+        s.push(
+            "pipeline masks",
+            format!(
+                "{} of {} training scenes ({} views per silhouette, silhouette placed in {}), {} of {} held-out scenes; trained on {} vectors{}",
+                h.samples.len(),
+                h.scenes,
+                r.views,
+                h.placed,
+                held.samples.len(),
+                held.scenes,
+                train_set.len(),
+                if r.with_clean { " with the clean silhouettes" } else { "" }
+            ),
+        );
+    }
     s.push(
         "network",
         format!(
@@ -240,6 +302,20 @@ pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
         "train accuracy (argmax)",
         format!("{:.1} %", 100.0 * correct as f64 / y.len().max(1) as f64),
     );
+    let pc = |r: Option<f64>| r.map_or_else(|| "n/a".into(), |v| format!("{:.1} %", 100.0 * v));
+    let clean_test = clean_split(true);
+    let qm =
+        protogist::mlp::Model::parse(&blob).map_err(|e| bad_model(&opts.out, model_error(e)))?;
+    s.push(
+        "held-out top-1 (int8), clean silhouettes",
+        pc(int8_top1(&qm, &clean_test)?),
+    );
+    if let Some((_, held)) = &harvests {
+        s.push(
+            "held-out top-1 (int8), their pipeline masks",
+            pc(int8_top1(&qm, held.samples.iter().map(|(_, s)| s))?),
+        );
+    }
     s.push(
         "model",
         format!(
@@ -277,8 +353,15 @@ pub fn train_meta(model: &ModelFile, dataset: &std::path::Path) -> String {
     let name = dataset
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let through = model.pipeline.map_or_else(String::new, |p| {
+        format!(
+            " --through-pipeline --views {}{}",
+            p.views,
+            if p.with_clean { " --with-clean" } else { "" }
+        )
+    });
     format!(
-        "protogist train --dataset {name} --features shape --hidden {} --epochs {} --test-fraction {} --seed {} --gamma {}",
+        "protogist train --dataset {name} --features shape --hidden {} --epochs {} --test-fraction {} --seed {} --gamma {}{through}",
         model.hidden, model.epochs, model.test_fraction, model.seed, model.gamma
     )
 }
