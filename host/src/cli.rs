@@ -13,6 +13,7 @@
 //!                      [--conditions LIST] [--json]
 //! protogist train-speed [--inputs D --hidden H --classes N --rows R]
 //! protogist train --dataset DIR --out model.json [--hidden H --epochs E]
+//!                 [--through-pipeline --views N --with-clean]
 //!                 [--test-fraction F --seed S --gamma G]
 //! protogist eval --model model.json --dataset DIR --out DIR [--json]
 //! protogist gen-scenes --out DIR [--scenes N --seed S --split test|train]
@@ -125,7 +126,7 @@ pub enum Command {
     /// Train the float network (section 4.4) on the shape vectors of an
     /// image-folder dataset; write the int8 model blob and its float JSON
     /// sidecar (`<out>.json`).
-    Train(crate::classify::model_cmd::TrainOptions),
+    Train(crate::classify::model_cmd::TrainCommand),
     /// Evaluate a trained model on its test split, float and int8 side by
     /// side: ROR, CMC, EER, HTER_min, AUC, verification rates; CMC, DET and
     /// ROC plots.
@@ -251,7 +252,9 @@ pub fn run(cli: Cli) -> Result<Summary> {
         Some(Command::GenRgbd(opts)) => crate::rgbd::gen::gen_rgbd(&opts),
         Some(Command::Experiment(opts)) => crate::rgbd::experiment::run_experiment(&opts),
         Some(Command::TrainSpeed(opts)) => crate::rgbd::speed::run_train_speed(&opts),
-        Some(Command::Train(opts)) => crate::classify::model_cmd::run_train(&opts),
+        Some(Command::Train(opts)) => {
+            crate::classify::model_cmd::run_train_with(&opts.train, &opts.pipeline)
+        }
         Some(Command::Eval(opts)) => crate::classify::model_cmd::run_eval(&opts),
         Some(Command::Quantize(opts)) => crate::classify::quant_cmd::run_quantize(&opts),
         Some(Command::Scratch) => Ok(scratch_summary()),
@@ -317,9 +320,17 @@ pub fn preflight(cmd: &Command, limit: u64) -> Result<()> {
             Ok(())
         }
         Command::SegmentEval { width, height, .. } => frame(*width, *height, "segment-eval"),
-        Command::Train(opts) => {
+        Command::Train(cmd) => {
+            let opts = &cmd.train;
             l::check_hidden(opts.hidden)?;
             let (classes, images) = crate::classify::dataset::count_images(&opts.dataset)?;
+            // Through the pipeline: up to `views` masks per image, and the
+            // clean ones.
+            let images = if cmd.pipeline.through_pipeline {
+                images.saturating_mul(cmd.pipeline.views.saturating_add(1))
+            } else {
+                images
+            };
             l::check_memory(
                 &format!(
                     "training a {}-{}-{classes} network on up to {images} images",

@@ -146,6 +146,7 @@ fn sidecar_seed() -> Vec<u8> {
         b2: vec![-0.5; k],
         blob_crc32: Some(7),
         templates: Some(vec![vec![0.9, 0.1], vec![0.1, 0.9]]),
+        pipeline: None,
     };
     serde_json::to_vec(&file).unwrap()
 }

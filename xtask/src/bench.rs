@@ -943,6 +943,10 @@ fn mlp_host() -> Section {
             "300",
             "--seed",
             "1",
+            "--through-pipeline",
+            "--views",
+            "4",
+            "--with-clean",
             "--out",
             &model,
         ])?;
@@ -973,11 +977,13 @@ fn mlp_host() -> Section {
         };
     };
     let same = fs::read(&model).ok() == fs::read(root().join("host/data/shapes_model.bin")).ok();
-    let mut body = format!(
-        "The shipped model's commands (README, Categorisation): `protogist gen-shapes --classes 19 \
-         --per-class 40 --seed 1 --size 64`, `protogist train --hidden 128 --epochs 300 --seed 1`, \
-         then `protogist eval --json` on the held-out half ({} probes, {} classes). The model \
-         built here is {} `host/data/shapes_model.bin`.\n\n| measure | float | int8 |\n|---|---|---|\n",
+    let mut body =
+        format!(
+        "The shipped model's commands (docs/CLASSIFY.md, Shipped model): `protogist gen-shapes \
+         --classes 19 --per-class 40 --seed 1 --size 64`, `protogist train --hidden 128 --epochs \
+         300 --seed 1 --through-pipeline --views 4 --with-clean`, then `protogist eval --json` on \
+         the held-out half ({} probes, {} classes). The model built here is {} \
+         `host/data/shapes_model.bin`.\n\n| measure | float | int8 |\n|---|---|---|\n",
         v["float"]["test"],
         v["float"]["classes"],
         if same { "byte-identical to" } else { "**not** identical to" }

@@ -17,8 +17,10 @@
 //! * [`mlp`], [`train`]: the float network of section 4.4 (two layers,
 //!   log-sigmoid, `MSE_REG`) and its full-batch Rprop− training.
 //! * [`dataset`]: image-folder datasets of silhouettes, their shape vectors
-//!   and a seeded stratified split; [`model_cmd`]: `protogist train` and
-//!   `protogist eval`; [`model`]: the JSON model file.
+//!   and a seeded stratified split; [`model_cmd`]: `protogist train`
+//!   ([`train_cmd`]) and `protogist eval`; [`model`]: the JSON model file;
+//!   [`pipeline_data`]: training masks as core's pipeline segments them
+//!   (`train --through-pipeline`).
 //!
 //! The rules take any output vectors (`&[Vec<f32>]`), so the 720-element
 //! shape vectors themselves can also stand in for a network output (an
@@ -33,6 +35,7 @@ pub mod metrics;
 pub mod mlp;
 pub mod model;
 pub mod model_cmd;
+pub mod pipeline_data;
 mod plot_style;
 mod plot_text;
 pub mod plots;
@@ -43,6 +46,7 @@ pub mod rules;
 pub mod shapes;
 pub mod shipped;
 pub mod train;
+pub mod train_cmd;
 
 /// Why a classification rule or a metric rejected its input.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -60,6 +60,10 @@ pub struct ModelFile {
     /// hold the training images (absent in older files).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub templates: Option<Vec<Vec<f32>>>,
+    /// How the training masks were made through the pipeline (`train
+    /// --through-pipeline`); absent for clean silhouettes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pipeline: Option<super::pipeline_data::PipelineRecord>,
 }
 
 pub(crate) fn bad_model(path: &Path, reason: impl Into<String>) -> HostError {
@@ -197,6 +201,7 @@ mod tests {
             b2: net.b2.to_vec(),
             blob_crc32: None,
             templates: None,
+            pipeline: None,
         }
     }
 

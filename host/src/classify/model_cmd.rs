@@ -1,68 +1,29 @@
-//! `protogist train` and `protogist eval`: the float network on an
-//! image-folder dataset, its quantised model blob and JSON float sidecar,
-//! and the section 5.1 measures on the held-out split, float and int8 side
-//! by side.
+//! `protogist train` (module [`super::train_cmd`], re-exported here) and
+//! `protogist eval`: the float network on an image-folder dataset, its
+//! quantised model blob and JSON float sidecar, and the section 5.1
+//! measures on the held-out split, float and int8 side by side.
 //!
 //! **Files.** `train --out model.bin` writes two files: `model.bin`, the
 //! int8 `PGML` blob the core runs (docs/MODEL_FORMAT.md), and
 //! `model.bin.json` ([`sidecar_path`]), the float network with its class
 //! names, training parameters and split. `eval` reads both.
 
-use super::dataset::{load_dataset, stratified_split, Dataset};
+use super::dataset::load_dataset;
 use super::eval_set::{eval_set, outputs as eval_outputs};
 use super::metrics::{cmc, Det};
-use super::mlp::{Mlp, GAMMA};
-use super::model::{bad_model, ModelFile, MODEL_FORMAT};
+use super::model::{bad_model, ModelFile};
 use super::plots::{add_plot, cmc_points, Curve, PlotKind, ORANGE, SHAPE_BLUE};
-use super::quant::{int_outputs, int_scores, model_error, quantize, score_sets};
-use super::rules::{evaluate, ranked, Evaluation, Templates};
-use super::train::{train, TrainParams};
+use super::quant::{int_outputs, int_scores, model_error, score_sets};
+use super::rules::{evaluate, ranked, Evaluation};
 use crate::error::{HostError, Result};
-use crate::output::ensure_dir;
 use crate::summary::Summary;
-use ndarray::Array2;
-use protogist::shape::SHAPE_LEN;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// Options of `protogist train`.
-#[derive(Clone, Debug, PartialEq, clap::Args)]
-pub struct TrainOptions {
-    /// Image-folder dataset: one subfolder per class.
-    #[arg(long)]
-    pub dataset: PathBuf,
-    /// Hidden units (the paper: 2000).
-    #[arg(long, default_value_t = 2000)]
-    pub hidden: usize,
-    /// Maximum epochs (the paper: 1000).
-    #[arg(long, default_value_t = 1000)]
-    pub epochs: usize,
-    /// Model blob to write (int8, PGML); the float network goes to
-    /// `<out>.json` beside it.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Input features: the 720-element shape vector (the only kind).
-    #[arg(long, value_enum, default_value_t = Features::Shape)]
-    pub features: Features,
-    /// Fraction of each class held out for testing.
-    #[arg(long, default_value_t = 0.5)]
-    pub test_fraction: f64,
-    /// Seed of the split and of the initial weights.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Weight of the MSE in MSE_REG = γ·MSE + (1 − γ)·MSW (msereg's ratio).
-    #[arg(long, default_value_t = GAMMA)]
-    pub gamma: f64,
-}
-
-/// Input features of the network.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum Features {
-    /// The centroidal profile of section 3.5 (720 values).
-    #[default]
-    Shape,
-}
+pub use super::train_cmd::{
+    run_train, run_train_with, train_meta, Features, TrainCommand, TrainOptions,
+};
 
 /// The float sidecar of a model blob: `<blob>.json`.
 pub fn sidecar_path(blob: &std::path::Path) -> PathBuf {
@@ -87,200 +48,6 @@ pub struct EvalOptions {
     /// Print the metrics as JSON.
     #[arg(long)]
     pub json: bool,
-}
-
-fn inputs(ds: &Dataset, pick: impl Fn(usize) -> bool) -> (Array2<f64>, Vec<usize>) {
-    let rows: Vec<usize> = (0..ds.samples.len()).filter(|&i| pick(i)).collect();
-    let mut x = Array2::zeros((rows.len(), SHAPE_LEN));
-    let mut labels = vec![];
-    for (r, &i) in rows.iter().enumerate() {
-        for (j, &v) in ds.samples[i].x.iter().enumerate() {
-            x[[r, j]] = f64::from(v);
-        }
-        labels.push(ds.samples[i].label);
-    }
-    (x, labels)
-}
-
-/// `protogist train`.
-///
-/// # Errors
-/// Bad arguments, dataset and I/O errors, all typed.
-pub fn run_train(opts: &TrainOptions) -> Result<Summary> {
-    let start = Instant::now();
-    let arg = |name, reason: String| HostError::InvalidArgument { name, reason };
-    if opts.hidden == 0 {
-        return Err(HostError::ZeroDimension { name: "hidden" });
-    }
-    crate::limits::check_hidden(opts.hidden)?;
-    if opts.epochs == 0 {
-        return Err(HostError::ZeroDimension { name: "epochs" });
-    }
-    if !(0.0..1.0).contains(&opts.test_fraction) {
-        return Err(arg(
-            "test-fraction",
-            format!("{} is outside [0, 1)", opts.test_fraction),
-        ));
-    }
-    if !(0.0..=1.0).contains(&opts.gamma) || opts.gamma == 0.0 {
-        return Err(arg("gamma", format!("{} is outside (0, 1]", opts.gamma)));
-    }
-    let ds = load_dataset(&opts.dataset)?;
-    let labels: Vec<usize> = ds.samples.iter().map(|s| s.label).collect();
-    let n = ds.classes.len();
-    let is_test = stratified_split(&labels, n, opts.test_fraction, opts.seed);
-    let (x, y) = inputs(&ds, |i| !is_test[i]);
-    let mut t = Array2::zeros((y.len(), n));
-    for (r, &c) in y.iter().enumerate() {
-        t[[r, c]] = 1.0;
-    }
-    let mut net = Mlp::new(SHAPE_LEN, opts.hidden, n, opts.seed);
-    let params = TrainParams {
-        epochs: opts.epochs,
-        gamma: opts.gamma,
-        ..TrainParams::default()
-    };
-    let report = train(&mut net, x.view(), t.view(), &params);
-    let out = net.predict(x.view());
-    let correct = out
-        .rows()
-        .into_iter()
-        .zip(&y)
-        .filter(|(row, &c)| (0..n).max_by(|&a, &b| row[a].total_cmp(&row[b])) == Some(c))
-        .count();
-    let keys = |test: bool| -> Vec<String> {
-        ds.samples
-            .iter()
-            .zip(&is_test)
-            .filter(|(_, &t)| t == test)
-            .map(|(s, _)| s.key.clone())
-            .collect()
-    };
-    let final_perf = *report.perf.last().unwrap_or(&f64::NAN);
-    let model = ModelFile {
-        format: MODEL_FORMAT.into(),
-        classes: ds.classes.clone(),
-        inputs: SHAPE_LEN,
-        hidden: opts.hidden,
-        gamma: opts.gamma,
-        seed: opts.seed,
-        test_fraction: opts.test_fraction,
-        epochs: report.epochs_run,
-        final_perf,
-        final_mse: report.final_mse,
-        train: keys(false),
-        test: keys(true),
-        w1: net.w1.iter().copied().collect(),
-        b1: net.b1.to_vec(),
-        w2: net.w2.iter().copied().collect(),
-        b2: net.b2.to_vec(),
-        blob_crc32: None,
-        templates: Some(train_templates(&out, &y, n)?),
-    };
-    if let Some(parent) = opts.out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        ensure_dir(parent)?;
-    }
-    let calib: Vec<Vec<i16>> = ds
-        .samples
-        .iter()
-        .zip(&is_test)
-        .filter(|(_, &t)| !t)
-        .map(|(s, _)| s.shape.clone())
-        .collect();
-    let blob = quantize(
-        &net,
-        &calib,
-        &y,
-        &ds.classes,
-        &train_meta(&model, &opts.dataset),
-    )?;
-    let model = ModelFile {
-        blob_crc32: Some(protogist::mlp::blob::crc32(&blob)),
-        ..model
-    };
-    let json = serde_json::to_vec(&model).map_err(|e| bad_model(&opts.out, e.to_string()))?;
-    // The blob and its sidecar are one result: both or neither.
-    let mut files = crate::output::Output::files();
-    files.add(&opts.out, blob.clone());
-    files.add(sidecar_path(&opts.out), json);
-    files.commit()?;
-    let mut s = Summary::new(format!("protogist train: {}", opts.dataset.display()));
-    s.push("classes", n);
-    s.push(
-        "images",
-        format!(
-            "{} usable, {} skipped (empty or degenerate mask)",
-            ds.samples.len(),
-            ds.skipped
-        ),
-    );
-    s.push(
-        "split",
-        format!(
-            "{} train, {} test (seed {})",
-            model.train.len(),
-            model.test.len(),
-            opts.seed
-        ),
-    );
-    s.push(
-        "network",
-        format!(
-            "{SHAPE_LEN}-{}-{n}, log-sigmoid, γ {}",
-            opts.hidden, opts.gamma
-        ),
-    );
-    s.push("epochs", report.epochs_run);
-    s.push(
-        "MSE_REG",
-        format!("{:.4e} -> {final_perf:.4e}", report.initial_perf),
-    );
-    s.push("MSE", format!("{:.4e}", report.final_mse));
-    s.push(
-        "train accuracy (argmax)",
-        format!("{:.1} %", 100.0 * correct as f64 / y.len().max(1) as f64),
-    );
-    s.push(
-        "model",
-        format!(
-            "{} ({} B int8), {}",
-            opts.out.display(),
-            blob.len(),
-            sidecar_path(&opts.out).display()
-        ),
-    );
-    s.push("time", format!("{:.1} s", start.elapsed().as_secs_f64()));
-    Ok(s)
-}
-
-/// The float templates of `train`'s sidecar: each class's mean output
-/// over the training split (`outputs`, one row per image of class
-/// `labels[i]`).
-///
-/// # Errors
-/// [`ClassifyError`](super::ClassifyError) for a class without images.
-fn train_templates(outputs: &Array2<f64>, labels: &[usize], n: usize) -> Result<Vec<Vec<f32>>> {
-    let rows: Vec<Vec<f32>> = outputs
-        .rows()
-        .into_iter()
-        .map(|r| r.iter().map(|&o| o as f32).collect())
-        .collect();
-    let t = Templates::from_outputs(&rows, labels, n)?;
-    Ok((0..n)
-        .map(|c| t.template(c).map(<[f32]>::to_vec).unwrap_or_default())
-        .collect())
-}
-
-/// The metadata string a blob records: how `train` made it (the dataset
-/// folder's name and the sidecar's parameters; `epochs` is the number run).
-pub fn train_meta(model: &ModelFile, dataset: &std::path::Path) -> String {
-    let name = dataset
-        .file_name()
-        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    format!(
-        "protogist train --dataset {name} --features shape --hidden {} --epochs {} --test-fraction {} --seed {} --gamma {}",
-        model.hidden, model.epochs, model.test_fraction, model.seed, model.gamma
-    )
 }
 
 /// The measures `protogist eval` reports (rates in `[0, 1]`).

@@ -4,7 +4,9 @@
 //! `--model` is either a float model (the JSON sidecar `train` writes, with
 //! `--dataset` for calibration, templates and Δ on its training split) or
 //! an existing blob (checked, then re-emitted as is). From the sidecar and
-//! the same dataset it rebuilds the blob `train` wrote, bit for bit.
+//! the same dataset it rebuilds the blob `train` wrote, bit for bit (for a
+//! model trained `--through-pipeline`, by rendering and segmenting the
+//! training silhouettes' scenes again).
 
 use super::dataset::load_dataset;
 use super::model::{bad_model, parse_sidecar, ModelKind};
@@ -76,12 +78,26 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
             });
         }
         let train: HashSet<&str> = file.train.iter().map(String::as_str).collect();
-        let (calib, labels): (Vec<Vec<i16>>, Vec<usize>) = ds
-            .samples
-            .iter()
-            .filter(|s| train.contains(s.key.as_str()))
-            .map(|s| (s.shape.clone(), s.label))
-            .unzip();
+        let (calib, labels): (Vec<Vec<i16>>, Vec<usize>) = match &file.pipeline {
+            // Trained on pipeline masks: the same scenes again.
+            Some(rec) => {
+                let is_test: Vec<bool> = ds
+                    .samples
+                    .iter()
+                    .map(|s| !train.contains(s.key.as_str()))
+                    .collect();
+                let (set, _) = super::pipeline_data::training_samples(
+                    dir, &ds, &is_test, rec, file.seed, true,
+                )?;
+                set.into_iter().map(|s| (s.shape, s.label)).unzip()
+            }
+            None => ds
+                .samples
+                .iter()
+                .filter(|s| train.contains(s.key.as_str()))
+                .map(|s| (s.shape.clone(), s.label))
+                .unzip(),
+        };
         let meta = super::model_cmd::train_meta(&file, dir);
         quantize(&net, &calib, &labels, &file.classes, &meta)?
     } else {

@@ -1,12 +1,15 @@
 //! The model shipped in the repository (`host/data/shapes_model.bin`) and
 //! the categorisation of object masks with it (the demo, issue 5 §9).
 //!
-//! The model is made by two seeded project commands (README, section
-//! "Categorisation"), checked bit for bit by `host/tests/shipped_model.rs`:
+//! The model is made by two seeded project commands (docs/CLASSIFY.md,
+//! "Shipped model"), checked bit for bit by `host/tests/shipped_model.rs`;
+//! it is trained on the masks core's pipeline segments
+//! ([`super::pipeline_data`]):
 //!
 //! ```text
 //! protogist gen-shapes --out shapes --classes 19 --per-class 40 --seed 1 --size 64
-//! protogist train --dataset shapes --hidden 128 --epochs 300 --seed 1 --out host/data/shapes_model.bin
+//! protogist train --dataset shapes --hidden 128 --epochs 300 --seed 1 \
+//!                 --through-pipeline --views 4 --with-clean --out host/data/shapes_model.bin
 //! ```
 
 use super::dataset::shape_inputs;

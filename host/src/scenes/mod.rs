@@ -26,6 +26,7 @@
 //! a scene does not depend on `--scenes`. `index.json` is written last: a
 //! set without it is incomplete.
 
+pub mod given;
 pub mod load;
 pub mod render;
 

@@ -14,6 +14,7 @@
 //! its own warped position (rather than pushing left pixels across) leaves
 //! no holes where the right eye sees what the left eye does not.
 
+use super::given::{fit_silhouette, GivenObject, GIVEN_FILL};
 use super::{BoxPx, ObjectTruth, SceneKey, SceneParams};
 use crate::classify::mlp::{unit, SplitMix};
 use crate::classify::shapes::{class_dir, render as render_silhouette};
@@ -33,6 +34,9 @@ pub struct RenderedScene {
     pub masks: Vec<GrayImage>,
     /// Each object's truth (its `mask` field is the mask's file name).
     pub objects: Vec<ObjectTruth>,
+    /// Each object's position in the objects drawn (or given, for
+    /// [`render_given`](super::given::render_given)).
+    pub sources: Vec<usize>,
 }
 
 /// Splitmix64's finaliser: a well-mixed 64-bit hash of `x`.
@@ -191,16 +195,21 @@ impl Layout {
     /// The nearest layer covering left position `(x, y)` when layer `k` is
     /// seen at `x + shift(k)`: the winner's index and disparity.
     fn nearest(&self, x: f64, y: f64, shifted: bool) -> Option<(usize, f64)> {
-        let mut best: Option<(usize, f64)> = None;
-        for (k, l) in self.layers.iter().enumerate() {
-            let d = l.depth.at(y);
-            let xl = if shifted { x + d } else { x };
-            if l.covers(xl, y) && best.is_none_or(|(_, b)| d >= b) {
-                best = Some((k, d));
-            }
-        }
-        best
+        nearest(&self.layers, x, y, shifted)
     }
+}
+
+/// [`Layout::nearest`] over `layers`.
+fn nearest(layers: &[Layer], x: f64, y: f64, shifted: bool) -> Option<(usize, f64)> {
+    let mut best: Option<(usize, f64)> = None;
+    for (k, l) in layers.iter().enumerate() {
+        let d = l.depth.at(y);
+        let xl = if shifted { x + d } else { x };
+        if l.covers(xl, y) && best.is_none_or(|(_, b)| d >= b) {
+            best = Some((k, d));
+        }
+    }
+    best
 }
 
 /// Largest disparity of the scenes at `width` px: 28 at 160 px, inside the
@@ -215,10 +224,20 @@ pub fn max_disparity(width: u32) -> f64 {
 /// [`HostError::InvalidArgument`] for a class count out of range (checked
 /// by the caller first), or a silhouette size out of range.
 pub fn render_scene(params: &SceneParams, key: SceneKey) -> Result<RenderedScene> {
+    render_stream(params, key.stream(), None)
+}
+
+/// Renders a scene of the stream `stream`: objects drawn from the classes,
+/// or `given` ([`super::given::render_given`]).
+pub(super) fn render_stream(
+    params: &SceneParams,
+    stream: u64,
+    given: Option<&[GivenObject<'_>]>,
+) -> Result<RenderedScene> {
     let (w, h) = (params.width, params.height);
     let (wf, hf) = (f64::from(w), f64::from(h));
     let s = wf / 160.0;
-    let mut rng = SplitMix::new(key.stream());
+    let mut rng = SplitMix::new(stream);
     let tex = |rng: &mut SplitMix, cell: f64| Texture {
         seed: rng.next_u64(),
         cell: cell * s,
@@ -287,17 +306,33 @@ pub fn render_scene(params: &SceneParams, key: SceneKey) -> Result<RenderedScene
     // Objects: distinct classes, each placed so that it is fully inside
     // both views and keeps most of its area visible.
     let (lo, hi) = params.objects;
-    let count = lo + (rng.next_u64() % u64::from(hi - lo + 1)) as u8;
+    let count = match given {
+        Some(g) => g.len(),
+        None => usize::from(lo + (rng.next_u64() % u64::from(hi - lo + 1)) as u8),
+    };
     let mut pool: Vec<usize> = (0..params.classes).collect();
     let d_max = max_disparity(w);
     let mut objects = Vec::new();
-    for _ in 0..count {
-        if pool.is_empty() {
-            break;
-        }
-        let class = pool.swap_remove((rng.next_u64() % pool.len() as u64) as usize);
-        let size = ((range(&mut rng, 36.0, 72.0) * s).round() as u32).clamp(16, w.min(h));
-        let mask = render_silhouette(class, rng.next_u64(), rng.next_u64(), size)?;
+    let mut sources = Vec::new();
+    for source in 0..count {
+        let (class_name, mask) = match given.and_then(|g| g.get(source)) {
+            Some(g) => {
+                let size = range(&mut rng, 36.0, 72.0) * s;
+                let Some(mask) = fit_silhouette(g.mask, (GIVEN_FILL * size).round()) else {
+                    continue;
+                };
+                (g.class.to_owned(), mask)
+            }
+            None => {
+                if pool.is_empty() {
+                    break;
+                }
+                let class = pool.swap_remove((rng.next_u64() % pool.len() as u64) as usize);
+                let size = ((range(&mut rng, 36.0, 72.0) * s).round() as u32).clamp(16, w.min(h));
+                let mask = render_silhouette(class, rng.next_u64(), rng.next_u64(), size)?;
+                (class_dir(class).unwrap_or_default(), mask)
+            }
+        };
         let Some(mb) = BoxPx::of_mask(&mask) else {
             continue;
         };
@@ -331,33 +366,18 @@ pub fn render_scene(params: &SceneParams, key: SceneKey) -> Result<RenderedScene
             };
             layers.push(layer);
             let full = mask.pixels().filter(|p| p.0[0] != 0).count();
-            let visible = visible_mask(
-                &Layout {
-                    layers: layers.clone(),
-                },
-                w,
-                h,
-                objects.len(),
-            );
-            let seen = visible.pixels().filter(|p| p.0[0] != 0).count();
+            let seen = visible_area(&layers, w, h, objects.len());
             // Earlier objects must stay mostly visible too.
             let earlier_ok = objects
                 .iter()
                 .enumerate()
                 .all(|(k, o): (usize, &ObjectTruth)| {
-                    let v = visible_mask(
-                        &Layout {
-                            layers: layers.clone(),
-                        },
-                        w,
-                        h,
-                        k,
-                    );
-                    v.pixels().filter(|p| p.0[0] != 0).count() * 10 >= o.area * 7
+                    visible_area(&layers, w, h, k) * 10 >= o.area * 7
                 });
             if seen * 10 >= full * 7 && seen >= 40 && earlier_ok {
+                sources.push(source);
                 objects.push(ObjectTruth {
-                    class: class_dir(class).unwrap_or_default(),
+                    class: class_name.clone(),
                     mask: format!("mask_{}.png", objects.len()),
                     bbox: mb,
                     disparity: d,
@@ -372,7 +392,7 @@ pub fn render_scene(params: &SceneParams, key: SceneKey) -> Result<RenderedScene
     let layout = Layout { layers };
 
     // Views, disparity and masks.
-    let mut cam = SplitMix::new(mix64(key.stream() ^ 0xCA3E));
+    let mut cam = SplitMix::new(mix64(stream ^ 0xCA3E));
     let gain: [f64; 3] = {
         let g = range(&mut cam, 0.92, 1.08);
         [0; 3].map(|_| g * range(&mut cam, 0.98, 1.02))
@@ -417,11 +437,40 @@ pub fn render_scene(params: &SceneParams, key: SceneKey) -> Result<RenderedScene
         disparity,
         masks,
         objects,
+        sources,
     })
 }
 
 fn pixel(c: [f64; 3]) -> Rgb<u8> {
     Rgb(c.map(|v| v.round().clamp(0.0, 255.0) as u8))
+}
+
+/// The pixels of [`visible_mask`], counted over object `k`'s silhouette
+/// window only (it is nowhere else).
+fn visible_area(layers: &[Layer], w: u32, h: u32, k: usize) -> usize {
+    let Some(Extent::Silhouette { mask, x0, y0 }) = layers
+        .iter()
+        .find(|l| l.object == Some(k))
+        .map(|l| &l.extent)
+    else {
+        return 0;
+    };
+    // Pixel x (centre x + 0.5) can be covered only when
+    // x0 <= x + 0.5 < x0 + width.
+    let span = |o: f64, len: u32, max: u32| {
+        let lo = (o - 0.5).ceil().max(0.0) as u32;
+        let hi = ((o + f64::from(len) - 0.5).ceil().max(0.0) as u32).min(max);
+        lo..hi.max(lo)
+    };
+    let mut n = 0;
+    for y in span(*y0, mask.height(), h) {
+        for x in span(*x0, mask.width(), w) {
+            let hit = nearest(layers, f64::from(x) + 0.5, f64::from(y) + 0.5, false)
+                .is_some_and(|(i, _)| layers[i].object == Some(k));
+            n += usize::from(hit);
+        }
+    }
+    n
 }
 
 /// Where object `k` is the nearest layer in the left view.
@@ -432,4 +481,73 @@ fn visible_mask(layout: &Layout, w: u32, h: u32, k: usize) -> GrayImage {
             .is_some_and(|(i, _)| layout.layers[i].object == Some(k));
         Luma([if hit { 255 } else { 0 }])
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> SceneParams {
+        SceneParams {
+            width: 160,
+            height: 120,
+            classes: 19,
+            objects: (1, 4),
+        }
+    }
+
+    /// A 40x20 bar at (10, 30) in a 64x64 frame.
+    fn bar() -> GrayImage {
+        GrayImage::from_fn(64, 64, |x, y| {
+            Luma([if (10..50).contains(&x) && (30..50).contains(&y) {
+                255
+            } else {
+                0
+            }])
+        })
+    }
+
+    #[test]
+    fn visible_area_counts_the_visible_mask() {
+        for index in 0..4 {
+            let key = SceneKey {
+                seed: 9,
+                split: super::super::Split::Train,
+                index,
+            };
+            let s = render_scene(&params(), key).unwrap();
+            for (o, m) in s.objects.iter().zip(&s.masks) {
+                assert_eq!(m.pixels().filter(|p| p.0[0] != 0).count(), o.area);
+            }
+        }
+        // Against the full-frame mask, on a layout with an occluder.
+        let a = bar();
+        let layer = |x0: f64, d: f64, k: usize| Layer {
+            extent: Extent::Silhouette {
+                mask: a.clone(),
+                x0,
+                y0: 3.0,
+            },
+            depth: Depth::constant(d),
+            colour: [0.0; 3],
+            texture: Texture { seed: 1, cell: 4.0 },
+            amplitude: 0.0,
+            object: Some(k),
+        };
+        let layers = vec![layer(0.0, 2.0, 0), layer(25.0, 3.0, 1)];
+        for k in 0..2 {
+            let full = visible_mask(
+                &Layout {
+                    layers: layers.clone(),
+                },
+                80,
+                60,
+                k,
+            );
+            let n = full.pixels().filter(|p| p.0[0] != 0).count();
+            assert_eq!(visible_area(&layers, 80, 60, k), n);
+            assert!(n > 0);
+        }
+        assert_eq!(visible_area(&layers, 80, 60, 7), 0);
+    }
 }
