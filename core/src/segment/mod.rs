@@ -70,6 +70,7 @@
 
 mod bits;
 mod buffers;
+mod ground;
 mod label;
 mod morph;
 mod passes;
@@ -78,6 +79,7 @@ mod stats;
 
 pub use bits::{bit_map_len, row_runs, run_capacity, words_per_row, BitView};
 pub use buffers::{maps_len, scratch_bytes, table_len, SegmentBuffers, BIT_MAPS};
+pub use ground::{fit_ground, ground_rows_len, inhibit_ground, GroundLine, MAX_SLOPE, MIN_SLOPE};
 pub use label::{area_filter, fill_holes, label_capacity, AreaReport, Connectivity, Labeller};
 pub use morph::{
     close, dilate, dilate_n, erode, erode_n, non_max_suppression, Disk, NMS_DIRECTIONS,
@@ -144,7 +146,25 @@ pub struct SegmentParams {
     pub min_area: Ratio,
     /// Objects to extract, 1 (the paper) to [`MAX_OBJECTS`].
     pub max_objects: u8,
+    /// Ground-plane inhibition: when a ground line is found
+    /// ([`fit_ground`]), the D_fg cells at most this many disparity bits
+    /// (1/256 px) nearer than it are OFF ([`inhibit_ground`]). `None`: no
+    /// inhibition (the paper). At most [`MAX_GROUND_BAND`].
+    pub ground_band: Option<u16>,
+    /// Least mask area of an object, a fraction of the frame's area
+    /// (at most 1). A search whose mask is smaller is inhibited like any
+    /// other but is not an object and does not count towards
+    /// `max_objects`; at most [`SEARCHES_PER_OBJECT`] · `max_objects`
+    /// searches run. 0 (the paper): every mask is an object.
+    pub min_object: Ratio,
 }
+
+/// Searches [`segment`] runs per object of `max_objects` at most, when
+/// small masks are not objects ([`SegmentParams::min_object`]).
+pub const SEARCHES_PER_OBJECT: usize = 2;
+
+/// Largest [`SegmentParams::ground_band`]: 16 px.
+pub const MAX_GROUND_BAND: u16 = 16 * 256;
 
 impl Default for SegmentParams {
     fn default() -> Self {
@@ -168,6 +188,8 @@ impl SegmentParams {
         closing_steps: 4,
         min_area: Ratio::new(1, 5),
         max_objects: 1,
+        ground_band: None,
+        min_object: Ratio::new(0, 1),
     };
 
     /// Checks the parameters.
@@ -182,6 +204,7 @@ impl SegmentParams {
             ("fg_high", self.fg_high),
             ("range", self.range),
             ("min_area", self.min_area),
+            ("min_object", self.min_object),
         ];
         if let Some((name, _)) = ratios.iter().find(|(_, r)| r.den == 0) {
             return Err(SegmentError::BadParams(name));
@@ -192,6 +215,15 @@ impl SegmentParams {
         }
         if self.left_strip.num >= self.left_strip.den {
             return Err(SegmentError::BadParams("left_strip"));
+        }
+        // A fraction above 1 would reject every object.
+        for (name, r) in [("min_object", self.min_object)] {
+            if r.num > r.den {
+                return Err(SegmentError::BadParams(name));
+            }
+        }
+        if self.ground_band.is_some_and(|b| b > MAX_GROUND_BAND) {
+            return Err(SegmentError::BadParams("ground_band"));
         }
         if self.exponent > 8 {
             return Err(SegmentError::BadParams("exponent"));

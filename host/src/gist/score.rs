@@ -108,6 +108,19 @@ pub struct SceneScore {
     pub low_contrast: usize,
     /// Of those, the matched ones.
     pub low_contrast_matched: usize,
+    /// Every detection, in the detector's order.
+    pub found: Vec<Found>,
+}
+
+/// One detection as scored: where it is and what it overlaps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Found {
+    /// Its box.
+    pub bbox: BoxPx,
+    /// Its largest box IoU with any object of the truth (0 with none).
+    pub best_iou: f64,
+    /// The object it is matched to.
+    pub object: Option<usize>,
 }
 
 /// Scores one scene's detections against its truth.
@@ -135,6 +148,15 @@ pub fn score_scene(scene: &Scene, dets: &[Detection], ms: f64) -> SceneScore {
         s.top5 += usize::from(d.top5.iter().any(|(c, _)| *c == o.class));
         claimed_right += usize::from(d.category() == Some(o.class.as_str()));
     }
+    s.found = dets
+        .iter()
+        .enumerate()
+        .map(|(k, d)| Found {
+            bbox: d.bbox,
+            best_iou: gt.iter().map(|b| d.bbox.iou(b)).fold(0.0, f64::max),
+            object: matches.iter().find(|m| m.detection == k).map(|m| m.object),
+        })
+        .collect();
     let claims = dets.iter().filter(|d| d.category().is_some()).count();
     s.gist = claimed_right == truth.len() && claims == truth.len();
     s.unknown = dets.len() - claims;
