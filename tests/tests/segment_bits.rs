@@ -86,7 +86,8 @@ fn by_steps(
             report.foreground -= sg::inhibit_ground(line, band, vm!(m.d_fg)).unwrap();
         }
     }
-    let searches = if p.min_object.num == 0 {
+    let mw = p.max_object_width;
+    let searches = if p.min_object.num == 0 && mw.num >= mw.den {
         k
     } else {
         k * sg::SEARCHES_PER_OBJECT
@@ -122,8 +123,11 @@ fn by_steps(
         sg::fill_holes(&v!(m.closed), vm!(m.filled), &mut lab).unwrap();
         let regions = sg::area_filter(&v!(m.filled), vm!(mask), &mut lab, p.min_area).unwrap();
         // Masks under `min_object` of the frame are not objects.
+        // ... and nor are boxes wider than `max_object_width` of it.
+        let bbox = sg::bounding_box(&v!(mask));
         let object = u64::from(regions.area) * u64::from(p.min_object.den)
-            >= (n as u64) * u64::from(p.min_object.num);
+            >= (n as u64) * u64::from(p.min_object.num)
+            && bbox.map_or(0, |b| b.width) * usize::from(mw.den) <= w * usize::from(mw.num);
         if object {
             let det = sg::Detection {
                 index,
@@ -131,7 +135,7 @@ fn by_steps(
                 range,
                 score: slice.score,
                 area: regions.area,
-                bbox: sg::bounding_box(&v!(mask)),
+                bbox,
                 regions,
             };
             report.objects.push(det).unwrap();
@@ -212,23 +216,26 @@ fn params() -> impl Strategy<Value = SegmentParams> {
         any::<bool>(),
         1u8..=4,
         0u8..3,
-        (proptest::option::of(0u16..2048), 0u16..3),
+        (proptest::option::of(0u16..2048), 0u16..3, 1u16..=4),
     )
         .prop_map(
-            |(disk, refine, close, on_cells, k, exponent, (ground, min_object))| SegmentParams {
-                disk,
-                refine_dilations: refine,
-                closing_steps: close,
-                psi_mean: if on_cells {
-                    PsiMean::OnCells
-                } else {
-                    PsiMean::Region
-                },
-                max_objects: k,
-                exponent,
-                ground_band: ground,
-                min_object: sg::Ratio::new(min_object, 64),
-                ..SegmentParams::default()
+            |(disk, refine, close, on_cells, k, exponent, (ground, min_object, width))| {
+                SegmentParams {
+                    disk,
+                    refine_dilations: refine,
+                    closing_steps: close,
+                    psi_mean: if on_cells {
+                        PsiMean::OnCells
+                    } else {
+                        PsiMean::Region
+                    },
+                    max_objects: k,
+                    exponent,
+                    ground_band: ground,
+                    min_object: sg::Ratio::new(min_object, 64),
+                    max_object_width: sg::Ratio::new(width, 4),
+                    ..SegmentParams::default()
+                }
             },
         )
 }

@@ -5,9 +5,12 @@
 //! [`fit_ground`] takes each row's dominant disparity (the mean of the
 //! cells within a plane of the row's most common whole-pixel plane, when
 //! at least a quarter of the row agrees), finds the line through most of
-//! them by a Hough vote over slopes from [`MIN_SLOPE`] to [`MAX_SLOPE`],
-//! and refines it by least squares over the rows within a pixel of it. A
-//! line is a ground only when at least a quarter of the rows lie on it.
+//! them by a Hough vote over slopes from [`MIN_SLOPE`] to [`MAX_SLOPE`]
+//! (1/128 px per row apart; intercepts in half pixels), in which a row
+//! within 1/64 px of the row above (a frontal wall) does not vote, and
+//! refines it by least squares over the rows near it (within 1/2 px, then
+//! twice within 1/4 px). A line is a ground only when at least a quarter
+//! of the rows lie on it.
 //! [`inhibit_ground`] then turns OFF the D_fg cells no nearer than
 //! `d_g(y) + band` ([`SegmentParams::ground_band`](super::SegmentParams)):
 //! the ground, its texture and what lies flat on it. Objects standing on
@@ -26,12 +29,14 @@ use crate::image::{ImageError, ImageView, ImageViewMut};
 pub const MIN_SLOPE: i64 = 8;
 /// Largest slope searched, bits per row (1/2 px per row).
 pub const MAX_SLOPE: i64 = 128;
-/// Step between the slopes of the vote, bits per row (1/64 px per row).
-const SLOPE_STEP: usize = 4;
-/// A row lies on a line when its disparity is within this many bits (1 px).
-const ON_LINE: i64 = 256;
-/// Least-squares refinements after the vote.
-const REFINE: usize = 2;
+/// Step between the slopes of the vote, bits per row (1/128 px per row).
+const SLOPE_STEP: usize = 2;
+/// Bins of the vote's intercepts: half pixels over the planes.
+const BINS: usize = 2 * PLANES;
+/// The refinements after the vote: each a least-squares fit over the rows
+/// whose disparity is within this many bits of the line before it (1/2
+/// px around the vote's coarse line, then 1/4 px).
+const REFINE: [i64; 3] = [128, 64, 64];
 
 /// The fitted ground: `d_g(y) = (slope·y + offset) / 2^16` disparity bits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -85,14 +90,14 @@ fn row_disparity(row: &[DisparityCell], hist: &mut [u16; PLANES]) -> Option<u32>
     (n >= need).then(|| (2 * sum + n) / (2 * n))
 }
 
-/// Least squares of `d = a·y + b` over the rows within [`ON_LINE`] of
-/// `line` (all rows with an estimate when `line` is `None`).
-fn least_squares(rows: &[u32], line: Option<&GroundLine>) -> Option<GroundLine> {
+/// Least squares of `d = a·y + b` over the rows within `band` bits of
+/// `line`.
+fn least_squares(rows: &[u32], line: &GroundLine, band: i64) -> Option<GroundLine> {
     let (mut n, mut sy, mut sd, mut syy, mut syd) = (0i128, 0i128, 0i128, 0i128, 0i128);
     for (y, &r) in rows.iter().enumerate() {
         let Some(d) = r.checked_sub(1) else { continue };
         let d = i64::from(d);
-        if line.is_some_and(|l| (d - l.at(y)).abs() > ON_LINE) {
+        if (d - line.at(y)).abs() > band {
             continue;
         }
         let y = i128::try_from(y).ok()?;
@@ -136,28 +141,37 @@ pub fn fit_ground(
         // 0: no estimate; else the disparity bits + 1.
         *r = row_disparity(row, &mut hist).map_or(0, |d| d + 1);
     }
-    // Hough vote: per slope, the rows' intercepts at row 0 in whole pixels;
-    // the best (slope, intercept ± 1 px) collects the most rows.
+    // Hough vote: per slope, the rows' intercepts at the bottom row in
+    // half pixels; the best (slope, two neighbouring bins) collects the
+    // most rows.
     let mut best: Option<(u32, i64, i64)> = None;
-    let mut votes = [0u16; PLANES];
+    let mut votes = [0u16; BINS];
     for slope in (MIN_SLOPE..=MAX_SLOPE).step_by(SLOPE_STEP) {
         votes.fill(0);
         // Intercepts at the bottom row (never below the row's own
         // disparity: the slopes are positive).
         let bottom = i64::try_from(h).unwrap_or(i64::MAX) - 1;
+        let mut above = 0u32;
         for (y, &r) in rows.iter().enumerate() {
-            let Some(d) = r.checked_sub(1) else { continue };
+            // A row as far as the one above it is a frontal surface (a
+            // wall): it does not vote.
+            let flat = above != 0 && i64::from(r.abs_diff(above)) < MIN_SLOPE / 2;
+            above = r;
+            let Some(d) = r.checked_sub(1).filter(|_| !flat) else {
+                continue;
+            };
             let y = i64::try_from(y).unwrap_or(i64::MAX);
             let at_bottom = i64::from(d) + slope * (bottom - y);
-            let bin = (at_bottom + 128) >> 8;
+            let bin = (at_bottom + 64) >> 7;
             if let Some(v) = usize::try_from(bin).ok().and_then(|b| votes.get_mut(b)) {
                 *v = v.saturating_add(1);
             }
         }
-        for (bin, w) in votes.windows(3).enumerate() {
+        for (bin, w) in votes.windows(2).enumerate() {
             let n: u32 = w.iter().map(|&v| u32::from(v)).sum();
             if best.is_none_or(|(m, _, _)| n > m) {
-                let b = i64::try_from(bin + 1).unwrap_or(0);
+                // Between the two bins, in bits.
+                let b = i64::try_from(2 * bin + 1).unwrap_or(0) * 64;
                 best = Some((n, slope, b));
             }
         }
@@ -168,11 +182,11 @@ pub fn fit_ground(
     let bottom = i64::try_from(h).unwrap_or(i64::MAX) - 1;
     let mut line = GroundLine {
         slope: slope << 16,
-        offset: ((b << 8) - slope * bottom) << 16,
+        offset: (b - slope * bottom) << 16,
         rows: 0,
     };
-    for _ in 0..REFINE {
-        match least_squares(rows, Some(&line)) {
+    for band in REFINE {
+        match least_squares(rows, &line, band) {
             Some(l) => line = l,
             None => return Ok(None),
         }

@@ -157,10 +157,15 @@ pub struct SegmentParams {
     /// `max_objects`; at most [`SEARCHES_PER_OBJECT`] · `max_objects`
     /// searches run. 0 (the paper): every mask is an object.
     pub min_object: Ratio,
+    /// Widest object box, a fraction of the frame's width (above 0, at
+    /// most 1). A wider mask (a horizon, a wall's edge across the frame)
+    /// is not an object, as with `min_object`. 1 (the paper): any width.
+    pub max_object_width: Ratio,
 }
 
 /// Searches [`segment`] runs per object of `max_objects` at most, when
-/// small masks are not objects ([`SegmentParams::min_object`]).
+/// some masks are not objects ([`SegmentParams::min_object`],
+/// [`SegmentParams::max_object_width`]).
 pub const SEARCHES_PER_OBJECT: usize = 2;
 
 /// Largest [`SegmentParams::ground_band`]: 16 px.
@@ -190,6 +195,7 @@ impl SegmentParams {
         max_objects: 1,
         ground_band: None,
         min_object: Ratio::new(0, 1),
+        max_object_width: Ratio::new(1, 1),
     };
 
     /// Checks the parameters.
@@ -205,6 +211,7 @@ impl SegmentParams {
             ("range", self.range),
             ("min_area", self.min_area),
             ("min_object", self.min_object),
+            ("max_object_width", self.max_object_width),
         ];
         if let Some((name, _)) = ratios.iter().find(|(_, r)| r.den == 0) {
             return Err(SegmentError::BadParams(name));
@@ -216,11 +223,14 @@ impl SegmentParams {
         if self.left_strip.num >= self.left_strip.den {
             return Err(SegmentError::BadParams("left_strip"));
         }
-        // A fraction above 1 would reject every object.
-        for (name, r) in [("min_object", self.min_object)] {
-            if r.num > r.den {
-                return Err(SegmentError::BadParams(name));
-            }
+        // A least area above the frame, or a widest box of 0, would
+        // reject every object.
+        if self.min_object.num > self.min_object.den {
+            return Err(SegmentError::BadParams("min_object"));
+        }
+        let mw = self.max_object_width;
+        if mw.num == 0 || mw.num > mw.den {
+            return Err(SegmentError::BadParams("max_object_width"));
         }
         if self.ground_band.is_some_and(|b| b > MAX_GROUND_BAND) {
             return Err(SegmentError::BadParams("ground_band"));

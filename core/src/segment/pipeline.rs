@@ -333,7 +333,9 @@ pub fn segment_into(
     let ground = report.ground.as_ref().zip(params.ground_band);
     report.foreground = passes::foreground(params, disparity, &t, ground, g, bufs.d_fg);
     observer.step(Step::Foreground);
-    let searches = if params.min_object.num == 0 {
+    let searches = if params.min_object.num == 0
+        && params.max_object_width.num >= params.max_object_width.den
+    {
         k
     } else {
         k * SEARCHES_PER_OBJECT
@@ -417,9 +419,11 @@ pub fn segment_into(
             largest,
             area,
         };
-        let mo = params.min_object;
-        let object = u64::from(area) * u64::from(mo.den) >= frame * u64::from(mo.num);
         let bbox = bits::bbox(g, bufs.mask);
+        let (mo, mw) = (params.min_object, params.max_object_width);
+        let box_width = bbox.map_or(0, |(x0, _, x1, _)| x1 + 1 - x0);
+        let object = u64::from(area) * u64::from(mo.den) >= frame * u64::from(mo.num)
+            && box_width * usize::from(mw.den) <= w * usize::from(mw.num);
         let span = index * chunk..(index + 1) * chunk;
         match &mut masks {
             _ if !object => {}
