@@ -24,7 +24,11 @@
 //! [`segment`] runs them all on caller-provided [`SegmentBuffers`], for up to
 //! [`SegmentParams::max_objects`] objects (beyond the paper, which keeps only
 //! the most salient): after each object its cells are inhibited in D_fg and
-//! the search runs again (see [`inhibit`]).
+//! the search runs again (see [`inhibit`]). Also beyond the paper, and off
+//! in [`SegmentParams::PAPER`]: the ground plane can be inhibited in D_fg
+//! ([`fit_ground`], [`inhibit_ground`], [`SegmentParams::ground_band`]), and
+//! masks too small or too wide for an object are searched past
+//! ([`SegmentParams::min_object`], [`SegmentParams::max_object_width`]).
 //!
 //! Per-pixel work is integer only: statistics use `u64`/`u128` sums and an
 //! integer square root. Each step is also a function over `bool` and cell
