@@ -58,6 +58,7 @@ fn by_steps(
     let mut report = sg::SegmentReport {
         stats: None,
         thresholds: None,
+        ground: None,
         foreground: 0,
         objects: Default::default(),
     };
@@ -78,7 +79,25 @@ fn by_steps(
     report.stats = Some(stats);
     report.thresholds = Some(t);
     report.foreground = sg::foreground(p, &dv, &t, vm!(m.d_fg)).unwrap();
-    for (index, mask) in masks.chunks_exact_mut(n).take(k).enumerate() {
+    if let Some(band) = p.ground_band {
+        let mut rows = vec![0u32; sg::ground_rows_len(h)];
+        report.ground = sg::fit_ground(&dv, &mut rows).unwrap();
+        if let Some(line) = &report.ground {
+            report.foreground -= sg::inhibit_ground(line, band, vm!(m.d_fg)).unwrap();
+        }
+    }
+    let mw = p.max_object_width;
+    let searches = if p.min_object.num == 0 && mw.num >= mw.den {
+        k
+    } else {
+        k * sg::SEARCHES_PER_OBJECT
+    };
+    let mut mask = vec![false; n];
+    for search in 0..searches {
+        let index = report.objects.len();
+        if index >= k {
+            break;
+        }
         sg::foreground_conspicuity(&cv, &v!(m.d_fg), vm!(m.c_fg)).unwrap();
         let counts = sg::slice_counts(&v!(m.c_fg), &v!(m.d_fg)).unwrap();
         let Some(slice) = sg::select_slice(&counts, p.exponent) else {
@@ -102,24 +121,32 @@ fn by_steps(
         m.closed.copy_from_slice(&m.nms);
         sg::close(p.disk, vm!(m.closed), vm!(scratch), p.closing_steps).unwrap();
         sg::fill_holes(&v!(m.closed), vm!(m.filled), &mut lab).unwrap();
-        let mut mk = ImageViewMut::packed(mask, w, h).unwrap();
-        let regions = sg::area_filter(&v!(m.filled), &mut mk, &mut lab, p.min_area).unwrap();
-        let det = sg::Detection {
-            index,
-            delta: slice.delta,
-            range,
-            score: slice.score,
-            area: regions.area,
-            bbox: sg::bounding_box(&mk.as_view()),
-            regions,
-        };
-        report.objects.push(det).unwrap();
-        if index + 1 < k {
+        let regions = sg::area_filter(&v!(m.filled), vm!(mask), &mut lab, p.min_area).unwrap();
+        // Masks under `min_object` of the frame are not objects.
+        // ... and nor are boxes wider than `max_object_width` of it.
+        let bbox = sg::bounding_box(&v!(mask));
+        let object = u64::from(regions.area) * u64::from(p.min_object.den)
+            >= (n as u64) * u64::from(p.min_object.num)
+            && bbox.map_or(0, |b| b.width) * usize::from(mw.den) <= w * usize::from(mw.num);
+        if object {
+            let det = sg::Detection {
+                index,
+                delta: slice.delta,
+                range,
+                score: slice.score,
+                area: regions.area,
+                bbox,
+                regions,
+            };
+            report.objects.push(det).unwrap();
+            masks[index * n..(index + 1) * n].copy_from_slice(&mask);
+        }
+        if report.objects.len() < k && search + 1 < searches {
             sg::inhibit(
                 vm!(m.d_fg),
                 &v!(m.d_obj_reg),
                 &v!(m.region),
-                &mk.as_view(),
+                &v!(mask),
                 slice.delta,
             )
             .unwrap();
@@ -189,25 +216,31 @@ fn params() -> impl Strategy<Value = SegmentParams> {
         any::<bool>(),
         1u8..=4,
         0u8..3,
+        (proptest::option::of(0u16..2048), 0u16..3, 1u16..=4),
     )
         .prop_map(
-            |(disk, refine, close, on_cells, k, exponent)| SegmentParams {
-                disk,
-                refine_dilations: refine,
-                closing_steps: close,
-                psi_mean: if on_cells {
-                    PsiMean::OnCells
-                } else {
-                    PsiMean::Region
-                },
-                max_objects: k,
-                exponent,
-                ..SegmentParams::default()
+            |(disk, refine, close, on_cells, k, exponent, (ground, min_object, width))| {
+                SegmentParams {
+                    disk,
+                    refine_dilations: refine,
+                    closing_steps: close,
+                    psi_mean: if on_cells {
+                        PsiMean::OnCells
+                    } else {
+                        PsiMean::Region
+                    },
+                    max_objects: k,
+                    exponent,
+                    ground_band: ground,
+                    min_object: sg::Ratio::new(min_object, 64),
+                    max_object_width: sg::Ratio::new(width, 4),
+                    ..SegmentParams::default()
+                }
             },
         )
 }
 
-/// Blocky scenes: a background plane and rectangles at other planes, with
+/// Blocky scenes: a background plane (flat or tilting like a ground) and rectangles at other planes, with
 /// sub-pixel jitter and OFF cells; C ON at random, stronger on rectangle
 /// outlines. Widths cross the 32-pixel word boundaries.
 #[allow(clippy::type_complexity)]
@@ -219,18 +252,24 @@ fn scene() -> impl Strategy<Value = (Vec<DisparityCell>, Vec<EdgeCell>, usize, u
             (0usize..70, 0usize..40, 1usize..40, 1usize..30, 3u8..40),
             0..4,
         ),
-        0u8..4,
+        (0u8..4, 0u16..3),
         0u32..=100,
         0u32..=40,
     )
-        .prop_flat_map(|(w, h, rects, bg, edge_pct, off_pct)| {
+        .prop_flat_map(|(w, h, rects, (bg, tilt), edge_pct, off_pct)| {
             let n = w * h;
             (
                 proptest::collection::vec((0u16..200, 0u32..100, 0u32..100, 1u16..6), n),
-                Just((w, h, rects, bg, edge_pct, off_pct)),
+                Just((w, h, rects, bg, tilt, edge_pct, off_pct)),
             )
-                .prop_map(|(noise, (w, h, rects, bg, edge_pct, off_pct))| {
-                    let mut d = vec![from_pixels(bg); w * h];
+                .prop_map(|(noise, (w, h, rects, bg, tilt, edge_pct, off_pct))| {
+                    // A background tilting towards the bottom (a ground) or flat.
+                    let mut d: Vec<_> = (0..w * h)
+                        .map(|i| {
+                            let b = u16::from(bg) * 256 + (i / w) as u16 * tilt * 40;
+                            DisparityCell::on(Disparity::from_bits(b)).unwrap()
+                        })
+                        .collect();
                     let mut ring = vec![false; w * h];
                     for &(x0, y0, rw, rh, disp) in &rects {
                         for y in y0..(y0 + rh).min(h) {
@@ -288,10 +327,15 @@ fn segment_on_bits_matches_the_steps_on_seeded_scenes() {
         let mut gt = vec![0u8; w * h];
         render_disparity(&spec, &mut ImageViewMut::packed(&mut gt, w, h).unwrap()).unwrap();
         let d: Vec<_> = gt.iter().map(|&v| from_pixels(v)).collect();
-        for k in [1, 4] {
+        let product = protogist::pipeline::PipelineParams::DEFAULT.segment;
+        for (k, base) in [
+            (1, SegmentParams::default()),
+            (4, SegmentParams::default()),
+            (4, product),
+        ] {
             let p = SegmentParams {
                 max_objects: k,
-                ..SegmentParams::default()
+                ..base
             };
             check(&p, &d, &edges.edges, w, h).unwrap();
         }

@@ -127,10 +127,20 @@ impl PipelineParams {
 
     /// The default: [`PipelineParams::PAPER`] without the foreground
     /// band's upper cut, which treats the nearest objects as wrong
-    /// estimates (docs/PIPELINE.md, "Choices").
+    /// estimates; with the foreground over the whole frame but its left
+    /// sixteenth (the paper leaves out the top and bottom sixths and the
+    /// left eighth, cutting objects near the border); with the ground
+    /// plane inhibited up to 4 px above its fitted line; and with masks
+    /// under 1/128 of the frame or boxes over 3/4 of its width not taken
+    /// as objects (docs/PIPELINE.md, "Choices").
     pub const DEFAULT: Self = Self {
         segment: SegmentParams {
             fg_high: Ratio::new(100, 1),
+            top_bottom_strip: Ratio::new(0, 1),
+            left_strip: Ratio::new(1, 16),
+            ground_band: Some(4 * 256),
+            min_object: Ratio::new(1, 128),
+            max_object_width: Ratio::new(3, 4),
             ..Self::PAPER.segment
         },
         ..Self::PAPER

@@ -6,6 +6,7 @@
 //! memory is one table entry per run, not a label per pixel.
 
 use super::bits::{bit_map_len, morph_rows_len, row_runs, run_capacity, BitView, Geom};
+use super::ground::ground_rows_len;
 use super::SegmentError;
 use crate::image::ImageError;
 
@@ -15,9 +16,12 @@ pub const BIT_MAPS: usize = 10;
 
 /// `u32` words of the `maps` buffer of [`SegmentBuffers`]: [`BIT_MAPS`] bit
 /// maps, two rows of runs for the labelling and two rows of words for the
-/// morphology.
+/// morphology, and one word per row for the ground fit.
 pub const fn maps_len(width: usize, height: usize) -> usize {
-    BIT_MAPS * bit_map_len(width, height) + 4 * row_runs(width) + morph_rows_len(width)
+    BIT_MAPS * bit_map_len(width, height)
+        + 4 * row_runs(width)
+        + morph_rows_len(width)
+        + ground_rows_len(height)
 }
 
 /// Entries of the `table` buffer of [`SegmentBuffers`] that label any map
@@ -50,6 +54,7 @@ pub struct SegmentBuffers<'a> {
     pub(super) scratch: &'a mut [u32],
     pub(super) rows: &'a mut [u32],
     pub(super) morph_rows: &'a mut [u32],
+    pub(super) ground_rows: &'a mut [u32],
     pub(super) table: &'a mut [u32],
 }
 
@@ -98,6 +103,7 @@ impl<'a> SegmentBuffers<'a> {
             scratch: take(len),
             rows: take(4 * row_runs(width)),
             morph_rows: take(morph_rows_len(width)),
+            ground_rows: take(ground_rows_len(height)),
             table,
         })
     }

@@ -24,7 +24,11 @@
 //! [`segment`] runs them all on caller-provided [`SegmentBuffers`], for up to
 //! [`SegmentParams::max_objects`] objects (beyond the paper, which keeps only
 //! the most salient): after each object its cells are inhibited in D_fg and
-//! the search runs again (see [`inhibit`]).
+//! the search runs again (see [`inhibit`]). Also beyond the paper, and off
+//! in [`SegmentParams::PAPER`]: the ground plane can be inhibited in D_fg
+//! ([`fit_ground`], [`inhibit_ground`], [`SegmentParams::ground_band`]), and
+//! masks too small or too wide for an object are searched past
+//! ([`SegmentParams::min_object`], [`SegmentParams::max_object_width`]).
 //!
 //! Per-pixel work is integer only: statistics use `u64`/`u128` sums and an
 //! integer square root. Each step is also a function over `bool` and cell
@@ -70,6 +74,7 @@
 
 mod bits;
 mod buffers;
+mod ground;
 mod label;
 mod morph;
 mod passes;
@@ -78,6 +83,7 @@ mod stats;
 
 pub use bits::{bit_map_len, row_runs, run_capacity, words_per_row, BitView};
 pub use buffers::{maps_len, scratch_bytes, table_len, SegmentBuffers, BIT_MAPS};
+pub use ground::{fit_ground, ground_rows_len, inhibit_ground, GroundLine, MAX_SLOPE, MIN_SLOPE};
 pub use label::{area_filter, fill_holes, label_capacity, AreaReport, Connectivity, Labeller};
 pub use morph::{
     close, dilate, dilate_n, erode, erode_n, non_max_suppression, Disk, NMS_DIRECTIONS,
@@ -144,7 +150,30 @@ pub struct SegmentParams {
     pub min_area: Ratio,
     /// Objects to extract, 1 (the paper) to [`MAX_OBJECTS`].
     pub max_objects: u8,
+    /// Ground-plane inhibition: when a ground line is found
+    /// ([`fit_ground`]), the D_fg cells at most this many disparity bits
+    /// (1/256 px) nearer than it are OFF ([`inhibit_ground`]). `None`: no
+    /// inhibition (the paper). At most [`MAX_GROUND_BAND`].
+    pub ground_band: Option<u16>,
+    /// Least mask area of an object, a fraction of the frame's area
+    /// (at most 1). A search whose mask is smaller is inhibited like any
+    /// other but is not an object and does not count towards
+    /// `max_objects`; at most [`SEARCHES_PER_OBJECT`] · `max_objects`
+    /// searches run. 0 (the paper): every mask is an object.
+    pub min_object: Ratio,
+    /// Widest object box, a fraction of the frame's width (above 0, at
+    /// most 1). A wider mask (a horizon, a wall's edge across the frame)
+    /// is not an object, as with `min_object`. 1 (the paper): any width.
+    pub max_object_width: Ratio,
 }
+
+/// Searches [`segment`] runs per object of `max_objects` at most, when
+/// some masks are not objects ([`SegmentParams::min_object`],
+/// [`SegmentParams::max_object_width`]).
+pub const SEARCHES_PER_OBJECT: usize = 2;
+
+/// Largest [`SegmentParams::ground_band`]: 16 px.
+pub const MAX_GROUND_BAND: u16 = 16 * 256;
 
 impl Default for SegmentParams {
     fn default() -> Self {
@@ -168,6 +197,9 @@ impl SegmentParams {
         closing_steps: 4,
         min_area: Ratio::new(1, 5),
         max_objects: 1,
+        ground_band: None,
+        min_object: Ratio::new(0, 1),
+        max_object_width: Ratio::new(1, 1),
     };
 
     /// Checks the parameters.
@@ -182,6 +214,8 @@ impl SegmentParams {
             ("fg_high", self.fg_high),
             ("range", self.range),
             ("min_area", self.min_area),
+            ("min_object", self.min_object),
+            ("max_object_width", self.max_object_width),
         ];
         if let Some((name, _)) = ratios.iter().find(|(_, r)| r.den == 0) {
             return Err(SegmentError::BadParams(name));
@@ -192,6 +226,18 @@ impl SegmentParams {
         }
         if self.left_strip.num >= self.left_strip.den {
             return Err(SegmentError::BadParams("left_strip"));
+        }
+        // A least area above the frame, or a widest box of 0, would
+        // reject every object.
+        if self.min_object.num > self.min_object.den {
+            return Err(SegmentError::BadParams("min_object"));
+        }
+        let mw = self.max_object_width;
+        if mw.num == 0 || mw.num > mw.den {
+            return Err(SegmentError::BadParams("max_object_width"));
+        }
+        if self.ground_band.is_some_and(|b| b > MAX_GROUND_BAND) {
+            return Err(SegmentError::BadParams("ground_band"));
         }
         if self.exponent > 8 {
             return Err(SegmentError::BadParams("exponent"));

@@ -3,6 +3,7 @@
 //! the selected area as bounds and the masks as bits.
 
 use super::bits::{for_each_on, Geom};
+use super::ground::GroundLine;
 use super::stats::{
     plane, selected_bounds, DisparityRange, PsiMean, SliceCounts, Thresholds, PLANES,
     STAT_FRAC_BITS,
@@ -25,11 +26,14 @@ fn bits_at(d: &ImageView<'_, DisparityCell>, x: usize, y: usize) -> Option<u16> 
     d.get(x, y).and_then(|c| c.get()).map(|v| v.to_bits())
 }
 
-/// D_fg as bits: valid D inside S with `low < D < high`. Returns the count.
+/// D_fg as bits: valid D inside S with `low < D < high`, and, with a
+/// ground line, `D > d_g(y) + band` ([`inhibit_ground`](super::inhibit_ground)).
+/// Returns the count.
 pub(super) fn foreground(
     params: &SegmentParams,
     d: &ImageView<'_, DisparityCell>,
     t: &Thresholds,
+    ground: Option<(&GroundLine, u16)>,
     g: Geom,
     fg: &mut [u32],
 ) -> u32 {
@@ -40,10 +44,15 @@ pub(super) fn foreground(
     // decides both.
     let lo = (t.low >> EXTRA) + 1;
     let hi = t.high.div_ceil(1 << EXTRA).min(u32::from(u16::MAX));
-    let span = hi.saturating_sub(lo);
     let mut n = 0;
     let rows = d.rows().zip(fg.chunks_exact_mut(g.stride.max(1)));
-    for (row, out) in rows.take(y1).skip(y0) {
+    for (y, (row, out)) in rows.enumerate().take(y1).skip(y0) {
+        // Above the ground: b > d_g(y) + band  <=>  b >= d_g(y) + band + 1.
+        let lo = ground.map_or(lo, |(l, band)| {
+            let above = l.at(y).saturating_add(i64::from(band) + 1);
+            lo.max(u32::try_from(above.max(0)).unwrap_or(u32::MAX))
+        });
+        let span = hi.saturating_sub(lo);
         for (i, (cells, o)) in row.chunks(32).zip(out.iter_mut()).enumerate() {
             let mut word = 0u32;
             for (b, c) in cells.iter().enumerate() {

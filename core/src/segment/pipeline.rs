@@ -2,6 +2,7 @@
 
 use super::bits;
 use super::buffers::SegmentBuffers;
+use super::ground::{fit_ground, GroundLine};
 use super::label::{AreaReport, Connectivity, Labeller};
 use super::morph::dilate_n;
 use super::passes;
@@ -9,7 +10,7 @@ use super::stats::{
     plane, select_slice, selected_stats, slice_range, thresholds, DisparityRange, SelectedStats,
     Thresholds,
 };
-use super::{check_size, SegmentError, SegmentParams, MAX_OBJECTS};
+use super::{check_size, SegmentError, SegmentParams, MAX_OBJECTS, SEARCHES_PER_OBJECT};
 use crate::conspicuity::EdgeCell;
 use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut};
@@ -117,7 +118,11 @@ pub struct SegmentReport {
     pub stats: Option<SelectedStats>,
     /// The D_fg interval.
     pub thresholds: Option<Thresholds>,
-    /// ON cells of D_fg before any inhibition.
+    /// The ground line, when [`SegmentParams::ground_band`] is set and
+    /// one was found.
+    pub ground: Option<GroundLine>,
+    /// ON cells of D_fg before any object's inhibition (after the
+    /// ground's).
     pub foreground: u32,
     /// Objects, most salient first.
     pub objects: heapless::Vec<Detection, MAX_OBJECTS>,
@@ -312,6 +317,7 @@ pub fn segment_into(
     let mut report = SegmentReport {
         stats: None,
         thresholds: None,
+        ground: None,
         foreground: 0,
         objects: heapless::Vec::new(),
     };
@@ -321,11 +327,27 @@ pub fn segment_into(
     let t = thresholds(params, &stats);
     report.stats = Some(stats);
     report.thresholds = Some(t);
-    report.foreground = passes::foreground(params, disparity, &t, g, bufs.d_fg);
+    if params.ground_band.is_some() {
+        report.ground = fit_ground(disparity, bufs.ground_rows)?;
+    }
+    let ground = report.ground.as_ref().zip(params.ground_band);
+    report.foreground = passes::foreground(params, disparity, &t, ground, g, bufs.d_fg);
     observer.step(Step::Foreground);
+    let searches = if params.min_object.num == 0
+        && params.max_object_width.num >= params.max_object_width.den
+    {
+        k
+    } else {
+        k * SEARCHES_PER_OBJECT
+    };
+    let frame = u64::try_from(w * h).unwrap_or(u64::MAX);
     // `w·h >= 1` (`check_size`); `max` shows the compiler, so that the
     // chunk loops have no panic path.
-    for index in 0..k {
+    for search in 0..searches {
+        let index = report.objects.len();
+        if index >= k {
+            break;
+        }
         let counts = passes::slice_counts(conspicuity, disparity, g, bufs.d_fg);
         let Some(slice) = select_slice(&counts, params.exponent) else {
             break;
@@ -398,8 +420,13 @@ pub fn segment_into(
             area,
         };
         let bbox = bits::bbox(g, bufs.mask);
+        let (mo, mw) = (params.min_object, params.max_object_width);
+        let box_width = bbox.map_or(0, |(x0, _, x1, _)| x1 + 1 - x0);
+        let object = u64::from(area) * u64::from(mo.den) >= frame * u64::from(mo.num)
+            && box_width * usize::from(mw.den) <= w * usize::from(mw.num);
         let span = index * chunk..(index + 1) * chunk;
         match &mut masks {
+            _ if !object => {}
             Masks::Bools(m) => {
                 if let (Some((_, y0, _, y1)), Some(mask)) = (bbox, m.get_mut(span)) {
                     let rows = mask
@@ -434,12 +461,14 @@ pub fn segment_into(
             }),
             regions,
         };
-        observer.object(&det, bufs);
-        // Capacity MAX_OBJECTS >= max_objects, checked by `validate`.
-        let _ = report.objects.push(det);
+        if object {
+            observer.object(&det, bufs);
+            // Capacity MAX_OBJECTS >= max_objects, checked by `validate`.
+            let _ = report.objects.push(det);
+        }
         // Inhibit only before another search, so that after the run every
         // map shows what the last search saw (for K = 1, the paper's maps).
-        if index + 1 < k {
+        if report.objects.len() < k && search + 1 < searches {
             passes::inhibit(
                 disparity,
                 g,

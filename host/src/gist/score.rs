@@ -108,6 +108,21 @@ pub struct SceneScore {
     pub low_contrast: usize,
     /// Of those, the matched ones.
     pub low_contrast_matched: usize,
+    /// Every detection, in the detector's order.
+    pub found: Vec<Found>,
+}
+
+/// One detection as scored: where it is and what it overlaps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Found {
+    /// Its box.
+    pub bbox: BoxPx,
+    /// Its largest box IoU with any object of the truth (0 with none).
+    pub best_iou: f64,
+    /// The object it is matched to.
+    pub object: Option<usize>,
+    /// Its best class's cosine score (`None` without a shape).
+    pub score: Option<f32>,
 }
 
 /// Scores one scene's detections against its truth.
@@ -135,6 +150,16 @@ pub fn score_scene(scene: &Scene, dets: &[Detection], ms: f64) -> SceneScore {
         s.top5 += usize::from(d.top5.iter().any(|(c, _)| *c == o.class));
         claimed_right += usize::from(d.category() == Some(o.class.as_str()));
     }
+    s.found = dets
+        .iter()
+        .enumerate()
+        .map(|(k, d)| Found {
+            bbox: d.bbox,
+            best_iou: gt.iter().map(|b| d.bbox.iou(b)).fold(0.0, f64::max),
+            object: matches.iter().find(|m| m.detection == k).map(|m| m.object),
+            score: d.top5.first().map(|t| t.1),
+        })
+        .collect();
     let claims = dets.iter().filter(|d| d.category().is_some()).count();
     s.gist = claimed_right == truth.len() && claims == truth.len();
     s.unknown = dets.len() - claims;
@@ -343,6 +368,13 @@ mod tests {
         });
         let sc = score_scene(&s, &extra, 0.0);
         assert_eq!((sc.detections, sc.matched, sc.gist), (3, 2, true));
+        // Every detection is listed with its best box IoU and its match.
+        let found: Vec<_> = sc.found.iter().map(|f| (f.object, f.best_iou)).collect();
+        assert_eq!(found[..2], [(Some(0), 1.0), (Some(1), 1.0)]);
+        assert_eq!(found[2].0, None);
+        assert!(found[2].1 < MIN_IOU, "{found:?}");
+        assert_eq!(sc.found[0].bbox, b(0, 0, 4, 4));
+        assert_eq!(sc.found[0].score, Some(0.9));
         extra[2].known = true;
         assert!(!score_scene(&s, &extra, 0.0).gist);
 

@@ -303,3 +303,119 @@ pub fn refine_region(disk: Disk, psi: &[EdgeCell], w: usize, h: usize, n: u8) ->
     }
     labels.iter().map(|&l| l != 0 && l == best.0).collect()
 }
+
+/// The fitted ground of [`fit_ground`]: `d_g(y) = slope·y + offset`, px.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroundLineF {
+    /// px per row.
+    pub slope: f64,
+    /// px at row 0.
+    pub offset: f64,
+    /// Rows that lie on the line.
+    pub rows: u32,
+}
+
+impl GroundLineF {
+    /// `d_g(y)`, px.
+    pub fn at(&self, y: usize) -> f64 {
+        self.slope * y as f64 + self.offset
+    }
+}
+
+/// Reference of [`protogist::segment::fit_ground`]: each row's dominant
+/// disparity (the mean within a plane of its most common whole-px plane,
+/// when a quarter of the row agrees, to 1/256 px), a Hough vote of the rows not within
+/// 1/64 px of the row above over slopes 1/32 to
+/// 1/2 px per row in steps of 1/128 (intercepts at the bottom row in half
+/// px, two bins a window), three least-squares refinements over the rows
+/// near the line before (within 1/2 px, then 1/4 px), and the checks (a quarter of the rows, slope ≥ 1/32).
+pub fn fit_ground(disparity: &[DispF], width: usize, height: usize) -> Option<GroundLineF> {
+    let plane = |v: f64| (v + 0.5).floor() as i64;
+    let rows: Vec<Option<f64>> = (0..height)
+        .map(|y| {
+            let row: Vec<f64> = disparity[y * width..(y + 1) * width]
+                .iter()
+                .filter_map(|d| d.map(f64::from))
+                .collect();
+            let mut hist = vec![0usize; 257];
+            for &v in &row {
+                hist[plane(v).clamp(0, 256) as usize] += 1;
+            }
+            // Most common plane, the lowest on ties.
+            let mode = (0..257).rev().max_by_key(|&i| hist[i])? as i64;
+            let near: Vec<f64> = row
+                .iter()
+                .copied()
+                .filter(|&v| (plane(v) - mode).abs() <= 1)
+                .collect();
+            (!near.is_empty() && near.len() >= width.div_ceil(4).max(1))
+                // In the disparity's unit, 1/256 px, as core keeps it.
+                .then(|| (near.iter().sum::<f64>() / near.len() as f64 * 256.0).round() / 256.0)
+        })
+        .collect();
+    let bottom = height as f64 - 1.0;
+    let mut best: Option<(usize, f64, f64)> = None;
+    for step in 0..=60 {
+        let slope = (8 + 2 * step) as f64 / 256.0;
+        let mut votes = vec![0usize; 514];
+        for (y, r) in rows.iter().enumerate() {
+            // Rows within 1/64 px of the row above (a wall) do not vote.
+            let flat = y > 0
+                && match (rows[y - 1], r) {
+                    (Some(a), Some(b)) => (a - b).abs() < 4.0 / 256.0,
+                    _ => false,
+                };
+            if let Some(d) = r.filter(|_| !flat) {
+                let bin = plane(2.0 * (d + slope * (bottom - y as f64)));
+                if (0..514).contains(&bin) {
+                    votes[bin as usize] += 1;
+                }
+            }
+        }
+        for bin in 0..513 {
+            let n = votes[bin] + votes[bin + 1];
+            if best.is_none_or(|b| n > b.0) {
+                best = Some((n, slope, (bin as f64 + 0.5) / 2.0));
+            }
+        }
+    }
+    let (_, slope, b) = best?;
+    let mut line = GroundLineF {
+        slope,
+        offset: b - slope * bottom,
+        rows: 0,
+    };
+    for band in [0.5, 0.25, 0.25] {
+        let on: Vec<(f64, f64)> = rows
+            .iter()
+            .enumerate()
+            .filter_map(|(y, r)| r.map(|d| (y as f64, d)))
+            .filter(|&(y, d)| (d - line.at(y as usize)).abs() <= band)
+            .collect();
+        let n = on.len() as f64;
+        let (sy, sd) = on.iter().fold((0.0, 0.0), |a, &(y, d)| (a.0 + y, a.1 + d));
+        let (syy, syd) = on
+            .iter()
+            .fold((0.0, 0.0), |a, &(y, d)| (a.0 + y * y, a.1 + y * d));
+        let den = n * syy - sy * sy;
+        if on.is_empty() || den == 0.0 {
+            return None;
+        }
+        let slope = (n * syd - sy * sd) / den;
+        line = GroundLineF {
+            slope,
+            offset: (sd - slope * sy) / n,
+            rows: on.len() as u32,
+        };
+    }
+    (line.rows as usize >= height.div_ceil(4).max(2) && line.slope >= 1.0 / 32.0).then_some(line)
+}
+
+/// Reference of [`protogist::segment::inhibit_ground`]: D_fg without the
+/// cells at most `band` px nearer than the ground line.
+pub fn inhibit_ground(line: &GroundLineF, band: f32, d_fg: &[DispF], width: usize) -> Vec<DispF> {
+    d_fg.iter()
+        .enumerate()
+        .map(|(i, d)| d.filter(|&v| f64::from(v) > line.at(i / width) + f64::from(band)))
+        .collect()
+}

@@ -1,0 +1,219 @@
+//! Ground-plane inhibition: the v-disparity fit of Labayrade et al. (2002).
+//!
+//! A ground plane seen by a level stereo camera has, on each image row, one
+//! disparity, growing linearly towards the bottom: `d_g(y) = a·y + b`.
+//! [`fit_ground`] takes each row's dominant disparity (the mean of the
+//! cells within a plane of the row's most common whole-pixel plane, when
+//! at least a quarter of the row agrees), finds the line through most of
+//! them by a Hough vote over slopes from [`MIN_SLOPE`] to [`MAX_SLOPE`]
+//! (1/128 px per row apart; intercepts in half pixels), in which a row
+//! within 1/64 px of the row above (a frontal wall) does not vote, and
+//! refines it by least squares over the rows near it (within 1/2 px, then
+//! twice within 1/4 px). A line is a ground only when at least a quarter
+//! of the rows lie on it.
+//! [`inhibit_ground`] then turns OFF the D_fg cells no nearer than
+//! `d_g(y) + band` ([`SegmentParams::ground_band`](super::SegmentParams)):
+//! the ground, its texture and what lies flat on it. Objects standing on
+//! the ground rise above the line.
+//!
+//! Integer only: disparities are [`Disparity`](crate::disparity::Disparity)
+//! bits (1/256 px), the line is Q16 in those bits.
+
+use super::stats::{plane, PLANES};
+use super::SegmentError;
+use crate::disparity::DisparityCell;
+use crate::image::{ImageError, ImageView, ImageViewMut};
+
+/// Least slope of a ground line, disparity bits per row (1/32 px per row):
+/// a flatter line is a wall or an object face, not a ground.
+pub const MIN_SLOPE: i64 = 8;
+/// Largest slope searched, bits per row (1/2 px per row).
+pub const MAX_SLOPE: i64 = 128;
+/// Step between the slopes of the vote, bits per row (1/128 px per row).
+const SLOPE_STEP: usize = 2;
+/// Bins of the vote's intercepts: half pixels over the planes.
+const BINS: usize = 2 * PLANES;
+/// The refinements after the vote: each a least-squares fit over the rows
+/// whose disparity is within this many bits of the line before it (1/2
+/// px around the vote's coarse line, then 1/4 px).
+const REFINE: [i64; 3] = [128, 64, 64];
+
+/// The fitted ground: `d_g(y) = (slope·y + offset) / 2^16` disparity bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GroundLine {
+    /// Bits per row, Q16.
+    pub slope: i64,
+    /// Bits at row 0, Q16.
+    pub offset: i64,
+    /// Rows that lie on the line.
+    pub rows: u32,
+}
+
+impl GroundLine {
+    /// `d_g(y)`, disparity bits (may be negative above the horizon).
+    pub fn at(&self, y: usize) -> i64 {
+        let y = i64::try_from(y).unwrap_or(i64::MAX);
+        self.slope.saturating_mul(y).saturating_add(self.offset) >> 16
+    }
+}
+
+/// `u32` words of the row buffer [`fit_ground`] takes: one per row.
+pub const fn ground_rows_len(height: usize) -> usize {
+    height
+}
+
+/// One row's dominant disparity, bits, when at least a quarter of its
+/// cells lie within a plane of its most common whole-pixel plane.
+fn row_disparity(row: &[DisparityCell], hist: &mut [u16; PLANES]) -> Option<u32> {
+    hist.fill(0);
+    for d in row.iter().filter_map(|c| c.get()) {
+        if let Some(k) = hist.get_mut(usize::from(plane(d.to_bits()))) {
+            *k = k.saturating_add(1);
+        }
+    }
+    let (mode, _) = hist
+        .iter()
+        .enumerate()
+        .max_by_key(|&(i, &n)| (n, core::cmp::Reverse(i)))?;
+    let mode = u16::try_from(mode).ok()?;
+    let (mut n, mut sum) = (0u32, 0u32);
+    for d in row.iter().filter_map(|c| c.get()) {
+        let b = d.to_bits();
+        if plane(b).abs_diff(mode) <= 1 {
+            n += 1;
+            sum += u32::from(b);
+        }
+    }
+    let need = u32::try_from(row.len().div_ceil(4))
+        .unwrap_or(u32::MAX)
+        .max(1);
+    (n >= need).then(|| (2 * sum + n) / (2 * n))
+}
+
+/// Least squares of `d = a·y + b` over the rows within `band` bits of
+/// `line`.
+fn least_squares(rows: &[u32], line: &GroundLine, band: i64) -> Option<GroundLine> {
+    let (mut n, mut sy, mut sd, mut syy, mut syd) = (0i128, 0i128, 0i128, 0i128, 0i128);
+    for (y, &r) in rows.iter().enumerate() {
+        let Some(d) = r.checked_sub(1) else { continue };
+        let d = i64::from(d);
+        if (d - line.at(y)).abs() > band {
+            continue;
+        }
+        let y = i128::try_from(y).ok()?;
+        let d = i128::from(d);
+        n += 1;
+        sy += y;
+        sd += d;
+        syy += y * y;
+        syd += y * d;
+    }
+    let den = n * syy - sy * sy;
+    let slope = ((n * syd - sy * sd) << 16).checked_div(den)?;
+    let offset = ((sd << 16) - slope * sy).checked_div(n)?;
+    Some(GroundLine {
+        slope: i64::try_from(slope).ok()?,
+        offset: i64::try_from(offset).ok()?,
+        rows: u32::try_from(n).ok()?,
+    })
+}
+
+/// Fits the ground line of `disparity` (see the module docs); `None` when
+/// no line of a ground's slope holds a quarter of the rows. `rows` needs
+/// [`ground_rows_len`] entries and is overwritten.
+///
+/// # Errors
+/// [`SegmentError::Image`] when `rows` is shorter than the height.
+pub fn fit_ground(
+    disparity: &ImageView<'_, DisparityCell>,
+    rows: &mut [u32],
+) -> Result<Option<GroundLine>, SegmentError> {
+    let (_, h) = disparity.size();
+    let got = rows.len();
+    let rows = rows
+        .get_mut(..h)
+        .ok_or(SegmentError::Image(ImageError::BufferTooSmall {
+            needed: ground_rows_len(h),
+            got,
+        }))?;
+    let mut hist = [0u16; PLANES];
+    for (r, row) in rows.iter_mut().zip(disparity.rows()) {
+        // 0: no estimate; else the disparity bits + 1.
+        *r = row_disparity(row, &mut hist).map_or(0, |d| d + 1);
+    }
+    // Hough vote: per slope, the rows' intercepts at the bottom row in
+    // half pixels; the best (slope, two neighbouring bins) collects the
+    // most rows.
+    let mut best: Option<(u32, i64, i64)> = None;
+    let mut votes = [0u16; BINS];
+    for slope in (MIN_SLOPE..=MAX_SLOPE).step_by(SLOPE_STEP) {
+        votes.fill(0);
+        // Intercepts at the bottom row (never below the row's own
+        // disparity: the slopes are positive).
+        let bottom = i64::try_from(h).unwrap_or(i64::MAX) - 1;
+        let mut above = 0u32;
+        for (y, &r) in rows.iter().enumerate() {
+            // A row as far as the one above it is a frontal surface (a
+            // wall): it does not vote.
+            let flat = above != 0 && i64::from(r.abs_diff(above)) < MIN_SLOPE / 2;
+            above = r;
+            let Some(d) = r.checked_sub(1).filter(|_| !flat) else {
+                continue;
+            };
+            let y = i64::try_from(y).unwrap_or(i64::MAX);
+            let at_bottom = i64::from(d) + slope * (bottom - y);
+            let bin = (at_bottom + 64) >> 7;
+            if let Some(v) = usize::try_from(bin).ok().and_then(|b| votes.get_mut(b)) {
+                *v = v.saturating_add(1);
+            }
+        }
+        for (bin, w) in votes.windows(2).enumerate() {
+            let n: u32 = w.iter().map(|&v| u32::from(v)).sum();
+            if best.is_none_or(|(m, _, _)| n > m) {
+                // Between the two bins, in bits.
+                let b = i64::try_from(2 * bin + 1).unwrap_or(0) * 64;
+                best = Some((n, slope, b));
+            }
+        }
+    }
+    let Some((_, slope, b)) = best else {
+        return Ok(None);
+    };
+    let bottom = i64::try_from(h).unwrap_or(i64::MAX) - 1;
+    let mut line = GroundLine {
+        slope: slope << 16,
+        offset: (b - slope * bottom) << 16,
+        rows: 0,
+    };
+    for band in REFINE {
+        match least_squares(rows, &line, band) {
+            Some(l) => line = l,
+            None => return Ok(None),
+        }
+    }
+    let quarter = u32::try_from(h.div_ceil(4)).unwrap_or(u32::MAX).max(2);
+    Ok((line.rows >= quarter && line.slope >= MIN_SLOPE << 16).then_some(line))
+}
+
+/// Turns OFF the D_fg cells whose disparity is at most `d_g(y) + band`
+/// bits. Returns the cells turned OFF.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`].
+pub fn inhibit_ground(
+    line: &GroundLine,
+    band: u16,
+    d_fg: &mut ImageViewMut<'_, DisparityCell>,
+) -> Result<u32, SegmentError> {
+    let mut n = 0;
+    for (y, row) in d_fg.rows_mut().enumerate() {
+        let top = line.at(y).saturating_add(i64::from(band));
+        for d in row.iter_mut() {
+            if d.get().is_some_and(|v| i64::from(v.to_bits()) <= top) {
+                *d = DisparityCell::OFF;
+                n += 1;
+            }
+        }
+    }
+    Ok(n)
+}
