@@ -7,13 +7,13 @@
 
 use crate::error::{HostError, Result};
 use crate::panels::{self, Panel};
-use crate::stages::{run_conspicuity, run_segment};
+use crate::reference_chain::{run_chain, Source};
+use crate::stages::run_conspicuity;
 use crate::summary::Summary;
 use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::from_pixels;
 use protogist::image::{buffer_len, ImageViewMut, Rgb8};
 use protogist::pipeline::PipelineParams;
-use protogist::segment::SegmentParams;
 use protogist::synth::{render_disparity, render_left, render_mask, render_right, SceneSpec};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -182,7 +182,15 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
     }
     // Figure-ground from ground-truth disparity, for comparison.
     let gt_disparity: Vec<_> = scene.disparity.iter().map(|&d| from_pixels(d)).collect();
-    let seg_gt = run_segment(&SegmentParams::default(), &gt_disparity, &maps.edges, w, h)?;
+    let seg_gt = run_chain(
+        &params.segment,
+        Source::Given(&gt_disparity),
+        &scene.left,
+        &scene.right,
+        w,
+        h,
+    )?
+    .segment;
     summary.push(
         "mask IoU, GT disparity",
         format!("{:.3}", seg_gt.iou(0, &scene.mask)),

@@ -2,9 +2,7 @@
 
 use crate::error::Result;
 use crate::reference::stereo::{Decoder, DemParams};
-use crate::stages::{run_conspicuity, run_segment};
-use protogist::complete::CompleteParams;
-use protogist::conspicuity::{EdgeParams, LuvTables};
+use crate::reference_chain::{run_chain, Source};
 use protogist::disparity::from_pixels;
 use protogist::image::{ImageViewMut, Rgb8};
 use protogist::segment::SegmentParams;
@@ -59,15 +57,15 @@ pub fn segment_scene_iou(
     let spec = SceneSpec::random(seed, w, h);
     let mut rgb = vec![Rgb8::default(); w * h];
     render_left(&spec, &mut ImageViewMut::packed(&mut rgb, w, h)?)?;
-    let edges = run_conspicuity(&LuvTables::new(), &EdgeParams::default(), &rgb, w, h)?;
     let mut gt = vec![0u8; w * h];
     render_disparity(&spec, &mut ImageViewMut::packed(&mut gt, w, h)?)?;
-    let d: Vec<_> = match source {
-        DisparitySource::Gt => gt.iter().map(|&v| from_pixels(v)).collect(),
+    let gt: Vec<_> = gt.iter().map(|&v| from_pixels(v)).collect();
+    let mut right = vec![Rgb8::default(); w * h];
+    render_right(&spec, &mut ImageViewMut::packed(&mut right, w, h)?)?;
+    let trained;
+    let chain_source = match source {
+        DisparitySource::Gt => Source::Given(&gt),
         DisparitySource::Dem | DisparitySource::DemRaw => {
-            let mut right = vec![Rgb8::default(); w * h];
-            render_right(&spec, &mut ImageViewMut::packed(&mut right, w, h)?)?;
-            let trained;
             let (p, dec) = match dem {
                 Some((p, d)) => (p, d),
                 None => {
@@ -75,23 +73,14 @@ pub fn segment_scene_iou(
                     (&trained.0, &trained.1)
                 }
             };
-            let raw = crate::stages::run_dem(p, dec, &rgb, &right, &gt, w, h)?.disparity;
-            if source == DisparitySource::Dem {
-                crate::stages::run_complete(
-                    &CompleteParams::default(),
-                    &edges.edges,
-                    &edges.smoothed,
-                    &raw,
-                    w,
-                    h,
-                )?
-                .0
-            } else {
-                raw
+            Source::Dem {
+                params: p,
+                decoder: dec,
+                complete: source == DisparitySource::Dem,
             }
         }
     };
-    let seg = run_segment(params, &d, &edges.edges, w, h)?;
+    let seg = run_chain(params, chain_source, &rgb, &right, w, h)?.segment;
     let mut best = (0.0, None);
     let mut m = vec![0u8; w * h];
     for i in 0..spec.objects.len() {

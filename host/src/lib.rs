@@ -34,6 +34,7 @@ pub mod panels;
 pub mod plot;
 pub mod product;
 pub mod reference;
+pub mod reference_chain;
 pub mod rgbd;
 pub mod run_cmd;
 pub mod scenes;

@@ -13,12 +13,10 @@ use crate::panels::disparity_panel;
 use crate::panels::{rgb_from, Panel};
 use crate::product::{default_max_disp, run_frame, tables_for};
 use crate::reference::stereo::DemParams;
-use crate::stages::{run_complete, run_conspicuity, run_segment, run_shape};
+use crate::reference_chain::{run_chain, Source};
+use crate::stages::run_shape;
 use crate::summary::Summary;
-use protogist::complete::CompleteParams;
-use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::{Disparity, DisparityCell};
-use protogist::image::ImageView;
 use protogist::pipeline::PipelineParams;
 use protogist::segment::{SegmentParams, STAT_FRAC_BITS};
 use std::path::PathBuf;
@@ -249,70 +247,61 @@ fn reference_chain(
 ) -> Result<ReferenceRun> {
     let seg_params = SegmentParams {
         max_objects: opts.objects,
-        ..SegmentParams::default()
+        ..PipelineParams::DEFAULT.segment
     };
     seg_params.validate()?;
     let (w, h) = (pair.width, pair.height);
 
-    let edges = run_conspicuity(&LuvTables::new(), &EdgeParams::default(), &pair.left, w, h)?;
-    let (disparity, disparity_f32, source) = match &pair.gt {
-        Some(gt) => (
-            gt.data.iter().map(|&v| gt_cell(v)).collect::<Vec<_>>(),
-            gt.data.clone(),
-            "ground truth",
-        ),
+    let gt: Option<Vec<DisparityCell>> = pair
+        .gt
+        .as_ref()
+        .map(|gt| gt.data.iter().map(|&v| gt_cell(v)).collect());
+    let dem = DemParams {
+        max_disp,
+        ..DemParams::default()
+    };
+    let decoder;
+    let chain_source = match &gt {
+        Some(d) => Source::Given(d),
         None => {
-            let params = DemParams {
-                max_disp,
-                ..DemParams::default()
-            };
-            let decoder = decoder_for(&params, None)?;
-            let maps = crate::reference::stereo::stereo(
-                &params,
-                &decoder,
-                &ImageView::packed(&pair.left, w, h)?,
-                &ImageView::packed(&pair.right, w, h)?,
-            )?;
-            if opts.raw_disparity {
-                (
-                    maps.disparity,
-                    maps.disparity_f32,
-                    "disparity energy model (f32), raw",
-                )
-            } else {
-                let (done, report) = run_complete(
-                    &CompleteParams::default(),
-                    &edges.edges,
-                    &edges.smoothed,
-                    &maps.disparity,
-                    w,
-                    h,
-                )?;
-                s.push(
-                    "disparity completion",
-                    format!(
-                        "{} regions, {} cells replaced, {} filled",
-                        report.regions, report.replaced, report.filled
-                    ),
-                );
-                let f32s = done
-                    .iter()
-                    .map(|c| c.get().map(|d| d.to_num::<f32>()))
-                    .collect();
-                (
-                    done,
-                    f32s,
-                    "disparity energy model (f32), completed over conspicuity regions",
-                )
+            decoder = decoder_for(&dem, None)?;
+            Source::Dem {
+                params: &dem,
+                decoder: &decoder,
+                complete: !opts.raw_disparity,
             }
         }
     };
+    let chain = run_chain(&seg_params, chain_source, &pair.left, &pair.right, w, h)?;
+    if let Some(report) = &chain.completion {
+        s.push(
+            "disparity completion",
+            format!(
+                "{} regions, {} cells replaced, {} filled",
+                report.regions, report.replaced, report.filled
+            ),
+        );
+    }
+    let source = match (&gt, opts.raw_disparity) {
+        (Some(_), _) => "ground truth",
+        (None, true) => "disparity energy model (f32), raw",
+        (None, false) => "disparity energy model (f32), completed over conspicuity regions",
+    };
+    let disparity_f32: Vec<Option<f32>> = match &pair.gt {
+        Some(gt) => gt.data.clone(),
+        None => chain
+            .disparity
+            .iter()
+            .map(|c| c.get().map(|d| d.to_num::<f32>()))
+            .collect(),
+    };
+    let edges = &chain.edges;
     s.push("reference disparity", source);
     let max_d = disparity_f32
         .iter()
         .flatten()
         .fold(1.0f32, |a, &b| a.max(b));
-    let seg = run_segment(&seg_params, &disparity, &edges.edges, w, h)?;
+    let seg = &chain.segment;
     seg.summarise(s, None);
 
     let mut panels = vec![

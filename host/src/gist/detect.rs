@@ -14,13 +14,11 @@
 use crate::classify::shipped::categorise_mask;
 use crate::error::{HostError, Result};
 use crate::reference::stereo::{Decoder, DemParams};
+use crate::reference_chain::{run_chain, Source};
 use crate::scenes::load::Scene;
 use crate::scenes::BoxPx;
-use crate::stages::{run_complete, run_conspicuity, run_segment};
-use protogist::complete::CompleteParams;
-use protogist::conspicuity::{EdgeParams, LuvTables};
+
 use protogist::disparity::{Disparity, DisparityCell};
-use protogist::image::ImageView;
 use protogist::mlp::{Identity, Model};
 use protogist::segment::SegmentParams;
 
@@ -162,34 +160,21 @@ fn segment_and_classify(
     disparity: Option<&[DisparityCell]>,
 ) -> Result<Vec<Detection>> {
     let (w, h) = (scene.width, scene.height);
-    let edges = run_conspicuity(&LuvTables::new(), &EdgeParams::default(), &scene.left, w, h)?;
-    let owned;
-    let d = match disparity {
-        Some(d) => d,
-        None => {
-            let (params, decoder) = shared.dem.as_ref().ok_or(HostError::InvalidArgument {
+    let source = match (disparity, shared.dem.as_ref()) {
+        (Some(d), _) => Source::Given(d),
+        (None, Some((params, decoder))) => Source::Dem {
+            params,
+            decoder,
+            complete: true,
+        },
+        (None, None) => {
+            return Err(HostError::InvalidArgument {
                 name: "mode",
                 reason: "the reference chain needs a stereo model".into(),
-            })?;
-            let maps = crate::reference::stereo::stereo(
-                params,
-                decoder,
-                &ImageView::packed(&scene.left, w, h)?,
-                &ImageView::packed(&scene.right, w, h)?,
-            )?;
-            owned = run_complete(
-                &CompleteParams::default(),
-                &edges.edges,
-                &edges.smoothed,
-                &maps.disparity,
-                w,
-                h,
-            )?
-            .0;
-            &owned
+            })
         }
     };
-    let seg = run_segment(&shared.segment, d, &edges.edges, w, h)?;
+    let seg = run_chain(&shared.segment, source, &scene.left, &scene.right, w, h)?.segment;
     let n = w * h;
     let mut out = Vec::new();
     for (k, obj) in seg.report.objects.iter().enumerate() {

@@ -1,0 +1,147 @@
+//! The f32 chain beside core's pipeline: one orchestration of the stages
+//! for every front end that compares against it (`run --reference`,
+//! `gist-eval --mode reference|gt-disparity`, `segment-eval` and the
+//! demo's ground-truth row).
+//!
+//! Stereo is the host's f32 disparity energy model (or a given disparity,
+//! e.g. ground truth); the conspicuity, the completion and figure-ground
+//! are core's stages run step by step ([`crate::stages`]), with the
+//! pipeline's segmentation parameters, so that the chain differs from the
+//! product only where its disparity comes from.
+
+use crate::error::Result;
+use crate::reference::stereo::{Decoder, DemParams};
+use crate::stages::{run_complete, run_conspicuity, run_segment, ConspicuityMaps, SegmentResult};
+use protogist::complete::{CompleteParams, CompleteReport};
+use protogist::conspicuity::{EdgeParams, LuvTables};
+use protogist::disparity::DisparityCell;
+use protogist::image::{ImageView, Rgb8};
+use protogist::segment::SegmentParams;
+
+/// Where the chain's disparity comes from.
+#[derive(Clone, Copy, Debug)]
+pub enum Source<'a> {
+    /// A given map (ground truth, or the synthetic scene's), used as is.
+    Given(&'a [DisparityCell]),
+    /// The f32 disparity energy model on the pair, completed over the
+    /// conspicuity regions as the pipeline does (`complete: false` keeps
+    /// the model's raw map).
+    Dem {
+        /// The model's parameters.
+        params: &'a DemParams,
+        /// Its decoder.
+        decoder: &'a Decoder,
+        /// Complete the map over the conspicuity regions.
+        complete: bool,
+    },
+}
+
+/// One frame through the chain.
+#[derive(Clone, Debug)]
+pub struct ChainRun {
+    /// The conspicuity stage's maps (smoothed CIELUV, C).
+    pub edges: ConspicuityMaps,
+    /// The disparity figure-ground segmented.
+    pub disparity: Vec<DisparityCell>,
+    /// The completion's report, when it ran.
+    pub completion: Option<CompleteReport>,
+    /// Figure-ground: the report and one mask per search slot.
+    pub segment: SegmentResult,
+}
+
+/// Runs the chain on a `width` x `height` pair with figure-ground's
+/// `segment` parameters (the pipeline's: `PipelineParams::segment`).
+///
+/// # Errors
+/// A stage's typed error: frame sizes, bad parameters, a given map of
+/// another size.
+pub fn run_chain(
+    segment: &SegmentParams,
+    source: Source<'_>,
+    left: &[Rgb8],
+    right: &[Rgb8],
+    width: usize,
+    height: usize,
+) -> Result<ChainRun> {
+    let (w, h) = (width, height);
+    let edges = run_conspicuity(&LuvTables::new(), &EdgeParams::default(), left, w, h)?;
+    let (disparity, completion) = match source {
+        Source::Given(d) => (d.to_vec(), None),
+        Source::Dem {
+            params,
+            decoder,
+            complete,
+        } => {
+            let maps = crate::reference::stereo::stereo(
+                params,
+                decoder,
+                &ImageView::packed(left, w, h)?,
+                &ImageView::packed(right, w, h)?,
+            )?;
+            if complete {
+                let (done, report) = run_complete(
+                    &CompleteParams::default(),
+                    &edges.edges,
+                    &edges.smoothed,
+                    &maps.disparity,
+                    w,
+                    h,
+                )?;
+                (done, Some(report))
+            } else {
+                (maps.disparity, None)
+            }
+        }
+    };
+    let segment = run_segment(segment, &disparity, &edges.edges, w, h)?;
+    Ok(ChainRun {
+        edges,
+        disparity,
+        completion,
+        segment,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use protogist::disparity::from_pixels;
+    use protogist::pipeline::PipelineParams;
+
+    /// A frame with a bright square in front of a dark wall.
+    fn square() -> (Vec<Rgb8>, Vec<DisparityCell>, usize, usize) {
+        let (w, h) = (64usize, 48usize);
+        let inside = |i: usize| (20..44).contains(&(i % w)) && (14..34).contains(&(i / w));
+        let rgb = (0..w * h)
+            .map(|i| {
+                if inside(i) {
+                    Rgb8::new(230, 200, 40)
+                } else {
+                    Rgb8::new(30, 40, 90)
+                }
+            })
+            .collect();
+        let d = (0..w * h)
+            .map(|i| from_pixels(if inside(i) { 9 } else { 2 }))
+            .collect();
+        (rgb, d, w, h)
+    }
+
+    #[test]
+    fn a_given_disparity_is_segmented_as_is() {
+        let (rgb, d, w, h) = square();
+        let p = PipelineParams::DEFAULT.with_objects(1).segment;
+        let run = run_chain(&p, Source::Given(&d), &rgb, &rgb, w, h).unwrap();
+        assert_eq!(run.disparity, d);
+        assert!(run.completion.is_none());
+        let obj = &run.segment.report.objects[0];
+        assert!(obj.area > 300, "{obj:?}");
+    }
+
+    #[test]
+    fn a_given_map_of_another_size_is_an_error() {
+        let (rgb, d, w, h) = square();
+        let p = PipelineParams::DEFAULT.segment;
+        assert!(run_chain(&p, Source::Given(&d[1..]), &rgb, &rgb, w, h).is_err());
+    }
+}
