@@ -37,6 +37,12 @@ use crate::disparity::{from_pixels, DisparityCell};
 use crate::image::{ImageError, ImageView, ImageViewMut};
 use crate::segment::{label_capacity, Connectivity, Labeller, SegmentError};
 
+mod runs;
+pub use runs::{
+    complete_runs, run_rows_len, run_table_len, RunBuffers, SideColour, Tone, DEFAULT_RUN_CAPACITY,
+    LABEL_ROWS,
+};
+
 /// Parameters of [`complete`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CompleteParams {
@@ -108,6 +114,9 @@ pub struct CompleteReport {
     pub replaced: u32,
     /// OFF cells given their region's median.
     pub filled: u32,
+    /// Runs of non-edge cells past the run table's capacity
+    /// ([`complete_runs`]), left unchanged; always 0 for [`complete`].
+    pub runs_unlabelled: u32,
 }
 
 /// Entries each region table needs so that no region of a `width` x

@@ -513,7 +513,7 @@ impl RamPlan {
             frames: 2 * pair_len(width, height),
             kept: layout::kept_bytes(width, height, &PARAMS),
             stereo: layout::stereo_bytes(width, height, &PARAMS),
-            colour: layout::colour_bytes(width, height),
+            colour: layout::colour_bytes(width, height, &PARAMS),
             luv: width * height * core::mem::size_of::<Luv>(),
             edge_map: width * height,
             objects: layout::object_bytes(width, height, &PARAMS),

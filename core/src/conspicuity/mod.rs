@@ -39,6 +39,7 @@
 mod luv;
 mod ring;
 mod smooth;
+mod stream;
 
 pub use luv::{
     lightness, srgb_to_linear, Luv, LuvTables, CIE_EPSILON, CIE_KAPPA, LUV_LIMIT_BITS, MAX_ERR_L,
@@ -46,6 +47,7 @@ pub use luv::{
 };
 pub use ring::row_scratch_len;
 pub use smooth::{smooth, smooth_step, SmoothParams, MAX_ERR_SMOOTH_STEP_LSB};
+pub use stream::{stream, stream_scratch_len};
 
 use crate::checksum::Fnv1a;
 use crate::fixed::{isqrt_round, U10F6};

@@ -14,12 +14,14 @@
 
 use super::arena::bytes;
 use super::PipelineParams;
-use crate::complete::DEFAULT_REGION_CAPACITY;
-use crate::conspicuity::{row_scratch_len, EdgeCell, Luv};
+use crate::complete::{
+    run_rows_len, Tone, DEFAULT_REGION_CAPACITY, DEFAULT_RUN_CAPACITY, LABEL_ROWS,
+};
+use crate::conspicuity::{stream_scratch_len, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::Rgb8;
 use crate::mlp;
-use crate::segment::{bit_map_len, label_capacity, maps_len, table_len};
+use crate::segment::{bit_map_len, maps_len, table_len};
 use crate::shape::{ShapeElem, SHAPE_LEN};
 use crate::stereo::c2f;
 use crate::stereo::filters::Z;
@@ -62,20 +64,22 @@ pub const fn stereo_bytes(width: usize, height: usize, params: &PipelineParams) 
         + phase
 }
 
-/// Bytes of the conspicuity stage and the completion: the CIELUV map,
-/// its row scratch and one RGB row, then the labelling and the region
-/// tables.
-pub const fn colour_bytes(width: usize, height: usize) -> usize {
+/// Bytes of the conspicuity stage and the completion: the row rings of
+/// the streamed stage and one RGB row, one [`Tone`] per pixel, then the
+/// completion's two bit maps, run table, two rows of runs, five label rows
+/// and the region tables.
+pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
     let n = width * height;
-    let cap = label_capacity(width, height);
     let regions = DEFAULT_REGION_CAPACITY;
-    bytes(n, size_of::<Luv>())
-        + bytes(row_scratch_len(width), size_of::<Luv>())
-        + bytes(width, size_of::<Rgb8>())
-        + bytes(n, 2)
-        + bytes(cap, 2)
-        + bytes(cap, 4)
-        + bytes(n, 1)
+    bytes(
+        stream_scratch_len(width, &params.edges.smooth),
+        size_of::<Luv>(),
+    ) + bytes(width, size_of::<Rgb8>())
+        + bytes(n, size_of::<Tone>())
+        + 2 * bytes(bit_map_len(width, height), 4)
+        + bytes(DEFAULT_RUN_CAPACITY, 2)
+        + bytes(run_rows_len(width), 4)
+        + bytes(LABEL_ROWS * width, 2)
         + 2 * bytes(regions, 4)
         + 2 * bytes(regions, 1)
 }
@@ -103,7 +107,7 @@ pub const fn shared_bytes(width: usize, height: usize, params: &PipelineParams) 
     max(
         stereo_bytes(width, height, params),
         max(
-            colour_bytes(width, height),
+            colour_bytes(width, height, params),
             object_bytes(width, height, params),
         ),
     )

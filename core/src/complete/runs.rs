@@ -1,0 +1,568 @@
+//! [`complete`](super::complete) on bit maps and runs, with bounded tables:
+//! the pipeline's completion.
+//!
+//! The regions are labelled by runs (maximal horizontal stretches of
+//! non-edge cells), one table entry per run, not a label per pixel. Every
+//! later pass walks the runs again in the same order, so a run's region is
+//! its table entry and no label map is kept: the medians are counted run by
+//! run, and the last pass rebuilds five rows of labels at a time for the
+//! edge cells, which look up to two rows away. The edges and the trusted
+//! cells are bit maps. The colour that gives an edge cell its side is any
+//! [`SideColour`]; the pipeline keeps one byte per pixel ([`Tone`]).
+//!
+//! With tables large enough ([`run_table_len`], and region tables of
+//! [`region_table_len`](super::region_table_len)), and [`Luv`] as the
+//! colour, the result is that of [`complete`](super::complete). With fewer
+//! table entries it degrades as the full-frame stage does: runs past the
+//! run table's capacity belong to no region and are left unchanged (and
+//! counted), as are regions past the region tables' capacity.
+//!
+//! The medians' bisection starts from each region's smallest and largest
+//! trusted disparity and runs as many passes as the widest of those ranges
+//! needs (5 for disparities up to 31 px), not 8.
+
+use super::{whole_px, CompleteError, CompleteParams, CompleteReport, RegionTables};
+use crate::conspicuity::{EdgeCell, Luv};
+use crate::disparity::{from_pixels, DisparityCell};
+use crate::image::{ImageError, ImageView, ImageViewMut};
+use crate::segment::{bit_map_len, row_runs, words_per_row};
+
+mod tone;
+pub use tone::Tone;
+
+/// A colour the completion compares to give an edge cell to the side it
+/// looks like.
+pub trait SideColour: Copy {
+    /// A squared distance between two colours (only its order matters).
+    fn dist2(self, other: Self) -> u32;
+}
+
+impl SideColour for Luv {
+    /// The exact squared CIELUV distance in Q12 (channels within
+    /// ±16 383 LSB, so it fits `u32`).
+    fn dist2(self, other: Self) -> u32 {
+        let (a, b) = (self.to_bits(), other.to_bits());
+        let sq = |x: i16, y: i16| {
+            let d = i32::from(x) - i32::from(y);
+            d.unsigned_abs() * d.unsigned_abs()
+        };
+        sq(a[0], b[0]) + sq(a[1], b[1]) + sq(a[2], b[2])
+    }
+}
+
+/// Run-table entries that label any `width` x `height` map: one per run,
+/// at most `⌈width/2⌉` runs a row, capped at `u16::MAX`.
+pub const fn run_table_len(width: usize, height: usize) -> usize {
+    let n = row_runs(width) * height;
+    if n > u16::MAX as usize {
+        u16::MAX as usize
+    } else {
+        n
+    }
+}
+
+/// Run-table entries that suit frames up to 160x120 on a board: the
+/// synthetic scenes and Aloe at 160 px need at most about 1,400 runs of
+/// non-edge cells (`docs/PIPELINE.md`, "The workspace").
+pub const DEFAULT_RUN_CAPACITY: usize = 4096;
+
+/// `u32` words of the `rows` buffer of [`RunBuffers`]: two rows of runs.
+pub const fn run_rows_len(width: usize) -> usize {
+    4 * row_runs(width)
+}
+
+/// Label rows [`RunBuffers::labels`] holds: the edge cells of a row look
+/// two rows up and down.
+pub const LABEL_ROWS: usize = 5;
+
+/// The buffers of [`complete_runs`], caller-provided.
+#[derive(Debug)]
+pub struct RunBuffers<'a> {
+    /// Bit map ([`bit_map_len`] words): the non-edge cells.
+    pub open: &'a mut [u32],
+    /// Bit map: the trusted cells.
+    pub trusted: &'a mut [u32],
+    /// The run table, one `u16` per run; its length is the capacity.
+    pub runs: &'a mut [u16],
+    /// Two rows of runs ([`run_rows_len`] words).
+    pub rows: &'a mut [u32],
+    /// [`LABEL_ROWS`] rows of region labels (`LABEL_ROWS * width`).
+    pub labels: &'a mut [u16],
+}
+
+/// Calls `f(first, last)` for each run of set bits of a bit-map row, in
+/// order (bits past the width are 0).
+fn for_each_run(row: &[u32], mut f: impl FnMut(u32, u32)) {
+    let mut open: Option<u32> = None;
+    let mut base = 0u32;
+    for &w in row {
+        let mut pos = 0u32;
+        while pos < 32 {
+            let rest = w >> pos;
+            match open {
+                None => {
+                    if rest == 0 {
+                        break;
+                    }
+                    let tz = rest.trailing_zeros();
+                    open = Some(base + pos + tz);
+                    pos += tz;
+                }
+                Some(s) => {
+                    let ones = (!rest).trailing_zeros();
+                    if ones >= 32 - pos {
+                        break;
+                    }
+                    f(s, base + pos + ones - 1);
+                    open = None;
+                    pos += ones;
+                }
+            }
+        }
+        base = base.wrapping_add(32);
+    }
+    if let Some(s) = open {
+        f(s, base.wrapping_sub(1));
+    }
+}
+
+fn get16(t: &[u16], i: usize) -> u16 {
+    t.get(i).copied().unwrap_or(0)
+}
+
+fn set16(t: &mut [u16], i: usize, v: u16) {
+    if let Some(p) = t.get_mut(i) {
+        *p = v;
+    }
+}
+
+/// Root of run `a` (path halving; a parent is below its child).
+fn find(t: &mut [u16], mut a: usize) -> usize {
+    loop {
+        let p = usize::from(get16(t, a));
+        if p == a {
+            return a;
+        }
+        let gp = get16(t, p);
+        set16(t, a, gp);
+        a = usize::from(gp);
+    }
+}
+
+fn union(t: &mut [u16], a: usize, b: usize) {
+    let (ra, rb) = (find(t, a), find(t, b));
+    let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+    set16(t, hi, u16::try_from(lo).unwrap_or(0));
+}
+
+fn bit(row: &[u32], x: usize) -> bool {
+    row.get(x / 32).is_some_and(|w| w >> (x % 32) & 1 != 0)
+}
+
+/// Labels the runs of `open` (4-connected); returns `(regions, runs)`.
+/// Each run below the table's capacity ends with its region, 1-based in
+/// raster order of first cell; runs past it are counted, not labelled.
+fn label_runs(
+    open: &[u32],
+    stride: usize,
+    height: usize,
+    table: &mut [u16],
+    rows: &mut [u32],
+) -> (u16, usize) {
+    let cap = table.len().min(u16::MAX as usize);
+    let half = rows.len() / 2;
+    let (mut prev, mut cur) = rows.split_at_mut(half);
+    let (mut prev_base, mut pn) = (0usize, 0usize);
+    let mut next = 0usize;
+    for row in open.chunks_exact(stride.max(1)).take(height) {
+        let mut cn = 0usize;
+        let mut j = 0usize;
+        let run = |buf: &[u32], k: usize| {
+            (
+                buf.get(2 * k).copied().unwrap_or(0),
+                buf.get(2 * k + 1).copied().unwrap_or(0),
+            )
+        };
+        for_each_run(row, |s, e| {
+            let i = next;
+            next += 1;
+            if let Some(c) = cur.get_mut(2 * cn..2 * cn + 2) {
+                c.copy_from_slice(&[s, e]);
+            }
+            cn += 1;
+            if i >= cap {
+                return;
+            }
+            set16(table, i, u16::try_from(i).unwrap_or(0));
+            while j < pn && run(prev, j).1 < s {
+                j += 1;
+            }
+            let mut k = j;
+            while k < pn && run(prev, k).0 <= e {
+                if prev_base + k < cap {
+                    union(table, i, prev_base + k);
+                }
+                k += 1;
+            }
+        });
+        core::mem::swap(&mut prev, &mut cur);
+        prev_base = next - cn;
+        pn = cn;
+    }
+    // Roots take 1..=n in order; every other run its root's final label
+    // (a parent is below its child, so it is final first).
+    let mut n = 0u16;
+    for l in 0..next.min(cap) {
+        let p = usize::from(get16(table, l));
+        if p == l {
+            n = n.saturating_add(1);
+            set16(table, l, n);
+        } else {
+            let fp = get16(table, p);
+            set16(table, l, fp);
+        }
+    }
+    (n, next)
+}
+
+/// Writes the region labels of one row (0 on edges and on runs past the
+/// table) from run `first` on; returns the row's run count.
+fn label_row(open_row: &[u32], table: &[u16], first: usize, out: &mut [u16]) -> usize {
+    out.fill(0);
+    let mut i = first;
+    for_each_run(open_row, |s, e| {
+        let l = get16(table, i);
+        if let Some(r) = out.get_mut(s as usize..=e as usize) {
+            r.fill(l);
+        }
+        i += 1;
+    });
+    i - first
+}
+
+/// The trusted cells of row `y`: ON, and no edge within `g` px.
+fn trusted_row(
+    open: &[u32],
+    stride: usize,
+    (w, h): (usize, usize),
+    y: usize,
+    g: usize,
+    disparity: &[DisparityCell],
+    out: &mut [u32],
+) {
+    // Edges of rows y-g..=y+g, OR-ed.
+    out.fill(0);
+    for yy in y.saturating_sub(g)..=(y + g).min(h.saturating_sub(1)) {
+        let Some(r) = open.get(yy * stride..(yy + 1) * stride) else {
+            continue;
+        };
+        for (o, &v) in out.iter_mut().zip(r) {
+            *o |= !v;
+        }
+    }
+    // Bits past the width are 0 in `open`, so 1 here: clear them.
+    let last = if w % 32 == 0 {
+        u32::MAX
+    } else {
+        (1u32 << (w % 32)) - 1
+    };
+    if let Some(o) = out.last_mut() {
+        *o &= last;
+    }
+    // Widen by g px each way, across words.
+    for _ in 0..g {
+        let mut carry_in = 0u32;
+        for i in 0..out.len() {
+            let cur = out.get(i).copied().unwrap_or(0);
+            let next = out.get(i + 1).copied().unwrap_or(0);
+            let widened = cur | cur << 1 | carry_in | cur >> 1 | next << 31;
+            carry_in = cur >> 31;
+            if let Some(o) = out.get_mut(i) {
+                *o = widened;
+            }
+        }
+    }
+    // Trusted: ON and not near an edge.
+    for (i, o) in out.iter_mut().enumerate() {
+        let mut on = 0u32;
+        let cells = disparity.get(i * 32..((i + 1) * 32).min(w)).unwrap_or(&[]);
+        for (b, c) in cells.iter().enumerate() {
+            on |= u32::from(c.is_on()) << b;
+        }
+        *o = on & !*o;
+    }
+}
+
+/// The bit maps and the run table of a labelling, walked run by run.
+struct Walk<'a> {
+    open: &'a [u32],
+    trusted: &'a [u32],
+    table: &'a [u16],
+    stride: usize,
+    height: usize,
+    /// Region-table capacity: regions at or past it are skipped.
+    cap: usize,
+}
+
+impl Walk<'_> {
+    /// Calls `f(region, whole px)` for every trusted cell of a region
+    /// within the tables, in raster order.
+    fn for_each_trusted(&self, disp: &ImageView<'_, DisparityCell>, mut f: impl FnMut(usize, u8)) {
+        let mut i = 0usize;
+        let s = self.stride.max(1);
+        let rows = self.open.chunks_exact(s).zip(self.trusted.chunks_exact(s));
+        for (y, (orow, trow)) in rows.take(self.height).enumerate() {
+            let drow = disp.row(y).unwrap_or(&[]);
+            for_each_run(orow, |s, e| {
+                let l = usize::from(get16(self.table, i));
+                i += 1;
+                if l == 0 || l >= self.cap {
+                    return;
+                }
+                for x in s as usize..=e as usize {
+                    if bit(trow, x) {
+                        if let Some(v) = drow.get(x).and_then(|&c| whole_px(c)) {
+                            f(l, v);
+                        }
+                    }
+                }
+            });
+        }
+    }
+}
+
+/// [`complete`](super::complete) over bit maps and runs (module docs):
+/// completes `disparity` in place over the regions of the conspicuity map
+/// `edges`, with `colour` deciding the side of each edge cell.
+///
+/// # Errors
+/// [`CompleteError::Image`] when the maps differ in size or a buffer is
+/// too short for the frame.
+pub fn complete_runs<C: SideColour>(
+    params: &CompleteParams,
+    edges: &ImageView<'_, EdgeCell>,
+    colour: &ImageView<'_, C>,
+    disparity: &mut ImageViewMut<'_, DisparityCell>,
+    bufs: &mut RunBuffers<'_>,
+    tables: &mut RegionTables<'_>,
+) -> Result<CompleteReport, CompleteError> {
+    let size = edges.size();
+    let (w, h) = size;
+    for other in [colour.size(), disparity.size()] {
+        if other != size {
+            return Err(ImageError::SizeMismatch {
+                expected: size,
+                got: other,
+            }
+            .into());
+        }
+    }
+    let stride = words_per_row(w);
+    let short = |needed: usize, got: usize| -> Result<(), CompleteError> {
+        if got < needed {
+            Err(ImageError::BufferTooSmall { needed, got }.into())
+        } else {
+            Ok(())
+        }
+    };
+    short(bit_map_len(w, h), bufs.open.len())?;
+    short(bit_map_len(w, h), bufs.trusted.len())?;
+    short(run_rows_len(w), bufs.rows.len())?;
+    short(LABEL_ROWS * w, bufs.labels.len())?;
+
+    // The non-edge cells, as bits.
+    for (row, out) in edges.rows().zip(bufs.open.chunks_exact_mut(stride.max(1))) {
+        for (word, cells) in out.iter_mut().zip(row.chunks(32)) {
+            let mut b = 0u32;
+            for (i, c) in cells.iter().enumerate() {
+                b |= u32::from(c.is_off()) << i;
+            }
+            *word = b;
+        }
+    }
+    let (regions, runs) = label_runs(bufs.open, stride, h, bufs.runs, bufs.rows);
+    let run_cap = bufs.runs.len().min(u16::MAX as usize);
+    let g = usize::from(params.guard);
+    {
+        let disp = disparity.as_view();
+        for (y, out) in bufs
+            .trusted
+            .chunks_exact_mut(stride.max(1))
+            .take(h)
+            .enumerate()
+        {
+            let drow = disp.row(y).unwrap_or(&[]);
+            trusted_row(bufs.open, stride, size, y, g, drow, out);
+        }
+    }
+
+    let cap = tables.capacity();
+    let min_trusted = params.min_trusted.max(1);
+    let mut report = CompleteReport {
+        regions,
+        regions_skipped: u16::try_from(usize::from(regions).saturating_sub(cap.saturating_sub(1)))
+            .unwrap_or(u16::MAX),
+        runs_unlabelled: u32::try_from(runs.saturating_sub(run_cap)).unwrap_or(u32::MAX),
+        ..CompleteReport::default()
+    };
+    tables.total.fill(0);
+    tables.lo.fill(u8::MAX);
+    tables.hi.fill(0);
+
+    let open = &*bufs.open;
+    let trusted = &*bufs.trusted;
+    let table = &*bufs.runs;
+    let disp = disparity.as_view();
+    let walk = Walk {
+        open,
+        trusted,
+        table,
+        stride,
+        height: h,
+        cap,
+    };
+    // Counts, and each region's range.
+    walk.for_each_trusted(&disp, |l, v| {
+        if let (Some(t), Some(lo), Some(hi)) = (
+            tables.total.get_mut(l),
+            tables.lo.get_mut(l),
+            tables.hi.get_mut(l),
+        ) {
+            *t += 1;
+            *lo = (*lo).min(v);
+            *hi = (*hi).max(v);
+        }
+    });
+    let widest = tables
+        .lo
+        .iter()
+        .zip(tables.hi.iter())
+        .zip(tables.total.iter())
+        .filter(|&(_, &t)| t > 0)
+        .map(|((&lo, &hi), _)| hi.saturating_sub(lo))
+        .max()
+        .unwrap_or(0);
+    let passes = 8 - widest.leading_zeros();
+    for _ in 0..passes {
+        tables.below.fill(0);
+        let (lo, hi, below) = (&*tables.lo, &*tables.hi, &mut *tables.below);
+        walk.for_each_trusted(&disp, |l, v| {
+            if let (Some(&a), Some(&b), Some(c)) = (lo.get(l), hi.get(l), below.get_mut(l)) {
+                *c += u32::from(u16::from(v) <= (u16::from(a) + u16::from(b)) / 2);
+            }
+        });
+        for (((lo, hi), &below), &total) in tables
+            .lo
+            .iter_mut()
+            .zip(tables.hi.iter_mut())
+            .zip(tables.below.iter())
+            .zip(tables.total.iter())
+        {
+            if total == 0 {
+                continue;
+            }
+            let mid = ((u16::from(*lo) + u16::from(*hi)) / 2) as u8;
+            // Lower median: the k-th smallest, k = (total - 1) / 2, 0-based.
+            if below > (total - 1) / 2 {
+                *hi = mid;
+            } else {
+                *lo = mid.saturating_add(1).min(*hi);
+            }
+        }
+    }
+    report.regions_with_median = u16::try_from(
+        tables
+            .total
+            .iter()
+            .skip(1)
+            .take(usize::from(regions))
+            .filter(|&&t| t >= min_trusted)
+            .count(),
+    )
+    .unwrap_or(u16::MAX);
+
+    // Targets, row by row, with the labels of two rows each side.
+    let labels = &mut *bufs.labels;
+    let (mut built, mut first_run) = (0usize, 0usize);
+    for y in 0..h {
+        while built < h && built <= y + 2 {
+            let orow = open
+                .get(built * stride..(built + 1) * stride)
+                .unwrap_or(&[]);
+            let slot = (built % LABEL_ROWS) * w;
+            let out = labels.get_mut(slot..slot + w).unwrap_or(&mut []);
+            first_run += label_row(orow, table, first_run, out);
+            built += 1;
+        }
+        let label_at = |xx: usize, yy: usize| {
+            let slot = (yy % LABEL_ROWS) * w;
+            get16(labels, slot + xx)
+        };
+        let orow = open.get(y * stride..(y + 1) * stride).unwrap_or(&[]);
+        let trow = trusted.get(y * stride..(y + 1) * stride).unwrap_or(&[]);
+        for x in 0..w {
+            if bit(trow, x) {
+                continue;
+            }
+            let l = if bit(orow, x) {
+                label_at(x, y)
+            } else {
+                edge_region(open, stride, size, colour, x, y, &label_at)
+            };
+            let l = usize::from(l);
+            if l == 0 || l >= cap || tables.total.get(l).copied().unwrap_or(0) < min_trusted {
+                continue;
+            }
+            let (Some(&v), Some(cell)) = (tables.lo.get(l), disparity.get(x, y)) else {
+                continue;
+            };
+            if cell.is_on() {
+                report.replaced += 1;
+            } else {
+                report.filled += 1;
+            }
+            disparity.set(x, y, from_pixels(v));
+        }
+    }
+    Ok(report)
+}
+
+/// The region an edge cell joins: that of its non-edge neighbour of
+/// closest colour within radius 1, else 2 (raster order, first minimum);
+/// 0 when none.
+fn edge_region<C: SideColour>(
+    open: &[u32],
+    stride: usize,
+    (w, h): (usize, usize),
+    colour: &ImageView<'_, C>,
+    x: usize,
+    y: usize,
+    label_at: &impl Fn(usize, usize) -> u16,
+) -> u16 {
+    let Some(own) = colour.get(x, y) else {
+        return 0;
+    };
+    for r in 1..=2usize {
+        let mut best: Option<(u32, u16)> = None;
+        for yy in y.saturating_sub(r)..=(y + r).min(h.saturating_sub(1)) {
+            let orow = open.get(yy * stride..(yy + 1) * stride).unwrap_or(&[]);
+            let crow = colour.row(yy).unwrap_or(&[]);
+            for xx in x.saturating_sub(r)..=(x + r).min(w.saturating_sub(1)) {
+                if !bit(orow, xx) {
+                    continue;
+                }
+                let Some(&c) = crow.get(xx) else {
+                    continue;
+                };
+                let d = own.dist2(c);
+                if best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, label_at(xx, yy)));
+                }
+            }
+        }
+        if let Some((_, l)) = best {
+            return l;
+        }
+    }
+    0
+}
