@@ -40,6 +40,20 @@ impl Tone {
     }
 }
 
+impl Tone {
+    /// The CIELUV colour at the low corner of the tone's bins: CIELUV
+    /// distances between such colours are [`SideColour::dist2`] of the
+    /// tones.
+    pub fn to_luv(self) -> Luv {
+        let c = |b: u8, (lo, _, width): (i32, i32, i32)| {
+            i16::try_from(lo + i32::from(b) * width).unwrap_or(0)
+        };
+        let [l, u, v] = self.bins();
+        let [bl, bu, bv] = BINS;
+        Luv::from_bits(c(l, bl), c(u, bu), c(v, bv))
+    }
+}
+
 impl SideColour for Tone {
     /// The squared distance between the bins' starts, in raw Q6 units
     /// (below 2^29).
@@ -83,5 +97,9 @@ mod tests {
         assert_eq!(t(3, 1, 2).dist2(t(5, 1, 2)), 802 * 802);
         assert!(t(0, 0, 0).dist2(t(0, 3, 0)) > t(0, 0, 0).dist2(t(15, 0, 0)));
         assert_eq!(t(0, 0, 0).dist2(t(15, 3, 3)), t(15, 3, 3).dist2(t(0, 0, 0)));
+        for (a, b) in [(t(1, 2, 3), t(9, 0, 1)), (t(15, 3, 3), t(0, 0, 0))] {
+            assert_eq!(a.to_luv().dist2(b.to_luv()), a.dist2(b));
+            assert_eq!(Tone::of(a.to_luv()), a);
+        }
     }
 }
