@@ -305,9 +305,14 @@ struct Walk<'a> {
 }
 
 impl Walk<'_> {
-    /// Calls `f(region, whole px)` for every trusted cell of a region
-    /// within the tables, in raster order.
-    fn for_each_trusted(&self, disp: &ImageView<'_, DisparityCell>, mut f: impl FnMut(usize, u8)) {
+    /// Calls `f(region, disparity row, trusted x)` for every run of a
+    /// region within the tables, in raster order, with the trusted cells
+    /// of the run.
+    fn for_each_trusted<'d>(
+        &self,
+        disp: &ImageView<'d, DisparityCell>,
+        mut f: impl FnMut(usize, &'d [DisparityCell], SetBits<'_>),
+    ) {
         let mut i = 0usize;
         let s = self.stride.max(1);
         let rows = self.open.chunks_exact(s).zip(self.trusted.chunks_exact(s));
@@ -316,17 +321,61 @@ impl Walk<'_> {
             for_each_run(orow, |s, e| {
                 let l = usize::from(get16(self.table, i));
                 i += 1;
-                if l == 0 || l >= self.cap {
-                    return;
-                }
-                for x in s as usize..=e as usize {
-                    if bit(trow, x) {
-                        if let Some(v) = drow.get(x).and_then(|&c| whole_px(c)) {
-                            f(l, v);
-                        }
-                    }
+                if l != 0 && l < self.cap {
+                    f(l, drow, SetBits::new(trow, s as usize, e as usize));
                 }
             });
+        }
+    }
+}
+
+/// The set bits of a bit-map row within `s..=e`, as pixel indices.
+struct SetBits<'a> {
+    row: &'a [u32],
+    word: usize,
+    last: usize,
+    /// Bits of `last` at or below `e`.
+    last_mask: u32,
+    bits: u32,
+}
+
+impl<'a> SetBits<'a> {
+    fn new(row: &'a [u32], s: usize, e: usize) -> Self {
+        let (word, last) = (s / 32, e / 32);
+        let last_mask = u32::MAX >> (31 - e % 32);
+        let mut bits = row.get(word).copied().unwrap_or(0) & (u32::MAX << (s % 32));
+        if word == last {
+            bits &= last_mask;
+        }
+        Self {
+            row,
+            word,
+            last,
+            last_mask,
+            bits,
+        }
+    }
+}
+
+impl Iterator for SetBits<'_> {
+    type Item = usize;
+
+    #[inline]
+    fn next(&mut self) -> Option<usize> {
+        loop {
+            if self.bits != 0 {
+                let tz = self.bits.trailing_zeros() as usize;
+                self.bits &= self.bits - 1;
+                return Some(self.word * 32 + tz);
+            }
+            if self.word >= self.last {
+                return None;
+            }
+            self.word += 1;
+            self.bits = self.row.get(self.word).copied().unwrap_or(0);
+            if self.word == self.last {
+                self.bits &= self.last_mask;
+            }
         }
     }
 }
@@ -422,15 +471,20 @@ pub fn complete_runs<C: SideColour>(
         cap,
     };
     // Counts, and each region's range.
-    walk.for_each_trusted(&disp, |l, v| {
-        if let (Some(t), Some(lo), Some(hi)) = (
+    walk.for_each_trusted(&disp, |l, drow, xs| {
+        let (Some(t), Some(lo), Some(hi)) = (
             tables.total.get_mut(l),
             tables.lo.get_mut(l),
             tables.hi.get_mut(l),
-        ) {
-            *t += 1;
-            *lo = (*lo).min(v);
-            *hi = (*hi).max(v);
+        ) else {
+            return;
+        };
+        for x in xs {
+            if let Some(v) = drow.get(x).and_then(|&c| whole_px(c)) {
+                *t += 1;
+                *lo = (*lo).min(v);
+                *hi = (*hi).max(v);
+            }
         }
     });
     let widest = tables
@@ -446,9 +500,15 @@ pub fn complete_runs<C: SideColour>(
     for _ in 0..passes {
         tables.below.fill(0);
         let (lo, hi, below) = (&*tables.lo, &*tables.hi, &mut *tables.below);
-        walk.for_each_trusted(&disp, |l, v| {
-            if let (Some(&a), Some(&b), Some(c)) = (lo.get(l), hi.get(l), below.get_mut(l)) {
-                *c += u32::from(u16::from(v) <= (u16::from(a) + u16::from(b)) / 2);
+        walk.for_each_trusted(&disp, |l, drow, xs| {
+            let (Some(&a), Some(&b), Some(c)) = (lo.get(l), hi.get(l), below.get_mut(l)) else {
+                return;
+            };
+            let mid = (u16::from(a) + u16::from(b)) / 2;
+            for x in xs {
+                if let Some(v) = drow.get(x).and_then(|&c| whole_px(c)) {
+                    *c += u32::from(u16::from(v) <= mid);
+                }
             }
         });
         for (((lo, hi), &below), &total) in tables
@@ -500,28 +560,36 @@ pub fn complete_runs<C: SideColour>(
         };
         let orow = open.get(y * stride..(y + 1) * stride).unwrap_or(&[]);
         let trow = trusted.get(y * stride..(y + 1) * stride).unwrap_or(&[]);
-        for x in 0..w {
-            if bit(trow, x) {
-                continue;
+        // The untrusted cells: edges, and OFF or near-edge cells.
+        for (i, &tw) in trow.iter().enumerate() {
+            let mut m = !tw
+                & if (i + 1) * 32 > w {
+                    (1u32 << (w % 32)) - 1
+                } else {
+                    u32::MAX
+                };
+            while m != 0 {
+                let x = i * 32 + m.trailing_zeros() as usize;
+                m &= m - 1;
+                let l = if bit(orow, x) {
+                    label_at(x, y)
+                } else {
+                    edge_region(open, stride, size, colour, x, y, &label_at)
+                };
+                let l = usize::from(l);
+                if l == 0 || l >= cap || tables.total.get(l).copied().unwrap_or(0) < min_trusted {
+                    continue;
+                }
+                let (Some(&v), Some(cell)) = (tables.lo.get(l), disparity.get(x, y)) else {
+                    continue;
+                };
+                if cell.is_on() {
+                    report.replaced += 1;
+                } else {
+                    report.filled += 1;
+                }
+                disparity.set(x, y, from_pixels(v));
             }
-            let l = if bit(orow, x) {
-                label_at(x, y)
-            } else {
-                edge_region(open, stride, size, colour, x, y, &label_at)
-            };
-            let l = usize::from(l);
-            if l == 0 || l >= cap || tables.total.get(l).copied().unwrap_or(0) < min_trusted {
-                continue;
-            }
-            let (Some(&v), Some(cell)) = (tables.lo.get(l), disparity.get(x, y)) else {
-                continue;
-            };
-            if cell.is_on() {
-                report.replaced += 1;
-            } else {
-                report.filled += 1;
-            }
-            disparity.set(x, y, from_pixels(v));
         }
     }
     Ok(report)

@@ -132,6 +132,77 @@ pub(super) fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) 
     }
 }
 
+/// The squared distances from each pixel of a row to its three neighbours
+/// in the row below, `[down-left, down, down-right]`, as one pass of
+/// [`snn_row_shared`] leaves them for the next row.
+pub(super) type Down = [u32; 3];
+
+/// [`snn_row`] sharing distances with its neighbours: the distance from a
+/// pixel to its left neighbour is its left neighbour's to its right one,
+/// and its distances to the row above are that row's distances down
+/// (`down`, which the call reads and then overwrites with this row's).
+/// So a pixel takes 4 distances, not 8, and the output is [`snn_row`]'s.
+/// `first` is the top row, whose row above is itself.
+pub(super) fn snn_row_shared(
+    prev: &[Luv],
+    cur: &[Luv],
+    next: &[Luv],
+    out: &mut [Luv],
+    down: &mut [Down],
+    first: bool,
+) {
+    let w = out.len();
+    if down.len() < w {
+        return snn_row(prev, cur, next, out);
+    }
+    // Distance to the left neighbour (0 at the left end: the pad is the
+    // pixel itself), and the old down-right distance of the pixel before.
+    let (mut left, mut old_dr) = (0u32, 0u32);
+    let cells = prev.windows(3).zip(cur.windows(3)).zip(next.windows(3));
+    for (x, (((up, mid), below), o)) in cells.zip(out.iter_mut()).enumerate() {
+        let (&[a0, a1, a2], &[b0, b1, b2], &[c0, c1, c2]) = (up, mid, below) else {
+            continue;
+        };
+        let c = bits(b1);
+        let right = dist2(c, bits(b2));
+        let new = [dist2(c, bits(c0)), dist2(c, bits(c1)), dist2(c, bits(c2))];
+        let old = down.get(x).copied().unwrap_or_default();
+        let (d_a0, d_a1, d_a2) = if first {
+            (left, 0, right)
+        } else {
+            // a0 is the row above's pixel x - 1 (its own pixel at the left
+            // end), a2 its pixel x + 1 (its own at the right end).
+            let ul = if x == 0 { old[1] } else { old_dr };
+            let ur = if x + 1 == w {
+                old[1]
+            } else {
+                down.get(x + 1).map_or(0, |d| d[0])
+            };
+            (ul, old[1], ur)
+        };
+        let pick = |dm: u32, dp: u32, m: Luv, p: Luv| if dm <= dp { bits(m) } else { bits(p) };
+        let kept = [
+            pick(left, right, b0, b2),
+            pick(d_a0, new[2], a0, c2),
+            pick(d_a1, new[1], a1, c1),
+            pick(d_a2, new[0], a2, c0),
+        ];
+        let mut sum = c;
+        for k in kept {
+            sum[0] += k[0];
+            sum[1] += k[1];
+            sum[2] += k[2];
+        }
+        let [l, u, v] = sum.map(div5_round);
+        *o = Luv::in_range(l, u, v);
+        old_dr = old[2];
+        left = right;
+        if let Some(d) = down.get_mut(x) {
+            *d = new;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
