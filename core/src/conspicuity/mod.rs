@@ -47,7 +47,7 @@ pub use luv::{
 };
 pub use ring::row_scratch_len;
 pub use smooth::{smooth, smooth_step, SmoothParams, MAX_ERR_SMOOTH_STEP_LSB};
-pub use stream::{stream, stream_down_len, stream_scratch_len};
+pub use stream::{stream, stream_scratch_len};
 
 use crate::checksum::Fnv1a;
 use crate::fixed::{isqrt_round, U10F6};

@@ -12,7 +12,7 @@
 //! functions' output bit for bit.
 
 use super::ring::row_scratch_len;
-use super::smooth::{snn_row_shared, Down, SmoothParams};
+use super::smooth::{snn_row, SmoothParams};
 use super::{conspicuity_row, Conspicuity, ConspicuityError, EdgeCell, Luv};
 use crate::fixed::U10F6;
 use crate::image::ImageViewMut;
@@ -21,12 +21,6 @@ use crate::image::ImageViewMut;
 /// padded rows per smoothing pass, and one for C~.
 pub const fn stream_scratch_len(width: usize, smooth: &SmoothParams) -> usize {
     (smooth.iterations as usize + 1) * row_scratch_len(width)
-}
-
-/// Entries of the distance scratch [`stream`] needs: a row of shared
-/// distances per smoothing pass.
-pub const fn stream_down_len(width: usize, smooth: &SmoothParams) -> usize {
-    smooth.iterations as usize * width
 }
 
 /// Replicates the end pixels of a padded slot's body into its pads.
@@ -60,18 +54,15 @@ fn slot_mut(ring: &mut [Luv], r: usize, pw: usize) -> &mut [Luv] {
 /// given row by row: `source(y, row)` fills CIELUV row `y` (`width`
 /// pixels), `smoothed(y, row)` sees each smoothed row (for an observer or
 /// a compact copy), and C~ goes to `dst` (every cell ON). Returns max C~.
-/// `down` is scratch for the distances each smoothing pass shares between
-/// rows ([`stream_down_len`]).
 /// The result is [`smooth`](super::smooth) then
 /// [`conspicuity`](super::conspicuity) on the whole frame, bit for bit.
 ///
 /// # Errors
 /// [`ConspicuityError::ScratchTooSmall`] when `rows` is shorter than
-/// [`stream_scratch_len`] or `down` than [`stream_down_len`].
+/// [`stream_scratch_len`].
 pub fn stream(
     smooth: &SmoothParams,
     rows: &mut [Luv],
-    down: &mut [Down],
     dst: &mut ImageViewMut<'_, EdgeCell>,
     mut source: impl FnMut(usize, &mut [Luv]),
     mut smoothed: impl FnMut(usize, &[Luv]),
@@ -82,13 +73,6 @@ pub fn stream(
     let rows = rows
         .get_mut(..needed)
         .ok_or(ConspicuityError::ScratchTooSmall { needed, got })?;
-    let needed = stream_down_len(w, smooth);
-    if down.len() < needed {
-        return Err(ConspicuityError::ScratchTooSmall {
-            needed,
-            got: down.len(),
-        });
-    }
     let pw = w + 2;
     let ring_len = 3 * pw;
     let passes = usize::from(smooth.iterations);
@@ -122,9 +106,8 @@ pub fn stream(
             );
             if k < passes {
                 let s = slot_mut(rest, y, pw);
-                let d = down.get_mut(k * w..(k + 1) * w).unwrap_or(&mut []);
                 if let Some(body) = s.get_mut(1..=w) {
-                    snn_row_shared(prev, cur, next, body, d, y == 0);
+                    snn_row(prev, cur, next, body);
                 }
                 pad(s);
                 if k + 1 == passes {
@@ -169,11 +152,9 @@ mod tests {
                 let mut c = [EdgeCell::OFF; 54];
                 let mut c_v = ImageViewMut::packed(&mut c[..w * h], w, h).unwrap();
                 let mut seen = [Luv::default(); 54];
-                let mut down = [[0u32; 3]; 3 * 9];
                 let max = stream(
                     &p,
                     &mut scratch,
-                    &mut down,
                     &mut c_v,
                     |y, row| row.copy_from_slice(&original[y * w..(y + 1) * w]),
                     |y, row| seen[y * w..(y + 1) * w].copy_from_slice(row),
@@ -193,7 +174,7 @@ mod tests {
         let mut rows = [Luv::default(); 20];
         let p = SmoothParams { iterations: 2 };
         assert_eq!(
-            stream(&p, &mut rows, &mut [], &mut c_v, |_, _| {}, |_, _| {}),
+            stream(&p, &mut rows, &mut c_v, |_, _| {}, |_, _| {}),
             Err(ConspicuityError::ScratchTooSmall {
                 needed: 45,
                 got: 20

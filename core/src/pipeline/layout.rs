@@ -17,7 +17,7 @@ use super::PipelineParams;
 use crate::complete::{
     run_rows_len, Tone, DEFAULT_REGION_CAPACITY, DEFAULT_RUN_CAPACITY, LABEL_ROWS,
 };
-use crate::conspicuity::{stream_down_len, stream_scratch_len, EdgeCell, Luv};
+use crate::conspicuity::{stream_scratch_len, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::Rgb8;
 use crate::mlp;
@@ -64,17 +64,17 @@ pub const fn stereo_bytes(width: usize, height: usize, params: &PipelineParams) 
         + phase
 }
 
-/// Bytes of the conspicuity stage and the completion: the row rings and
-/// shared distances of the streamed stage and one RGB row, one [`Tone`] per pixel, then the
+/// Bytes of the conspicuity stage and the completion: the row rings of
+/// the streamed stage and one RGB row, one [`Tone`] per pixel, then the
 /// completion's two bit maps, run table, two rows of runs, five label rows
 /// and the region tables.
 pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
     let n = width * height;
     let regions = DEFAULT_REGION_CAPACITY;
-    let smooth = &params.edges.smooth;
-    bytes(stream_scratch_len(width, smooth), size_of::<Luv>())
-        + bytes(stream_down_len(width, smooth), size_of::<[u32; 3]>())
-        + bytes(width, size_of::<Rgb8>())
+    bytes(
+        stream_scratch_len(width, &params.edges.smooth),
+        size_of::<Luv>(),
+    ) + bytes(width, size_of::<Rgb8>())
         + bytes(n, size_of::<Tone>())
         + 2 * bytes(bit_map_len(width, height), 4)
         + bytes(DEFAULT_RUN_CAPACITY, 2)

@@ -132,14 +132,12 @@ pub(super) fn run<'w, S: RgbRows, O: Observer>(
         let mut s = Arena::new(&mut *shared);
         let smooth = &params.edges.smooth;
         let rows: &mut [Luv] = s.take(conspicuity::stream_scratch_len(w, smooth))?;
-        let down: &mut [[u32; 3]] = s.take(conspicuity::stream_down_len(w, smooth))?;
         let rgb: &mut [Rgb8] = s.take(w)?;
         let tone: &mut [Tone] = s.take(n)?;
         let mut c_v = ImageViewMut::packed(&mut *edges, w, h)?;
         let max = conspicuity::stream(
             smooth,
             rows,
-            down,
             &mut c_v,
             |y, out| {
                 left.rgb_row(y, rgb);
