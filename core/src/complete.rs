@@ -39,8 +39,8 @@ use crate::segment::{label_capacity, Connectivity, Labeller, SegmentError};
 
 mod runs;
 pub use runs::{
-    complete_runs, run_rows_len, run_table_len, RunBuffers, SideColour, Tone, DEFAULT_RUN_CAPACITY,
-    LABEL_ROWS,
+    complete_runs, pipeline_run_capacity, run_rows_len, run_table_len, RunBuffers, SideColour,
+    Tone, DEFAULT_RUN_CAPACITY, LABEL_ROWS,
 };
 
 /// Parameters of [`complete`].

@@ -391,3 +391,40 @@ fn bad_input_is_a_typed_error_or_a_reported_skip() {
     .unwrap_err();
     assert!(matches!(err, CompleteError::Label(_)), "{err:?}");
 }
+
+/// The pipeline's run table holds the runs of non-edge cells of seeded
+/// synthetic scenes at 160x120 three times over.
+#[test]
+fn the_default_run_table_holds_the_runs_of_synthetic_scenes() {
+    use protogist::complete::DEFAULT_RUN_CAPACITY;
+    use protogist::conspicuity::{EdgeParams, LuvTables};
+    use protogist::image::Rgb8;
+    use protogist::synth::{render_left, SceneSpec};
+    let (w, h) = (160, 120);
+    let mut most = 0;
+    for seed in 0..64 {
+        let spec = SceneSpec::random(seed, w, h);
+        let mut rgb = vec![Rgb8::default(); w * h];
+        render_left(&spec, &mut ImageViewMut::packed(&mut rgb, w, h).unwrap()).unwrap();
+        let maps = protogist_host::stages::run_conspicuity(
+            &LuvTables::new(),
+            &EdgeParams::default(),
+            &rgb,
+            w,
+            h,
+        )
+        .unwrap();
+        let runs: usize = maps
+            .edges
+            .chunks(w)
+            .map(|row| {
+                (0..w)
+                    .filter(|&x| row[x].is_off() && (x == 0 || row[x - 1].is_on()))
+                    .count()
+            })
+            .sum();
+        most = most.max(runs);
+    }
+    eprintln!("most runs of non-edge cells, 64 scenes at 160x120: {most}");
+    assert!(most > h && 3 * most < DEFAULT_RUN_CAPACITY, "{most}");
+}

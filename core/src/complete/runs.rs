@@ -61,10 +61,22 @@ pub const fn run_table_len(width: usize, height: usize) -> usize {
     }
 }
 
-/// Run-table entries that suit frames up to 160x120 on a board: the
-/// synthetic scenes and Aloe at 160 px need at most about 1,400 runs of
-/// non-edge cells (`docs/PIPELINE.md`, "The workspace").
-pub const DEFAULT_RUN_CAPACITY: usize = 4096;
+/// Most run-table entries the pipeline takes: 16 KB of table, three
+/// times the runs of non-edge cells of the synthetic scenes at 160x120
+/// (at most about 2,400; test `the_default_run_table_holds_the_runs_of_synthetic_scenes`),
+/// and every run of any frame up to 128x96 ([`run_table_len`] is 6,144).
+pub const DEFAULT_RUN_CAPACITY: usize = 8192;
+
+/// The run-table entries the pipeline takes at `width` x `height`:
+/// [`run_table_len`], at most [`DEFAULT_RUN_CAPACITY`].
+pub const fn pipeline_run_capacity(width: usize, height: usize) -> usize {
+    let n = run_table_len(width, height);
+    if n < DEFAULT_RUN_CAPACITY {
+        n
+    } else {
+        DEFAULT_RUN_CAPACITY
+    }
+}
 
 /// `u32` words of the `rows` buffer of [`RunBuffers`]: two rows of runs.
 pub const fn run_rows_len(width: usize) -> usize {

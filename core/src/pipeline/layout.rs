@@ -15,7 +15,7 @@
 use super::arena::bytes;
 use super::PipelineParams;
 use crate::complete::{
-    run_rows_len, Tone, DEFAULT_REGION_CAPACITY, DEFAULT_RUN_CAPACITY, LABEL_ROWS,
+    pipeline_run_capacity, run_rows_len, Tone, DEFAULT_REGION_CAPACITY, LABEL_ROWS,
 };
 use crate::conspicuity::{stream_scratch_len, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
@@ -77,7 +77,7 @@ pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) 
     ) + bytes(width, size_of::<Rgb8>())
         + bytes(n, size_of::<Tone>())
         + 2 * bytes(bit_map_len(width, height), 4)
-        + bytes(DEFAULT_RUN_CAPACITY, 2)
+        + bytes(pipeline_run_capacity(width, height), 2)
         + bytes(run_rows_len(width), 4)
         + bytes(LABEL_ROWS * width, 2)
         + 2 * bytes(regions, 4)

@@ -5,8 +5,8 @@ use super::{
     layout, Frame, Object, Observer, Pipeline, PipelineError, RgbRows, Stage, MAX_OBJECTS, TOP_K,
 };
 use crate::complete::{
-    complete_runs, run_rows_len, RegionTables, RunBuffers, Tone, DEFAULT_REGION_CAPACITY,
-    DEFAULT_RUN_CAPACITY, LABEL_ROWS,
+    complete_runs, pipeline_run_capacity, run_rows_len, RegionTables, RunBuffers, Tone,
+    DEFAULT_REGION_CAPACITY, LABEL_ROWS,
 };
 use crate::conspicuity::{self, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
@@ -161,7 +161,7 @@ pub(super) fn run<'w, S: RgbRows, O: Observer>(
         let mut bufs = RunBuffers {
             open: s.take(bit_map_len(w, h))?,
             trusted: s.take(bit_map_len(w, h))?,
-            runs: s.take(DEFAULT_RUN_CAPACITY)?,
+            runs: s.take(pipeline_run_capacity(w, h))?,
             rows: s.take(run_rows_len(w))?,
             labels: s.take(LABEL_ROWS * w)?,
         };
