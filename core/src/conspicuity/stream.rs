@@ -13,9 +13,10 @@
 
 use super::ring::row_scratch_len;
 use super::smooth::{snn_row, SmoothParams};
-use super::{conspicuity_row, Conspicuity, ConspicuityError, EdgeCell, Luv};
+use super::{pair_dist2, threshold, to_conspicuity, ConspicuityError, EdgeCell, EdgeReport, Luv};
 use crate::fixed::U10F6;
 use crate::image::ImageViewMut;
+use crate::off::MaybeOff;
 
 /// [`Luv`] elements of row scratch [`stream`] needs: one ring of three
 /// padded rows per smoothing pass, and one for C~.
@@ -50,23 +51,31 @@ fn slot_mut(ring: &mut [Luv], r: usize, pw: usize) -> &mut [Luv] {
     ring.get_mut(s..s + pw).unwrap_or(&mut [])
 }
 
-/// Runs CIELUV, `smooth.iterations` smoothing passes and C~ over a frame
-/// given row by row: `source(y, row)` fills CIELUV row `y` (`width`
-/// pixels), `smoothed(y, row)` sees each smoothed row (for an observer or
-/// a compact copy), and C~ goes to `dst` (every cell ON). Returns max C~.
-/// The result is [`smooth`](super::smooth) then
-/// [`conspicuity`](super::conspicuity) on the whole frame, bit for bit.
+/// Runs CIELUV, `smooth.iterations` smoothing passes, C~ and the
+/// threshold over a frame given row by row: `source(y, row)` fills CIELUV
+/// row `y` (`width` pixels), `smoothed(y, row)` sees each smoothed row (for
+/// an observer or a compact copy), and C goes to `dst`. The result is
+/// [`smooth`](super::smooth), [`conspicuity`](super::conspicuity) and
+/// [`threshold`](super::threshold) on the whole frame, bit for bit. A cell
+/// whose distance is at most `percent` % of the largest C~ so far, which
+/// the threshold would turn OFF whatever comes after, is written OFF
+/// without its square root.
 ///
 /// # Errors
 /// [`ConspicuityError::ScratchTooSmall`] when `rows` is shorter than
-/// [`stream_scratch_len`].
+/// [`stream_scratch_len`], [`ConspicuityError::BadThreshold`] for a
+/// `percent` above 100.
 pub fn stream(
     smooth: &SmoothParams,
+    percent: u8,
     rows: &mut [Luv],
     dst: &mut ImageViewMut<'_, EdgeCell>,
     mut source: impl FnMut(usize, &mut [Luv]),
     mut smoothed: impl FnMut(usize, &[Luv]),
-) -> Result<Conspicuity, ConspicuityError> {
+) -> Result<EdgeReport, ConspicuityError> {
+    if percent > 100 {
+        return Err(ConspicuityError::BadThreshold(percent));
+    }
     let (w, h) = dst.size();
     let needed = stream_scratch_len(w, smooth);
     let got = rows.len();
@@ -76,7 +85,11 @@ pub fn stream(
     let pw = w + 2;
     let ring_len = 3 * pw;
     let passes = usize::from(smooth.iterations);
-    let mut max = 0u16;
+    // The largest squared distance so far, and the squared distances at
+    // or below which a cell is surely OFF: C~ = round(sqrt(d)) <= k for
+    // d <= k² + k, and C~ <= k = ⌊percent · max so far / 100⌋ fails the
+    // threshold of any final max.
+    let (mut dmax, mut bound) = (0u32, 0u32);
     // Ring k receives its row r at time r + k; step k (a smoothing pass,
     // or C~ for k = passes) makes its output row t - 1 - k at time t.
     for t in 0..h + passes + 1 {
@@ -114,17 +127,30 @@ pub fn stream(
                     smoothed(y, slot(rest, y, pw).get(1..=w).unwrap_or(&[]));
                 }
             } else if let Some(out) = dst.row_mut(y) {
-                max = max.max(conspicuity_row(prev, cur, next, out));
+                let cells = prev.windows(3).zip(cur.windows(3)).zip(next.windows(3));
+                for (((up, mid), down), o) in cells.zip(out.iter_mut()) {
+                    let d = pair_dist2(up, mid, down);
+                    dmax = dmax.max(d);
+                    *o = if d <= bound {
+                        EdgeCell::OFF
+                    } else {
+                        MaybeOff::from_raw(U10F6::from_bits(to_conspicuity(d)))
+                    };
+                }
+                let k = u64::from(percent) * u64::from(to_conspicuity(dmax)) / 100;
+                bound = u32::try_from(k * k + k).unwrap_or(u32::MAX);
             }
         }
     }
-    Ok(U10F6::from_bits(max))
+    let max = U10F6::from_bits(to_conspicuity(dmax));
+    let on_count = threshold(dst, max, percent)?;
+    Ok(EdgeReport { max, on_count })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::conspicuity::{conspicuity, smooth};
+    use crate::conspicuity::{conspicuity, smooth, threshold};
     use crate::rng::SplitMix64;
 
     /// The streamed stage against the full-frame functions on random
@@ -133,7 +159,7 @@ mod tests {
     fn streaming_is_the_full_frame_stage_bit_for_bit() {
         let mut rng = SplitMix64::new(7);
         for (w, h) in [(1, 1), (1, 4), (5, 1), (2, 2), (7, 3), (9, 6)] {
-            for iterations in 0..=3u8 {
+            for (iterations, percent) in [(0u8, 10u8), (1, 0), (2, 10), (2, 60), (3, 100)] {
                 let p = SmoothParams { iterations };
                 let mut luv = [Luv::default(); 54];
                 for px in luv.iter_mut().take(w * h) {
@@ -148,19 +174,22 @@ mod tests {
                 let mut c_full = [EdgeCell::OFF; 54];
                 let mut c_full_v = ImageViewMut::packed(&mut c_full[..w * h], w, h).unwrap();
                 let max_full = conspicuity(&full.as_view(), &mut c_full_v, &mut scratch).unwrap();
+                let on_full = threshold(&mut c_full_v, max_full, percent).unwrap();
 
                 let mut c = [EdgeCell::OFF; 54];
                 let mut c_v = ImageViewMut::packed(&mut c[..w * h], w, h).unwrap();
                 let mut seen = [Luv::default(); 54];
-                let max = stream(
+                let report = stream(
                     &p,
+                    percent,
                     &mut scratch,
                     &mut c_v,
                     |y, row| row.copy_from_slice(&original[y * w..(y + 1) * w]),
                     |y, row| seen[y * w..(y + 1) * w].copy_from_slice(row),
                 )
                 .unwrap();
-                assert_eq!(max, max_full, "{w}x{h}, {iterations} passes");
+                assert_eq!(report.max, max_full, "{w}x{h}, {iterations} passes");
+                assert_eq!(report.on_count, on_full, "{w}x{h}, {iterations} passes");
                 assert_eq!(c, c_full, "{w}x{h}, {iterations} passes");
                 assert_eq!(&seen[..w * h], &luv[..w * h], "{w}x{h}");
             }
@@ -174,11 +203,16 @@ mod tests {
         let mut rows = [Luv::default(); 20];
         let p = SmoothParams { iterations: 2 };
         assert_eq!(
-            stream(&p, &mut rows, &mut c_v, |_, _| {}, |_, _| {}),
+            stream(&p, 10, &mut rows, &mut c_v, |_, _| {}, |_, _| {}),
             Err(ConspicuityError::ScratchTooSmall {
                 needed: 45,
                 got: 20
             })
+        );
+        let mut rows = [Luv::default(); 45];
+        assert_eq!(
+            stream(&p, 101, &mut rows, &mut c_v, |_, _| {}, |_, _| {}),
+            Err(ConspicuityError::BadThreshold(101))
         );
     }
 }

@@ -135,8 +135,9 @@ pub(super) fn run<'w, S: RgbRows, O: Observer>(
         let rgb: &mut [Rgb8] = s.take(w)?;
         let tone: &mut [Tone] = s.take(n)?;
         let mut c_v = ImageViewMut::packed(&mut *edges, w, h)?;
-        let max = conspicuity::stream(
+        conspicuity::stream(
             smooth,
+            params.edges.threshold_percent,
             rows,
             &mut c_v,
             |y, out| {
@@ -154,7 +155,6 @@ pub(super) fn run<'w, S: RgbRows, O: Observer>(
                 }
             },
         )?;
-        conspicuity::threshold(&mut c_v, max, params.edges.threshold_percent)?;
         obs.conspicuity(&c_v.as_view());
 
         obs.enter(Stage::Complete);
