@@ -31,6 +31,10 @@
 //! A region with fewer than `min_trusted` trusted cells, or beyond the region tables' capacity,
 //! leaves its cells as they were (the report counts skipped regions).
 //! Every step is integer; [`complete`] never panics.
+//!
+//! [`complete_runs`] is the same stage on bit maps and runs of non-edge
+//! cells, with fixed tables and any [`SideColour`] (the pipeline keeps one
+//! [`Tone`] byte per pixel): no label map, and no worst-case label tables.
 
 use crate::conspicuity::{EdgeCell, Luv};
 use crate::disparity::{from_pixels, DisparityCell};
