@@ -19,7 +19,8 @@
 //!
 //! The medians' bisection starts from each region's smallest and largest
 //! trusted disparity and runs as many passes as the widest of those ranges
-//! needs (5 for disparities up to 31 px), not 8.
+//! needs (5 for disparities up to 31 px), not 8; a pass skips the runs of
+//! regions whose median is already found.
 
 use super::{whole_px, CompleteError, CompleteParams, CompleteReport, RegionTables};
 use crate::conspicuity::{EdgeCell, Luv};
@@ -516,6 +517,10 @@ pub fn complete_runs<C: SideColour>(
             let (Some(&a), Some(&b), Some(c)) = (lo.get(l), hi.get(l), below.get_mut(l)) else {
                 return;
             };
+            if a == b {
+                // Converged: the update below keeps it whatever the count.
+                return;
+            }
             let mid = (u16::from(a) + u16::from(b)) / 2;
             for x in xs {
                 if let Some(v) = drow.get(x).and_then(|&c| whole_px(c)) {
