@@ -31,11 +31,21 @@
 //! A region with fewer than `min_trusted` trusted cells, or beyond the region tables' capacity,
 //! leaves its cells as they were (the report counts skipped regions).
 //! Every step is integer; [`complete`] never panics.
+//!
+//! [`complete_runs`] is the same stage on bit maps and runs of non-edge
+//! cells, with fixed tables and any [`SideColour`] (the pipeline keeps one
+//! [`Tone`] byte per pixel): no label map, and no worst-case label tables.
 
 use crate::conspicuity::{EdgeCell, Luv};
 use crate::disparity::{from_pixels, DisparityCell};
 use crate::image::{ImageError, ImageView, ImageViewMut};
 use crate::segment::{label_capacity, Connectivity, Labeller, SegmentError};
+
+mod runs;
+pub use runs::{
+    complete_runs, pipeline_run_capacity, run_rows_len, run_table_len, RunBuffers, SideColour,
+    Tone, DEFAULT_RUN_CAPACITY, LABEL_ROWS,
+};
 
 /// Parameters of [`complete`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,6 +118,9 @@ pub struct CompleteReport {
     pub replaced: u32,
     /// OFF cells given their region's median.
     pub filled: u32,
+    /// Runs of non-edge cells past the run table's capacity
+    /// ([`complete_runs`]), left unchanged; always 0 for [`complete`].
+    pub runs_unlabelled: u32,
 }
 
 /// Entries each region table needs so that no region of a `width` x

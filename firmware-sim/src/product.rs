@@ -15,7 +15,6 @@ use embedded_hal::digital::{self, OutputPin};
 
 use crate::camera::CameraError;
 use crate::pg::checksum::Fnv1a;
-use crate::pg::conspicuity::Luv;
 use crate::pg::image::ImageError;
 use crate::pg::mlp::Identity;
 use crate::pg::pipeline::{
@@ -500,12 +499,13 @@ pub struct RamPlan {
     pub kept: usize,
     /// Stereo's scratch.
     pub stereo: usize,
-    /// The colour phase: the CIELUV map, the edge map and the rest (the
-    /// labelling of the completion, its region tables, row scratch).
+    /// The colour phase: the streamed conspicuity stage, the completion's
+    /// bit maps and the rest (its run and region tables, label rows).
     pub colour: usize,
-    /// The colour phase's CIELUV map.
+    /// The colour phase's streamed conspicuity stage: row rings, an RGB
+    /// row, a `Tone` byte per pixel.
     pub luv: usize,
-    /// The colour phase's edge map (one `bool` per pixel).
+    /// The colour phase's bit maps (non-edge and trusted cells).
     pub edge_map: usize,
     /// Segmentation and the classifier.
     pub objects: usize,
@@ -520,9 +520,9 @@ impl RamPlan {
             frames: 2 * pair_len(width, height),
             kept: layout::kept_bytes(width, height, &PARAMS),
             stereo: layout::stereo_bytes(width, height, &PARAMS),
-            colour: layout::colour_bytes(width, height),
-            luv: width * height * core::mem::size_of::<Luv>(),
-            edge_map: width * height,
+            colour: layout::colour_bytes(width, height, &PARAMS),
+            luv: layout::colour_stream_bytes(width, height, &PARAMS),
+            edge_map: layout::colour_bit_map_bytes(width, height),
             objects: layout::object_bytes(width, height, &PARAMS),
             workspace: workspace_bytes(width, height, &PARAMS),
         }

@@ -106,8 +106,14 @@ impl Observer for Maps {
         self.raw_disparity = map.pixels().collect();
     }
 
-    fn conspicuity(&mut self, smoothed: &ImageView<'_, Luv>, edges: &ImageView<'_, EdgeCell>) {
-        self.smoothed = smoothed.pixels().collect();
+    fn smoothed_row(&mut self, y: usize, row: &[Luv]) {
+        if y == 0 {
+            self.smoothed.clear();
+        }
+        self.smoothed.extend_from_slice(row);
+    }
+
+    fn conspicuity(&mut self, edges: &ImageView<'_, EdgeCell>) {
         self.edges = edges.pixels().collect();
     }
 

@@ -607,12 +607,23 @@ pub fn run_complete(
     Vec<protogist::disparity::DisparityCell>,
     protogist::complete::CompleteReport,
 )> {
-    use protogist::complete::{complete, region_table_len, RegionTables};
-    use protogist::segment::{label_capacity, Labeller};
+    use protogist::complete::{
+        complete_runs, region_table_len, run_rows_len, run_table_len, RegionTables, RunBuffers,
+        Tone, LABEL_ROWS,
+    };
+    use protogist::segment::bit_map_len;
     let (w, h) = (width, height);
-    let cap = label_capacity(w, h);
-    let (mut labels, mut parent, mut area) = (vec![0u16; w * h], vec![0u16; cap], vec![0u32; cap]);
-    let mut lab = Labeller::new(w, h, &mut labels, &mut parent, &mut area)?;
+    let tone: Vec<Tone> = colour.iter().map(|&c| Tone::of(c)).collect();
+    let (mut open, mut trusted) = (vec![0u32; bit_map_len(w, h)], vec![0u32; bit_map_len(w, h)]);
+    let (mut runs, mut rows) = (vec![0u16; run_table_len(w, h)], vec![0u32; run_rows_len(w)]);
+    let mut labels = vec![0u16; LABEL_ROWS * w];
+    let mut bufs = RunBuffers {
+        open: &mut open,
+        trusted: &mut trusted,
+        runs: &mut runs,
+        rows: &mut rows,
+        labels: &mut labels,
+    };
     let n = region_table_len(w, h);
     let (mut total, mut below, mut lo, mut hi) =
         (vec![0u32; n], vec![0u32; n], vec![0u8; n], vec![0u8; n]);
@@ -623,14 +634,12 @@ pub fn run_complete(
         hi: &mut hi,
     };
     let mut out = disparity.to_vec();
-    let mut edge_map = vec![false; w * h];
-    let report = complete(
+    let report = complete_runs(
         params,
         &ImageView::packed(edges, w, h)?,
-        &ImageView::packed(colour, w, h)?,
+        &ImageView::packed(&tone, w, h)?,
         &mut ImageViewMut::packed(&mut out, w, h)?,
-        &mut ImageViewMut::packed(&mut edge_map, w, h)?,
-        &mut lab,
+        &mut bufs,
         &mut tables,
     )?;
     Ok((out, report))

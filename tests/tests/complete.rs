@@ -1,13 +1,17 @@
 //! Disparity completion over conspicuity regions (`protogist::complete`):
-//! bit for bit against its independent reference, a hand-worked case, and
-//! bad input.
+//! both forms (full-frame labelling, and runs with bounded tables as the
+//! pipeline runs it) bit for bit against the independent reference, a
+//! hand-worked case, and bad input.
 
 use proptest::prelude::*;
-use protogist::complete::{complete, CompleteError, CompleteParams, RegionTables};
+use protogist::complete::{
+    complete, complete_runs, region_table_len, run_rows_len, run_table_len, CompleteError,
+    CompleteParams, CompleteReport, RegionTables, RunBuffers, SideColour, Tone, LABEL_ROWS,
+};
 use protogist::conspicuity::{Conspicuity, EdgeCell, Luv};
 use protogist::disparity::{from_pixels, Disparity, DisparityCell};
 use protogist::image::{ImageView, ImageViewMut};
-use protogist::segment::{label_capacity, Labeller};
+use protogist::segment::{bit_map_len, label_capacity, Labeller};
 use protogist_host::reference::complete as rf;
 use protogist_host::stages::run_complete;
 
@@ -75,13 +79,167 @@ fn case() -> impl Strategy<
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
 
+    /// The pipeline's form (`run_complete`: runs, one [`Tone`] per pixel)
+    /// against the reference given the tones' colours.
     #[test]
     fn core_matches_the_reference_bit_for_bit((edges, colour, disp, w, h, params) in case()) {
         let (core_out, core_report) = run_complete(&params, &edges, &colour, &disp, w, h).unwrap();
-        let (ref_out, ref_report) = rf::complete(&params, &edges, &colour, &disp, w, h);
+        let toned: Vec<Luv> = colour.iter().map(|&c| Tone::of(c).to_luv()).collect();
+        let (ref_out, ref_report) = rf::complete(&params, &edges, &toned, &disp, w, h);
         prop_assert_eq!(core_out, ref_out);
         prop_assert_eq!(core_report, ref_report);
     }
+
+    /// Both core forms with the full colour against the reference.
+    #[test]
+    fn both_forms_match_the_reference_with_full_colour(
+        (edges, colour, disp, w, h, params) in case()
+    ) {
+        let (ref_out, ref_report) = rf::complete(&params, &edges, &colour, &disp, w, h);
+        let (runs_out, runs_report) = by_runs(&params, &edges, &colour, &disp, w, h, run_table_len(w, h));
+        prop_assert_eq!(&runs_out, &ref_out);
+        prop_assert_eq!(runs_report, ref_report);
+        let (full_out, full_report) = full_frame(&params, &edges, &colour, &disp, w, h);
+        prop_assert_eq!(&full_out, &ref_out);
+        prop_assert_eq!(full_report, ref_report);
+    }
+}
+
+/// [`complete_runs`] with region tables for every label and `runs` run-table
+/// entries.
+fn by_runs<C: SideColour>(
+    params: &CompleteParams,
+    edges: &[EdgeCell],
+    colour: &[C],
+    disp: &[DisparityCell],
+    w: usize,
+    h: usize,
+    runs: usize,
+) -> (Vec<DisparityCell>, CompleteReport) {
+    let (mut open, mut trusted) = (vec![0u32; bit_map_len(w, h)], vec![0u32; bit_map_len(w, h)]);
+    let (mut table, mut rows) = (vec![0u16; runs], vec![0u32; run_rows_len(w)]);
+    let mut labels = vec![0u16; LABEL_ROWS * w];
+    let n = region_table_len(w, h);
+    let (mut total, mut below, mut lo, mut hi) =
+        (vec![0u32; n], vec![0u32; n], vec![0u8; n], vec![0u8; n]);
+    let mut out = disp.to_vec();
+    let report = complete_runs(
+        params,
+        &ImageView::packed(edges, w, h).unwrap(),
+        &ImageView::packed(colour, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut out, w, h).unwrap(),
+        &mut RunBuffers {
+            open: &mut open,
+            trusted: &mut trusted,
+            runs: &mut table,
+            rows: &mut rows,
+            labels: &mut labels,
+        },
+        &mut RegionTables {
+            total: &mut total,
+            below: &mut below,
+            lo: &mut lo,
+            hi: &mut hi,
+        },
+    )
+    .unwrap();
+    (out, report)
+}
+
+/// The full-frame [`complete`] with tables for every label.
+fn full_frame(
+    params: &CompleteParams,
+    edges: &[EdgeCell],
+    colour: &[Luv],
+    disp: &[DisparityCell],
+    w: usize,
+    h: usize,
+) -> (Vec<DisparityCell>, CompleteReport) {
+    let cap = label_capacity(w, h);
+    let (mut labels, mut parent, mut area) = (vec![0u16; w * h], vec![0u16; cap], vec![0u32; cap]);
+    let mut lab = Labeller::new(w, h, &mut labels, &mut parent, &mut area).unwrap();
+    let n = region_table_len(w, h);
+    let (mut total, mut below, mut lo, mut hi) =
+        (vec![0u32; n], vec![0u32; n], vec![0u8; n], vec![0u8; n]);
+    let mut out = disp.to_vec();
+    let mut edge_map = vec![false; w * h];
+    let report = complete(
+        params,
+        &ImageView::packed(edges, w, h).unwrap(),
+        &ImageView::packed(colour, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut out, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut edge_map, w, h).unwrap(),
+        &mut lab,
+        &mut RegionTables {
+            total: &mut total,
+            below: &mut below,
+            lo: &mut lo,
+            hi: &mut hi,
+        },
+    )
+    .unwrap();
+    (out, report)
+}
+
+#[test]
+fn runs_past_the_run_table_are_counted_and_left_unchanged() {
+    // Three strips of 7 between edge columns, 5 rows: 15 runs; an OFF hole
+    // in row 2 of the third strip.
+    let (a, b) = ("5555555|5555555|5555555", "5555555|5555555|555.555");
+    let (edges, disp, w, h) = parse(&[a, a, b, a, a]);
+    let hole = 2 * w + 19;
+    let colour = vec![Luv::default(); w * h];
+    let params = CompleteParams::default();
+    let (all, report) = by_runs(&params, &edges, &colour, &disp, w, h, run_table_len(w, h));
+    assert_eq!((report.regions, report.runs_unlabelled), (3, 0));
+    assert!(all[hole].is_on(), "{:?}", show(&all, w));
+    // With 4 entries only row 0 and the first run of row 1 are labelled:
+    // the third strip's median comes from row 0, and the hole, in a run
+    // past the table, keeps its value.
+    let (few, report) = by_runs(&params, &edges, &colour, &disp, w, h, 4);
+    assert_eq!((report.regions, report.runs_unlabelled), (3, 11));
+    assert!(!few[hole].is_on(), "{:?}", show(&few, w));
+    assert_eq!(report.regions_with_median, 3);
+    // No table at all: nothing changes.
+    let (none, report) = by_runs(&params, &edges, &colour, &disp, w, h, 0);
+    assert_eq!((report.regions, report.runs_unlabelled), (0, 15));
+    assert_eq!(none, disp);
+}
+
+#[test]
+fn short_run_buffers_are_typed_errors() {
+    let (edges, disp, w, h) = parse(&["55|55", "55|55"]);
+    let colour = vec![Tone::default(); w * h];
+    let mut out = disp.clone();
+    let (mut open, mut trusted) = (vec![0u32; bit_map_len(w, h)], vec![0u32; 1]);
+    let (mut table, mut rows) = (vec![0u16; 8], vec![0u32; run_rows_len(w)]);
+    let mut labels = vec![0u16; LABEL_ROWS * w];
+    let (mut total, mut below, mut lo, mut hi) =
+        (vec![0u32; 4], vec![0u32; 4], vec![0u8; 4], vec![0u8; 4]);
+    let err = complete_runs(
+        &CompleteParams::default(),
+        &ImageView::packed(&edges, w, h).unwrap(),
+        &ImageView::packed(&colour, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut out, w, h).unwrap(),
+        &mut RunBuffers {
+            open: &mut open,
+            trusted: &mut trusted,
+            runs: &mut table,
+            rows: &mut rows,
+            labels: &mut labels,
+        },
+        &mut RegionTables {
+            total: &mut total,
+            below: &mut below,
+            lo: &mut lo,
+            hi: &mut hi,
+        },
+    )
+    .unwrap_err();
+    assert_eq!(
+        err,
+        CompleteError::Image(protogist::image::ImageError::BufferTooSmall { needed: 2, got: 1 })
+    );
 }
 
 /// Parses rows of `0`-`9` (whole px), `.` (OFF) and `|` (an edge cell, OFF).
@@ -232,4 +390,41 @@ fn bad_input_is_a_typed_error_or_a_reported_skip() {
     )
     .unwrap_err();
     assert!(matches!(err, CompleteError::Label(_)), "{err:?}");
+}
+
+/// The pipeline's run table holds the runs of non-edge cells of seeded
+/// synthetic scenes at 160x120 three times over.
+#[test]
+fn the_default_run_table_holds_the_runs_of_synthetic_scenes() {
+    use protogist::complete::DEFAULT_RUN_CAPACITY;
+    use protogist::conspicuity::{EdgeParams, LuvTables};
+    use protogist::image::Rgb8;
+    use protogist::synth::{render_left, SceneSpec};
+    let (w, h) = (160, 120);
+    let mut most = 0;
+    for seed in 0..64 {
+        let spec = SceneSpec::random(seed, w, h);
+        let mut rgb = vec![Rgb8::default(); w * h];
+        render_left(&spec, &mut ImageViewMut::packed(&mut rgb, w, h).unwrap()).unwrap();
+        let maps = protogist_host::stages::run_conspicuity(
+            &LuvTables::new(),
+            &EdgeParams::default(),
+            &rgb,
+            w,
+            h,
+        )
+        .unwrap();
+        let runs: usize = maps
+            .edges
+            .chunks(w)
+            .map(|row| {
+                (0..w)
+                    .filter(|&x| row[x].is_off() && (x == 0 || row[x - 1].is_on()))
+                    .count()
+            })
+            .sum();
+        most = most.max(runs);
+    }
+    eprintln!("most runs of non-edge cells, 64 scenes at 160x120: {most}");
+    assert!(most > h && 3 * most < DEFAULT_RUN_CAPACITY, "{most}");
 }

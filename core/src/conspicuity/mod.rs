@@ -39,6 +39,7 @@
 mod luv;
 mod ring;
 mod smooth;
+mod stream;
 
 pub use luv::{
     lightness, srgb_to_linear, Luv, LuvTables, CIE_EPSILON, CIE_KAPPA, LUV_LIMIT_BITS, MAX_ERR_L,
@@ -46,6 +47,7 @@ pub use luv::{
 };
 pub use ring::row_scratch_len;
 pub use smooth::{smooth, smooth_step, SmoothParams, MAX_ERR_SMOOTH_STEP_LSB};
+pub use stream::{stream, stream_scratch_len};
 
 use crate::checksum::Fnv1a;
 use crate::fixed::{isqrt_round, U10F6};
@@ -175,19 +177,30 @@ fn conspicuity_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [EdgeCell]
     let mut max = 0;
     let cells = prev.windows(3).zip(cur.windows(3)).zip(next.windows(3));
     for (((up, mid), down), o) in cells.zip(out.iter_mut()) {
-        let (&[a0, a1, a2], &[b0, _, b2], &[c0, c1, c2]) = (up, mid, down) else {
-            continue;
-        };
-        let d = dist2(bits(b0), bits(b2))
-            .max(dist2(bits(a0), bits(c2)))
-            .max(dist2(bits(a1), bits(c1)))
-            .max(dist2(bits(a2), bits(c0)));
-        // Q12 squared distance -> Q6 distance; below 2^16 - 1 = OFF.
-        let c = isqrt_round(d).min(u32::from(u16::MAX - 1)) as u16;
+        let c = to_conspicuity(pair_dist2(up, mid, down));
         *o = MaybeOff::from_raw(U10F6::from_bits(c));
         max = max.max(c);
     }
     max
+}
+
+/// The largest squared CIELUV distance (Q12) over the 4 pairs of a 3x3
+/// window given as its three rows.
+#[inline(always)]
+fn pair_dist2(up: &[Luv], mid: &[Luv], down: &[Luv]) -> u32 {
+    let (&[a0, a1, a2], &[b0, _, b2], &[c0, c1, c2]) = (up, mid, down) else {
+        return 0;
+    };
+    dist2(bits(b0), bits(b2))
+        .max(dist2(bits(a0), bits(c2)))
+        .max(dist2(bits(a1), bits(c1)))
+        .max(dist2(bits(a2), bits(c0)))
+}
+
+/// Q12 squared distance -> Q6 distance; below 2^16 - 1 = OFF.
+#[inline(always)]
+fn to_conspicuity(d: u32) -> u16 {
+    isqrt_round(d).min(u32::from(u16::MAX - 1)) as u16
 }
 
 /// Keeps C~ where `100 · C~ > percent · max`, and turns the rest OFF, in

@@ -60,11 +60,4 @@ impl<'a> Arena<'a> {
         b.fill(0);
         bytemuck::try_cast_slice_mut(b).map_err(|_| PipelineError::WorkspaceAlignment)
     }
-
-    /// `n` `false`s.
-    pub(super) fn take_bools(&mut self, n: usize) -> Result<&'a mut [bool], PipelineError> {
-        let b = self.take_bytes(n)?;
-        b.fill(0);
-        bytemuck::checked::try_cast_slice_mut(b).map_err(|_| PipelineError::WorkspaceAlignment)
-    }
 }

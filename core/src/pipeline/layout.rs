@@ -3,23 +3,27 @@
 //! ```text
 //! ┌ kept for the frame's result ─────────────┬ one region, reused by phase ─────────────┐
 //! │ edges C │ disparity │ K masks │ K vectors │ stereo scratch                          │
-//! │         │           │ (bits)  │           │ or: CIELUV map + rows + completion      │
+//! │         │           │ (bits)  │           │ or: row rings + tones + completion      │
 //! │         │           │         │           │ or: segmentation maps + classifier      │
 //! └─────────┴───────────┴─────────┴───────────┴──────────────────────────────────────────┘
 //! ```
 //!
 //! The stages reuse each other's scratch: stereo's is free once its map is
-//! written, the CIELUV map once the completion has used it. Each buffer is
+//! written, the colour phase's (conspicuity on a rolling window of rows,
+//! one [`Tone`] byte per pixel, the completion by runs) once the completion
+//! is done. Each buffer is
 //! rounded up to whole 8-byte words (the private `arena` module).
 
 use super::arena::bytes;
 use super::PipelineParams;
-use crate::complete::DEFAULT_REGION_CAPACITY;
-use crate::conspicuity::{row_scratch_len, EdgeCell, Luv};
+use crate::complete::{
+    pipeline_run_capacity, run_rows_len, Tone, DEFAULT_REGION_CAPACITY, LABEL_ROWS,
+};
+use crate::conspicuity::{stream_scratch_len, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::Rgb8;
 use crate::mlp;
-use crate::segment::{bit_map_len, label_capacity, maps_len, table_len};
+use crate::segment::{bit_map_len, maps_len, table_len};
 use crate::shape::{ShapeElem, SHAPE_LEN};
 use crate::stereo::c2f;
 use crate::stereo::filters::Z;
@@ -62,20 +66,31 @@ pub const fn stereo_bytes(width: usize, height: usize, params: &PipelineParams) 
         + phase
 }
 
-/// Bytes of the conspicuity stage and the completion: the CIELUV map,
-/// its row scratch and one RGB row, then the labelling and the region
-/// tables.
-pub const fn colour_bytes(width: usize, height: usize) -> usize {
-    let n = width * height;
-    let cap = label_capacity(width, height);
+/// Bytes of the streamed conspicuity stage: the row rings
+/// ([`stream_scratch_len`]), one RGB row and one [`Tone`] per pixel.
+pub const fn colour_stream_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
+    bytes(
+        stream_scratch_len(width, &params.edges.smooth),
+        size_of::<Luv>(),
+    ) + bytes(width, size_of::<Rgb8>())
+        + bytes(width * height, size_of::<Tone>())
+}
+
+/// Bytes of the completion's two bit maps (non-edge and trusted cells).
+pub const fn colour_bit_map_bytes(width: usize, height: usize) -> usize {
+    2 * bytes(bit_map_len(width, height), 4)
+}
+
+/// Bytes of the colour phase: [`colour_stream_bytes`], then the
+/// completion's [`colour_bit_map_bytes`], run table, two rows of runs, five
+/// label rows and the region tables.
+pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
     let regions = DEFAULT_REGION_CAPACITY;
-    bytes(n, size_of::<Luv>())
-        + bytes(row_scratch_len(width), size_of::<Luv>())
-        + bytes(width, size_of::<Rgb8>())
-        + bytes(n, 2)
-        + bytes(cap, 2)
-        + bytes(cap, 4)
-        + bytes(n, 1)
+    colour_stream_bytes(width, height, params)
+        + colour_bit_map_bytes(width, height)
+        + bytes(pipeline_run_capacity(width, height), 2)
+        + bytes(run_rows_len(width), 4)
+        + bytes(LABEL_ROWS * width, 2)
         + 2 * bytes(regions, 4)
         + 2 * bytes(regions, 1)
 }
@@ -103,7 +118,7 @@ pub const fn shared_bytes(width: usize, height: usize, params: &PipelineParams) 
     max(
         stereo_bytes(width, height, params),
         max(
-            colour_bytes(width, height),
+            colour_bytes(width, height, params),
             object_bytes(width, height, params),
         ),
     )

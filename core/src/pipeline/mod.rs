@@ -346,8 +346,11 @@ pub trait Observer {
     fn segment_step(&mut self, _step: crate::segment::Step) {}
     /// The stereo engine's map.
     fn raw_disparity(&mut self, _map: &ImageView<'_, DisparityCell>) {}
-    /// The smoothed CIELUV map and the edge map C.
-    fn conspicuity(&mut self, _smoothed: &ImageView<'_, Luv>, _edges: &ImageView<'_, EdgeCell>) {}
+    /// Row `y` of the smoothed CIELUV map, rows in order (the stage runs
+    /// on a rolling window of rows: no full map exists).
+    fn smoothed_row(&mut self, _y: usize, _row: &[Luv]) {}
+    /// The edge map C.
+    fn conspicuity(&mut self, _edges: &ImageView<'_, EdgeCell>) {}
     /// The completed disparity, as segmentation takes it.
     fn disparity(&mut self, _map: &ImageView<'_, DisparityCell>) {}
     /// One figure-ground search (rank `det.index`), with every map of its

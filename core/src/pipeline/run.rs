@@ -4,14 +4,16 @@ use super::arena::Arena;
 use super::{
     layout, Frame, Object, Observer, Pipeline, PipelineError, RgbRows, Stage, MAX_OBJECTS, TOP_K,
 };
-use crate::complete::{complete, RegionTables, DEFAULT_REGION_CAPACITY};
+use crate::complete::{
+    complete_runs, pipeline_run_capacity, run_rows_len, RegionTables, RunBuffers, Tone,
+    DEFAULT_REGION_CAPACITY, LABEL_ROWS,
+};
 use crate::conspicuity::{self, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, Ranked, Scratch};
 use crate::segment::{
-    bit_map_len, label_capacity, maps_len, segment_into, table_len, BitView, Labeller, Masks,
-    SegmentBuffers, SegmentObserver,
+    bit_map_len, maps_len, segment_into, table_len, BitView, Masks, SegmentBuffers, SegmentObserver,
 };
 use crate::shape::{shape_vector_bits, RadialProfile, ShapeError, ShapeVector, SHAPE_LEN};
 use crate::stereo::c2f::{self, C2fBuffers};
@@ -123,29 +125,46 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel>(
     }
     obs.raw_disparity(&ImageView::packed(&*disparity, w, h)?);
 
-    // Conspicuity, then the completion, which needs the smoothed colours.
+    // Conspicuity on a rolling window of rows, keeping one byte of
+    // smoothed colour per pixel for the completion's edge cells.
     obs.enter(Stage::Conspicuity);
     {
         let mut s = Arena::new(&mut *shared);
-        let luv: &mut [Luv] = s.take(n)?;
-        let rows: &mut [Luv] = s.take(conspicuity::row_scratch_len(w))?;
+        let smooth = &params.edges.smooth;
+        let rows: &mut [Luv] = s.take(conspicuity::stream_scratch_len(w, smooth))?;
         let rgb: &mut [Rgb8] = s.take(w)?;
-        for (y, out) in luv.chunks_exact_mut(w.max(1)).enumerate() {
-            left.rgb_row(y, rgb);
-            for (o, &px) in out.iter_mut().zip(rgb.iter()) {
-                *o = p.luv.convert(px);
-            }
-        }
-        let mut luv_v = ImageViewMut::packed(luv, w, h)?;
-        conspicuity::smooth(&params.edges.smooth, &mut luv_v, rows)?;
+        let tone: &mut [Tone] = s.take(n)?;
         let mut c_v = ImageViewMut::packed(&mut *edges, w, h)?;
-        let max = conspicuity::conspicuity(&luv_v.as_view(), &mut c_v, rows)?;
-        conspicuity::threshold(&mut c_v, max, params.edges.threshold_percent)?;
-        obs.conspicuity(&luv_v.as_view(), &c_v.as_view());
+        conspicuity::stream(
+            smooth,
+            params.edges.threshold_percent,
+            rows,
+            &mut c_v,
+            |y, out| {
+                left.rgb_row(y, rgb);
+                for (o, &px) in out.iter_mut().zip(rgb.iter()) {
+                    *o = p.luv.convert(px);
+                }
+            },
+            |y, row| {
+                obs.smoothed_row(y, row);
+                if let Some(t) = tone.get_mut(y * w..(y + 1) * w) {
+                    for (t, &c) in t.iter_mut().zip(row) {
+                        *t = Tone::of(c);
+                    }
+                }
+            },
+        )?;
+        obs.conspicuity(&c_v.as_view());
 
         obs.enter(Stage::Complete);
-        let cap = label_capacity(w, h);
-        let mut lab = Labeller::new(w, h, s.take(n)?, s.take(cap)?, s.take(cap)?)?;
+        let mut bufs = RunBuffers {
+            open: s.take(bit_map_len(w, h))?,
+            trusted: s.take(bit_map_len(w, h))?,
+            runs: s.take(pipeline_run_capacity(w, h))?,
+            rows: s.take(run_rows_len(w))?,
+            labels: s.take(LABEL_ROWS * w)?,
+        };
         let r = DEFAULT_REGION_CAPACITY;
         let mut tables = RegionTables {
             total: s.take(r)?,
@@ -153,14 +172,12 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel>(
             lo: s.take(r)?,
             hi: s.take(r)?,
         };
-        let edge_map = s.take_bools(n)?;
-        complete(
+        complete_runs(
             &params.complete,
             &c_v.as_view(),
-            &luv_v.as_view(),
+            &ImageView::packed(&*tone, w, h)?,
             &mut ImageViewMut::packed(&mut *disparity, w, h)?,
-            &mut ImageViewMut::packed(edge_map, w, h)?,
-            &mut lab,
+            &mut bufs,
             &mut tables,
         )?;
     }
