@@ -434,6 +434,114 @@ impl PhaseKernel for PhaseAsm {
         let (l01, l23, l4) = sgm_lanes(c, p, pad.min(0xffff), p1 | p1 << 16, p2 | p2 << 16);
         sgm_settle(l01, l23, l4, acc)
     }
+
+    /// The SGM path step for 9 candidates in 16-bit lanes, as
+    /// [`sgm_lanes`] and [`sgm_settle`] with the lane operations one by
+    /// one ([`min16`], [`uqadd16`], [`uadd16`], [`usub16`]), the words
+    /// packed and unpacked by the compiler.
+    #[inline(always)]
+    fn sgm_step9(
+        c: &[u16; 9],
+        p: &[u16; 9],
+        pad: u32,
+        (p1, p2): (u32, u32),
+        acc: &mut [u32; 9],
+    ) -> [u16; 9] {
+        let pad16 = pad.min(0xffff);
+        let (p1x2, p2x2) = (p1 | p1 << 16, p2 | p2 << 16);
+        // Candidates 2i and 2i + 1 per word; the 10th is the pad.
+        let word = |v: &[u16; 9], i: usize, none: u32| {
+            let at = |j: usize| v.get(j).map_or(none, |&x| u32::from(x));
+            at(2 * i) | at(2 * i + 1) << 16
+        };
+        let h: [u32; 5] = core::array::from_fn(|i| word(p, i, pad16));
+        let l: [u32; 5] = core::array::from_fn(|i| {
+            let hi = h.get(i).copied().unwrap_or(0);
+            let prev = i
+                .checked_sub(1)
+                .and_then(|j| h.get(j))
+                .map_or(pad16 << 16, |&v| v);
+            let next = h.get(i + 1).map_or(pad16, |&v| v);
+            // (h(2i − 1), h(2i)) and (h(2i + 1), h(2i + 2)).
+            let below = prev >> 16 | hi << 16;
+            let above = hi >> 16 | next << 16;
+            let t = uqadd16(min16(below, above), p1x2);
+            uadd16(min16(min16(t, hi), p2x2), word(c, i, 0))
+        });
+        for (i, &v) in l.iter().enumerate() {
+            if let Some(a) = acc.get_mut(2 * i) {
+                *a += v & 0xffff;
+            }
+            if let Some(a) = acc.get_mut(2 * i + 1) {
+                *a += v >> 16;
+            }
+        }
+        // The minimum of the nine in both halves (the 10th lane left out).
+        let last = l.get(4).map_or(u32::MAX, |&v| v | 0xffff_0000);
+        let m = l.iter().take(4).fold(last, |m, &v| min16(m, v));
+        let m = min16(m, m.rotate_right(16));
+        let s = l.map(|v| usub16(v, m));
+        core::array::from_fn(|d| {
+            let v = s.get(d / 2).copied().unwrap_or(0);
+            (if d % 2 == 0 { v } else { v >> 16 }) as u16
+        })
+    }
+}
+
+/// The lane-wise minimum of two pairs of `u16` (`USUB16` sets GE where
+/// `a >= b`, `SEL` then takes `b`).
+#[inline(always)]
+fn min16(a: u32, b: u32) -> u32 {
+    let r: u32;
+    // SAFETY: registers only.
+    unsafe {
+        core::arch::asm!(
+            "usub16 {t}, {a}, {b}",
+            "sel {r}, {b}, {a}",
+            a = in(reg) a,
+            b = in(reg) b,
+            t = out(reg) _,
+            r = lateout(reg) r,
+            options(pure, nomem, nostack),
+        );
+    }
+    r
+}
+
+/// Lane-wise `a + b`, saturating at 65535.
+#[inline(always)]
+fn uqadd16(a: u32, b: u32) -> u32 {
+    let r: u32;
+    // SAFETY: registers only.
+    unsafe {
+        core::arch::asm!("uqadd16 {r}, {a}, {b}", a = in(reg) a, b = in(reg) b, r = lateout(reg) r,
+            options(pure, nomem, nostack, preserves_flags));
+    }
+    r
+}
+
+/// Lane-wise `a + b` modulo 2^16.
+#[inline(always)]
+fn uadd16(a: u32, b: u32) -> u32 {
+    let r: u32;
+    // SAFETY: registers only (GE flags only).
+    unsafe {
+        core::arch::asm!("uadd16 {r}, {a}, {b}", a = in(reg) a, b = in(reg) b, r = lateout(reg) r,
+            options(pure, nomem, nostack));
+    }
+    r
+}
+
+/// Lane-wise `a − b` modulo 2^16.
+#[inline(always)]
+fn usub16(a: u32, b: u32) -> u32 {
+    let r: u32;
+    // SAFETY: registers only (GE flags only).
+    unsafe {
+        core::arch::asm!("usub16 {r}, {a}, {b}", a = in(reg) a, b = in(reg) b, r = lateout(reg) r,
+            options(pure, nomem, nostack));
+    }
+    r
 }
 
 /// `L` of one SGM path step for 5 candidates, two per word: `d = 0, 1` in

@@ -445,7 +445,7 @@ pub trait PhaseKernel {
     /// The stereo stage's other hot step: one path step of the
     /// semi-global aggregation for a pixel with 5 candidates whose
     /// predecessor's window starts at the same candidate
-    /// ([`crate::stereo::sgm::sgm_step5`], the portable default; the
+    /// ([`crate::stereo::sgm::sgm_step`], the portable default; the
     /// engine's windows of 5 at its finer levels). `c` are the pixel's
     /// costs, `p` the predecessor's state `L − min L`, `pad` stands for
     /// the candidates just outside the window (`1 << 30`, or 0 for a
@@ -465,7 +465,20 @@ pub trait PhaseKernel {
         pen: (u32, u32),
         acc: &mut [u32; 5],
     ) -> [u16; 5] {
-        crate::stereo::sgm::sgm_step5(c, p, pad, pen, acc)
+        crate::stereo::sgm::sgm_step(c, p, pad, pen, acc)
+    }
+
+    /// [`PhaseKernel::sgm_step5`] for 9 candidates (the coarsest level's
+    /// full search at 32 disparities), with the same contract.
+    #[inline(always)]
+    fn sgm_step9(
+        c: &[u16; 9],
+        p: &[u16; 9],
+        pad: u32,
+        pen: (u32, u32),
+        acc: &mut [u32; 9],
+    ) -> [u16; 9] {
+        crate::stereo::sgm::sgm_step(c, p, pad, pen, acc)
     }
 }
 

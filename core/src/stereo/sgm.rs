@@ -525,8 +525,8 @@ fn arr<const N: usize>(c: &[u16]) -> Option<&[u16; N]> {
 }
 
 /// `settle(path(..), acc)`, by kernel `K`'s [`PhaseKernel::sgm_step5`]
-/// for windows of 5 that start where the predecessor's does (the common
-/// case).
+/// or [`PhaseKernel::sgm_step9`] for windows of 5 or 9 that start where
+/// the predecessor's does (the common case).
 #[inline(always)]
 fn kernel_step<K: PhaseKernel, const N: usize>(
     c: &[u16; N],
@@ -545,21 +545,30 @@ fn kernel_step<K: PhaseKernel, const N: usize>(
             let s = K::sgm_step5(c5, p5, pad, pen, acc5);
             return core::array::from_fn(|i| s.get(i).copied().unwrap_or(0));
         }
+        if let (Ok(c9), Ok(p9), Ok(acc9)) = (
+            <&[u16; 9]>::try_from(c.as_slice()),
+            <&[u16; 9]>::try_from(p.as_slice()),
+            <&mut [u32; 9]>::try_from(acc.as_mut_slice()),
+        ) {
+            let s = K::sgm_step9(c9, p9, pad, pen, acc9);
+            return core::array::from_fn(|i| s.get(i).copied().unwrap_or(0));
+        }
     }
     settle(path(c, p, (lo, plo), pad, pen), acc)
 }
 
-/// The portable [`PhaseKernel::sgm_step5`]: one step of a path for 5
-/// candidates whose predecessor's state `p` has the same window, `L`
-/// added to `acc`, the state `L − min L` returned.
+/// The portable [`PhaseKernel::sgm_step5`] and
+/// [`PhaseKernel::sgm_step9`]: one step of a path for `N` candidates
+/// whose predecessor's state `p` has the same window, `L` added to `acc`,
+/// the state `L − min L` returned.
 #[inline(always)]
-pub fn sgm_step5(
-    c: &[u16; 5],
-    p: &[u16; 5],
+pub fn sgm_step<const N: usize>(
+    c: &[u16; N],
+    p: &[u16; N],
     pad: u32,
     pen: (u32, u32),
-    acc: &mut [u32; 5],
-) -> [u16; 5] {
+    acc: &mut [u32; N],
+) -> [u16; N] {
     settle(recur(c, (p.map(u32::from), pad, pad), pen), acc)
 }
 
@@ -845,34 +854,56 @@ mod tests {
             c: &[u16; 5],
             p: &[u16; 5],
             pad: u32,
-            (p1, p2): (u32, u32),
+            pen: (u32, u32),
             acc: &mut [u32; 5],
         ) -> [u16; 5] {
-            LANE_STEPS.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
-            let pad16 = pad.min(0xffff) as u16;
-            let h = |j: usize| p.get(j).copied().unwrap_or(pad16);
-            let (p1, p2) = (p1 as u16, p2 as u16);
-            let l: [u16; 5] = core::array::from_fn(|d| {
-                let near = h(d.wrapping_sub(1)).min(h(d + 1)).saturating_add(p1);
-                c[d].wrapping_add(near.min(p[d]).min(p2))
-            });
-            let min = l.iter().copied().min().unwrap();
-            for (a, &v) in acc.iter_mut().zip(&l) {
-                *a += u32::from(v);
-            }
-            l.map(|v| v - min)
+            lanes(c, p, pad, pen, acc)
         }
+        fn sgm_step9(
+            c: &[u16; 9],
+            p: &[u16; 9],
+            pad: u32,
+            pen: (u32, u32),
+            acc: &mut [u32; 9],
+        ) -> [u16; 9] {
+            lanes(c, p, pad, pen, acc)
+        }
+    }
+
+    /// [`Lanes`]' step for `N` candidates.
+    fn lanes<const N: usize>(
+        c: &[u16; N],
+        p: &[u16; N],
+        pad: u32,
+        (p1, p2): (u32, u32),
+        acc: &mut [u32; N],
+    ) -> [u16; N] {
+        LANE_STEPS.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
+        let pad16 = pad.min(0xffff) as u16;
+        let h = |j: usize| p.get(j).copied().unwrap_or(pad16);
+        let (p1, p2) = (p1 as u16, p2 as u16);
+        let l: [u16; N] = core::array::from_fn(|d| {
+            let near = h(d.wrapping_sub(1)).min(h(d + 1)).saturating_add(p1);
+            c[d].wrapping_add(near.min(p[d]).min(p2))
+        });
+        let min = l.iter().copied().min().unwrap();
+        for (a, &v) in acc.iter_mut().zip(&l) {
+            *a += u32::from(v);
+        }
+        l.map(|v| v - min)
     }
 
     #[test]
     fn a_lane_kernel_gives_the_naive_recurrence() {
         let mut rng = SplitMix64::new(0x1a9e5);
-        for _ in 0..300 {
-            let v = volume(&mut rng, 5);
-            check_with::<Lanes>(&v, 2);
+        for n in [5, 9] {
+            for _ in 0..300 {
+                let v = volume(&mut rng, n);
+                check_with::<Lanes>(&v, 2);
+            }
         }
         // The kernel took the steps whose windows start together.
-        assert!(LANE_STEPS.load(core::sync::atomic::Ordering::Relaxed) > 1000);
+        assert!(LANE_STEPS.load(core::sync::atomic::Ordering::Relaxed) > 2000);
     }
 
     /// [`check`] with the windows-of-5 step of kernel `K`.
