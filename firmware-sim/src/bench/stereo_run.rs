@@ -489,7 +489,7 @@ pub fn write_kernel_check(out: &mut impl Write, (sum, refined): (u32, usize)) ->
 }
 
 /// Steps of the SGM kernel's self-test ([`sgm_kernel_check`]).
-const SGM_STEPS: usize = 20_000;
+pub const SGM_STEPS: usize = 20_000;
 
 /// The SGM kernel's self-test: [`SGM_STEPS`] random steps through
 /// `K::sgm_step9` and `K::sgm_step5` within its contract and at its edges (`P2` up to 65535,
