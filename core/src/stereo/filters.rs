@@ -630,20 +630,22 @@ impl XUnit<'_, '_> {
         let mut e = self.e.map(|(h, o)| (h, o.chunks_mut(CHUNK)));
         let w = col.len();
         let mut x0 = 0;
+        // Scratch of every chunk, zeroed once: each chunk writes what it
+        // reads (`pad` its `n + 2R` columns, the sweeps their `n` sums).
+        let mut padded = [[0i32; 3]; CHUNK + 2 * MAX_RADIUS];
+        let mut bs = [0i32; CHUNK];
+        let (mut s, mut t) = ([[0i64; 2]; CHUNK], [[0i64; 2]; CHUNK]);
         while x0 < w {
             let n = CHUNK.min(w - x0);
-            let mut buf = [[0i32; 3]; CHUNK + 2 * MAX_RADIUS];
-            pad(col, x0, n, R, &mut buf);
+            pad(col, x0, n, R, &mut padded);
             x0 += n;
-            let buf = buf.get(..n + 2 * R).unwrap_or(&[]);
-            let mut bs = [0i32; CHUNK];
+            let buf = padded.get(..n + 2 * R).unwrap_or(&[]);
             let wins = buf.windows(T).filter_map(|w| w.first_chunk::<T>());
             for (win, bo) in wins.zip(&mut bs) {
                 let mut bl = mul(ec, win.get(R).map_or(0, |c| c[0]));
                 mirror::<R, T>(win, |i, m, p| bl += mul(et(i), m[0] + p[0]));
                 *bo = (bl >> KERNEL_FRAC) as i32;
             }
-            let (mut s, mut t) = ([[0i64; 2]; CHUNK], [[0i64; 2]; CHUNK]);
             if let Some((h, oe)) = e.as_mut().and_then(|(h, o)| Some((*h, o.next()?))) {
                 sym2::<R, T>(buf, 0, &h.kx, &mut s);
                 for ((o, &[re, im]), &bv) in oe.iter_mut().zip(&s).zip(&bs) {

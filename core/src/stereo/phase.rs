@@ -441,6 +441,45 @@ pub trait PhaseKernel {
     ) -> usize {
         phase_row3(max_disp, lambda_q8, zl, zr, cells)
     }
+
+    /// The stereo stage's other hot step: one path step of the
+    /// semi-global aggregation for a pixel with 5 candidates whose
+    /// predecessor's window starts at the same candidate
+    /// ([`crate::stereo::sgm::sgm_step`], the portable default; the
+    /// engine's windows of 5 at its finer levels). `c` are the pixel's
+    /// costs, `p` the predecessor's state `L − min L`, `pad` stands for
+    /// the candidates just outside the window (`1 << 30`, or 0 for a
+    /// missing predecessor), `pen` is `(P1, P2)`. Adds the pixel's `L` to
+    /// `acc` and returns its state `L − min L`.
+    ///
+    /// Contract: `P1 <= P2 <= 65535`, every `c[d] + P2 <= 65535` (the
+    /// aggregation checks it), every `p[d] <= 65535` and `pad` is 0 or
+    /// at least 65535; any kernel that honours it must give the same
+    /// integers as the default (so a 16-bit lane with saturating sums
+    /// serves).
+    #[inline(always)]
+    fn sgm_step5(
+        c: &[u16; 5],
+        p: &[u16; 5],
+        pad: u32,
+        pen: (u32, u32),
+        acc: &mut [u32; 5],
+    ) -> [u16; 5] {
+        crate::stereo::sgm::sgm_step(c, p, pad, pen, acc)
+    }
+
+    /// [`PhaseKernel::sgm_step5`] for 9 candidates (the coarsest level's
+    /// full search at 32 disparities), with the same contract.
+    #[inline(always)]
+    fn sgm_step9(
+        c: &[u16; 9],
+        p: &[u16; 9],
+        pad: u32,
+        pen: (u32, u32),
+        acc: &mut [u32; 9],
+    ) -> [u16; 9] {
+        crate::stereo::sgm::sgm_step(c, p, pad, pen, acc)
+    }
 }
 
 /// The portable phase step.

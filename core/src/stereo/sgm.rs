@@ -44,6 +44,7 @@
 //! case) is read without any gather. Other `n` run the plain per-path
 //! recurrence; both give the same integers.
 
+use crate::stereo::phase::{PhaseKernel, SafePhase};
 use core::fmt;
 
 /// `u16` elements of scratch for rows of `width` pixels and `n` candidates:
@@ -243,6 +244,21 @@ impl<'a> Sgm<'a> {
     /// [`SgmError::Buffer`] for a buffer of the wrong length,
     /// [`SgmError::CostTooLarge`]; on error nothing changes (state or `out`).
     pub fn push_row(&mut self, costs: &[u16], lo: &[u16], out: &mut [u32]) -> Result<(), SgmError> {
+        self.push_row_with::<SafePhase>(costs, lo, out)
+    }
+
+    /// [`Sgm::push_row`] with the path step of kernel `K` for windows of 5
+    /// ([`PhaseKernel::sgm_step5`]; the same integers with any kernel that
+    /// honours its contract).
+    ///
+    /// # Errors
+    /// As [`Sgm::push_row`].
+    pub fn push_row_with<K: PhaseKernel>(
+        &mut self,
+        costs: &[u16],
+        lo: &[u16],
+        out: &mut [u32],
+    ) -> Result<(), SgmError> {
         let (width, n) = (self.width, self.n);
         let wn = width * n;
         for (what, got, needed) in [
@@ -284,8 +300,8 @@ impl<'a> Sgm<'a> {
         macro_rules! fast {
             ($($k:literal)*; $($j:literal)*) => {
                 match (n, diagonals) {
-                    $(($k, true) => rows.fast::<$k, true>(first, state, out),)*
-                    $(($j, false) => rows.fast::<$j, false>(first, state, out),)*
+                    $(($k, true) => rows.fast::<K, $k, true>(first, state, out),)*
+                    $(($j, false) => rows.fast::<K, $j, false>(first, state, out),)*
                     _ => rows.generic(first, state, h, tmp, out, diagonals),
                 }
             };
@@ -319,7 +335,7 @@ impl Rows<'_> {
     /// `DIAG`: the two diagonal paths run too (else their state is left
     /// alone).
     #[inline(always)]
-    fn fast<const N: usize, const DIAG: bool>(
+    fn fast<K: PhaseKernel, const N: usize, const DIAG: bool>(
         self,
         first: bool,
         state: [&mut [u16]; 3],
@@ -365,13 +381,13 @@ impl Rows<'_> {
                 return;
             };
             let mut acc = [0u32; N];
-            hs = settle(path(c, &hs, (l, hlo), hpad, pen), &mut acc);
+            hs = kernel_step::<K, N>(c, &hs, (l, hlo), hpad, pen, &mut acc);
             (hlo, hpad) = (l, INF);
-            *v = settle(path(c, v, (l, vlo), pad, pen), &mut acc);
+            *v = kernel_step::<K, N>(c, v, (l, vlo), pad, pen, &mut acc);
             if DIAG {
                 let from = next.as_deref().and_then(arr).zip(right_lo.next());
                 let (p, plo, pd) = from.map_or((&zero, l, 0), |(p, &plo)| (p, plo, pad));
-                *s = settle(path(c, p, (l, plo), pd, pen), &mut acc);
+                *s = kernel_step::<K, N>(c, p, (l, plo), pd, pen, &mut acc);
             }
             *o = acc;
             slot = next;
@@ -391,7 +407,7 @@ impl Rows<'_> {
                 let (Some(c), Ok(o)) = (arr(c), <&mut [u32; N]>::try_from(o)) else {
                     return;
                 };
-                hs = settle(path(c, &hs, (l, hlo), hpad, pen), o);
+                hs = kernel_step::<K, N>(c, &hs, (l, hlo), hpad, pen, o);
                 (hlo, hpad) = (l, INF);
             }
             return;
@@ -418,11 +434,11 @@ impl Rows<'_> {
                 return;
             };
             let mut acc = *o;
-            hs = settle(path(c, &hs, (l, hlo), hpad, pen), &mut acc);
+            hs = kernel_step::<K, N>(c, &hs, (l, hlo), hpad, pen, &mut acc);
             (hlo, hpad) = (l, INF);
             let from = next.as_deref().and_then(arr).zip(left_lo.next());
             let (p, plo, pd) = from.map_or((&zero, l, 0), |(p, &plo)| (p, plo, pad));
-            *s = settle(path(c, p, (l, plo), pd, pen), &mut acc);
+            *s = kernel_step::<K, N>(c, p, (l, plo), pd, pen, &mut acc);
             *o = acc;
             slot = next;
         }
@@ -506,6 +522,54 @@ impl Rows<'_> {
 #[inline(always)]
 fn arr<const N: usize>(c: &[u16]) -> Option<&[u16; N]> {
     <&[u16; N]>::try_from(c).ok()
+}
+
+/// `settle(path(..), acc)`, by kernel `K`'s [`PhaseKernel::sgm_step5`]
+/// or [`PhaseKernel::sgm_step9`] for windows of 5 or 9 that start where
+/// the predecessor's does (the common case).
+#[inline(always)]
+fn kernel_step<K: PhaseKernel, const N: usize>(
+    c: &[u16; N],
+    p: &[u16; N],
+    (lo, plo): (u16, u16),
+    pad: u32,
+    pen: (u32, u32),
+    acc: &mut [u32; N],
+) -> [u16; N] {
+    if lo == plo {
+        if let (Ok(c5), Ok(p5), Ok(acc5)) = (
+            <&[u16; 5]>::try_from(c.as_slice()),
+            <&[u16; 5]>::try_from(p.as_slice()),
+            <&mut [u32; 5]>::try_from(acc.as_mut_slice()),
+        ) {
+            let s = K::sgm_step5(c5, p5, pad, pen, acc5);
+            return core::array::from_fn(|i| s.get(i).copied().unwrap_or(0));
+        }
+        if let (Ok(c9), Ok(p9), Ok(acc9)) = (
+            <&[u16; 9]>::try_from(c.as_slice()),
+            <&[u16; 9]>::try_from(p.as_slice()),
+            <&mut [u32; 9]>::try_from(acc.as_mut_slice()),
+        ) {
+            let s = K::sgm_step9(c9, p9, pad, pen, acc9);
+            return core::array::from_fn(|i| s.get(i).copied().unwrap_or(0));
+        }
+    }
+    settle(path(c, p, (lo, plo), pad, pen), acc)
+}
+
+/// The portable [`PhaseKernel::sgm_step5`] and
+/// [`PhaseKernel::sgm_step9`]: one step of a path for `N` candidates
+/// whose predecessor's state `p` has the same window, `L` added to `acc`,
+/// the state `L − min L` returned.
+#[inline(always)]
+pub fn sgm_step<const N: usize>(
+    c: &[u16; N],
+    p: &[u16; N],
+    pad: u32,
+    pen: (u32, u32),
+    acc: &mut [u32; N],
+) -> [u16; N] {
+    settle(recur(c, (p.map(u32::from), pad, pad), pen), acc)
 }
 
 /// One step of a path for `N` candidates: the pixel's costs `c` (window
@@ -774,6 +838,76 @@ mod tests {
     /// Runs `frames` frames of `v` through one `Sgm` (reset between) and
     /// checks each against [`naive`].
     fn check(v: &Volume, frames: usize) {
+        check_with::<SafePhase>(v, frames);
+    }
+
+    /// Steps the [`Lanes`] kernel took.
+    static LANE_STEPS: core::sync::atomic::AtomicUsize = core::sync::atomic::AtomicUsize::new(0);
+
+    /// The firmware's assembly step (`firmware-sim/src/dsp.rs`) written
+    /// plainly: 16-bit lanes, `min(h(d ± 1)) + P1` saturating at 65535,
+    /// the pads as `min(pad, 65535)`.
+    struct Lanes;
+
+    impl PhaseKernel for Lanes {
+        fn sgm_step5(
+            c: &[u16; 5],
+            p: &[u16; 5],
+            pad: u32,
+            pen: (u32, u32),
+            acc: &mut [u32; 5],
+        ) -> [u16; 5] {
+            lanes(c, p, pad, pen, acc)
+        }
+        fn sgm_step9(
+            c: &[u16; 9],
+            p: &[u16; 9],
+            pad: u32,
+            pen: (u32, u32),
+            acc: &mut [u32; 9],
+        ) -> [u16; 9] {
+            lanes(c, p, pad, pen, acc)
+        }
+    }
+
+    /// [`Lanes`]' step for `N` candidates.
+    fn lanes<const N: usize>(
+        c: &[u16; N],
+        p: &[u16; N],
+        pad: u32,
+        (p1, p2): (u32, u32),
+        acc: &mut [u32; N],
+    ) -> [u16; N] {
+        LANE_STEPS.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
+        let pad16 = pad.min(0xffff) as u16;
+        let h = |j: usize| p.get(j).copied().unwrap_or(pad16);
+        let (p1, p2) = (p1 as u16, p2 as u16);
+        let l: [u16; N] = core::array::from_fn(|d| {
+            let near = h(d.wrapping_sub(1)).min(h(d + 1)).saturating_add(p1);
+            c[d].wrapping_add(near.min(p[d]).min(p2))
+        });
+        let min = l.iter().copied().min().unwrap();
+        for (a, &v) in acc.iter_mut().zip(&l) {
+            *a += u32::from(v);
+        }
+        l.map(|v| v - min)
+    }
+
+    #[test]
+    fn a_lane_kernel_gives_the_naive_recurrence() {
+        let mut rng = SplitMix64::new(0x1a9e5);
+        for n in [5, 9] {
+            for _ in 0..300 {
+                let v = volume(&mut rng, n);
+                check_with::<Lanes>(&v, 2);
+            }
+        }
+        // The kernel took the steps whose windows start together.
+        assert!(LANE_STEPS.load(core::sync::atomic::Ordering::Relaxed) > 2000);
+    }
+
+    /// [`check`] with the windows-of-5 step of kernel `K`.
+    fn check_with<K: PhaseKernel>(v: &Volume, frames: usize) {
         let want = naive(v);
         let (w, n) = (v.w, v.n);
         let mut scratch = [0xffffu16; scratch_len(W, NMAX)];
@@ -787,7 +921,7 @@ mod tests {
                     dst.copy_from_slice(&src[..n]);
                 }
                 let mut out = [0u32; W * NMAX];
-                sgm.push_row(&costs[..w * n], &v.lo[y][..w], &mut out[..w * n])
+                sgm.push_row_with::<K>(&costs[..w * n], &v.lo[y][..w], &mut out[..w * n])
                     .unwrap();
                 for (x, o) in out[..w * n].chunks_exact(n).enumerate() {
                     for (i, &s) in o.iter().enumerate() {

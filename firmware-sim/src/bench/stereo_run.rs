@@ -487,3 +487,52 @@ pub fn write_kernel_check(out: &mut impl Write, (sum, refined): (u32, usize)) ->
         "checksum phase-kernel {KERNEL_ROWS}x{KERNEL_W} 0x{sum:08x} refined={refined}"
     )
 }
+
+/// Steps of the SGM kernel's self-test ([`sgm_kernel_check`]).
+pub const SGM_STEPS: usize = 20_000;
+
+/// The SGM kernel's self-test: [`SGM_STEPS`] random steps through
+/// `K::sgm_step9` and `K::sgm_step5` within its contract and at its edges (`P2` up to 65535,
+/// costs up to `65535 − P2`, states up to 65535, both pads, `P1` from 0
+/// to `P2`), the states and sums folded into a checksum. The firmware runs
+/// it with its assembly kernel and the desktop build with the portable
+/// step; xtask requires the two `checksum sgm-kernel` lines to be equal.
+pub fn sgm_kernel_check<K: PhaseKernel>() -> u32 {
+    let mut rng = crate::pg::rng::SplitMix64::new(0x5a5a_0005_d00d_f00d);
+    let mut hash = Fnv1a::new();
+    let pick = |rng: &mut crate::pg::rng::SplitMix64, top: i32| match rng.below(4) {
+        0 => 0,
+        1 => top,
+        _ => rng.range(0, top),
+    };
+    for _ in 0..SGM_STEPS {
+        let p2 = pick(&mut rng, 0xffff);
+        let p1 = pick(&mut rng, p2);
+        let c: [u16; 9] = core::array::from_fn(|_| pick(&mut rng, 0xffff - p2) as u16);
+        let p: [u16; 9] = core::array::from_fn(|_| pick(&mut rng, 0xffff) as u16);
+        let pad = if rng.below(2) == 0 { 0 } else { 1 << 30 };
+        let mut acc: [u32; 9] = core::array::from_fn(|_| rng.below(1 << 31) as u32);
+        let pen = (p1 as u32, p2 as u32);
+        let s9 = K::sgm_step9(&c, &p, pad, pen, &mut acc);
+        let (c5, p5) = (first5(&c), first5(&p));
+        let mut acc5 = first5(&acc);
+        let s5 = K::sgm_step5(&c5, &p5, pad, pen, &mut acc5);
+        for v in s9.iter().chain(&s5) {
+            hash.write(&v.to_le_bytes());
+        }
+        for v in acc.iter().chain(&acc5) {
+            hash.write(&v.to_le_bytes());
+        }
+    }
+    hash.finish()
+}
+
+/// The first five of `v`.
+fn first5<T: Copy + Default>(v: &[T; 9]) -> [T; 5] {
+    core::array::from_fn(|i| v.get(i).copied().unwrap_or_default())
+}
+
+/// `checksum sgm-kernel STEPS 0x........` (compared host vs QEMU).
+pub fn write_sgm_kernel_check(out: &mut impl Write, sum: u32) -> fmt::Result {
+    writeln!(out, "checksum sgm-kernel {SGM_STEPS} 0x{sum:08x}")
+}

@@ -100,8 +100,26 @@ pub(super) fn right_from_left(
     best: &mut [u32],
     right: &mut [i32],
 ) {
+    // The engine's windows of 5 and its coarsest level's 9 as constants.
+    match n {
+        5 => right_from_left_n::<5>(n, scores, lo, sums, best, right),
+        9 => right_from_left_n::<9>(n, scores, lo, sums, best, right),
+        _ => right_from_left_n::<0>(n, scores, lo, sums, best, right),
+    }
+}
+
+/// [`right_from_left`] with `N = n` known (`N > 0`), or any `n` (`N = 0`).
+#[inline(always)]
+fn right_from_left_n<const N: usize>(
+    n: usize,
+    scores: &[i64],
+    lo: &[u16],
+    sums: &[u32],
+    best: &mut [u32],
+    right: &mut [i32],
+) {
     // At least 1; `max` shows the compiler (no panic path in `chunks`).
-    let n = n.max(1);
+    let n = if N > 0 { N } else { n.max(1) };
     right.fill(-1);
     best.fill(u32::MAX);
     for (x, (raw, (&lo, s))) in scores
@@ -275,7 +293,7 @@ impl Verdict {
 
 #[cfg(test)]
 mod tests {
-    use super::decide;
+    use super::{decide, right_from_left, right_from_left_n};
     use crate::rng::SplitMix64;
 
     /// The decision written plainly: the first smallest sum, the smallest
@@ -324,5 +342,38 @@ mod tests {
         }
         assert!(decide(&[], 0, 0).is_none());
         assert!(decide(&[1, 2], 0, 3).is_none(), "valid beyond the sums");
+    }
+
+    /// The specialised derived right maps equal the general one on random
+    /// rows (windows anywhere, totals of both signs, ties).
+    #[test]
+    fn derived_right_maps_equal_the_general_rule() {
+        const W: usize = 40;
+        let mut rng = SplitMix64::new(0xd15c);
+        for case in 0..2_000 {
+            let n = if case % 2 == 0 { 5 } else { 9 };
+            let mut scores = [0i64; W * 10];
+            for t in scores.chunks_exact_mut(n + 1) {
+                t[n] = rng.below(3) as i64 - 1;
+            }
+            let lo: [u16; W] = core::array::from_fn(|_| rng.below(40) as u16);
+            let mut sums = [0u32; W * 9];
+            for s in &mut sums {
+                *s = rng.below(if case % 3 == 0 { 4 } else { 1 << 19 }) as u32;
+            }
+            let run = |general: bool| {
+                let (mut best, mut right) = ([0u32; W], [0i32; W]);
+                let (sc, su) = (&scores[..W * (n + 1)], &sums[..W * n]);
+                if general {
+                    right_from_left_n::<0>(n, sc, &lo, su, &mut best, &mut right);
+                } else {
+                    right_from_left(n, sc, &lo, su, &mut best, &mut right);
+                }
+                right
+            };
+            let want = run(true);
+            assert_eq!(run(false), want, "case {case}");
+            assert!(case > 0 || want.iter().any(|&r| r >= 0));
+        }
     }
 }

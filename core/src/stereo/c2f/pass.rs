@@ -8,6 +8,7 @@ use super::votes::{costs_of, Voter};
 use super::{C2f, LeftRight, PATHS};
 use crate::image::RgbRows;
 use crate::stereo::filters::{grey_row, Bank, MAX_TAPS};
+use crate::stereo::phase::PhaseKernel;
 use crate::stereo::sgm::{self, Sgm};
 use crate::stereo::{DemTable, Probe, Step, StereoError, StereoReport};
 
@@ -69,7 +70,10 @@ impl<'e, K> Pass<'e, K> {
         parent: Option<&[u8]>,
         mut out: Output<'_, F>,
         probe: &mut impl Probe,
-    ) -> Result<usize, StereoError> {
+    ) -> Result<usize, StereoError>
+    where
+        K: PhaseKernel,
+    {
         // `n` is at least 1 (every level has a candidate); `max` shows the
         // compiler, so that the chunk loops below have no panic path.
         let (w, h, n) = (self.w, self.h, self.n.max(1));
@@ -230,14 +234,19 @@ impl<'e, K> Pass<'e, K> {
                     match (valid, n) {
                         (5, 5) => costs_of::<5>(raw, total, table, lo, valid, dst),
                         (3, 3) => costs_of::<3>(raw, total, table, lo, valid, dst),
+                        (9, 9) => costs_of::<9>(raw, total, table, lo, valid, dst),
                         _ => costs_of::<0>(raw, total, table, lo, valid, dst),
                     }
                 }
             }
             probe.enter(Step::Sgm);
-            sgm_l.push_row(costs_l, lo_l, sum_l).map_err(sgm_err)?;
+            sgm_l
+                .push_row_with::<K>(costs_l, lo_l, sum_l)
+                .map_err(sgm_err)?;
             if lr.reads_right() {
-                sgm_r.push_row(costs_r, lo_r, sum_r).map_err(sgm_err)?;
+                sgm_r
+                    .push_row_with::<K>(costs_r, lo_r, sum_r)
+                    .map_err(sgm_err)?;
             }
             probe.enter(Step::Readout);
             // Right-referenced decisions first: the left-right check reads

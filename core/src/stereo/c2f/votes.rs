@@ -410,6 +410,7 @@ mod tests {
             match (valid, n) {
                 (5, 5) => costs_of::<5>(&mut r, total, &table, lo, valid, &mut out[..n]),
                 (3, 3) => costs_of::<3>(&mut r, total, &table, lo, valid, &mut out[..n]),
+                (9, 9) => costs_of::<9>(&mut r, total, &table, lo, valid, &mut out[..n]),
                 _ => costs_of::<0>(&mut r, total, &table, lo, valid, &mut out[..n]),
             }
             assert_eq!(out[..n], want[..n], "case {case}: total {total} lo {lo}");

@@ -159,6 +159,8 @@ fn run_stereo(
     }
     stereo_run::write_kernel_check(out, stereo_run::kernel_check::<crate::dsp::PhaseAsm>())
         .map_err(|_| "semihosting write failed")?;
+    stereo_run::write_sgm_kernel_check(out, stereo_run::sgm_kernel_check::<crate::dsp::PhaseAsm>())
+        .map_err(|_| "semihosting write failed")?;
     Ok(())
 }
 
