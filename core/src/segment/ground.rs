@@ -87,7 +87,10 @@ fn row_disparity(row: &[DisparityCell], hist: &mut [u16; PLANES]) -> Option<u32>
     let need = u32::try_from(row.len().div_ceil(4))
         .unwrap_or(u32::MAX)
         .max(1);
-    (n >= need).then(|| (2 * sum + n) / (2 * n))
+    if n < need {
+        return None;
+    }
+    (2 * sum + n).checked_div(2 * n)
 }
 
 /// Least squares of `d = a·y + b` over the rows within `band` bits of

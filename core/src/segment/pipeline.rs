@@ -429,10 +429,16 @@ pub fn segment_into(
             _ if !object => {}
             Masks::Bools(m) => {
                 if let (Some((_, y0, _, y1)), Some(mask)) = (bbox, m.get_mut(span)) {
-                    let rows = mask
-                        .chunks_exact_mut(w.max(1))
-                        .zip(bufs.mask.chunks_exact(g.stride.max(1)));
-                    for (out, words) in rows.take(y1 + 1).skip(y0) {
+                    // Rows by index: a zip of two `chunks_exact` is not
+                    // always inlined, and its size hint links a division
+                    // panic.
+                    for y in y0..=y1 {
+                        let (Some(out), Some(words)) = (
+                            mask.get_mut(y * w..(y + 1) * w),
+                            bufs.mask.get(y * g.stride..(y + 1) * g.stride),
+                        ) else {
+                            break;
+                        };
                         for (o, b) in out.chunks_mut(32).zip(words) {
                             for (i, o) in o.iter_mut().enumerate() {
                                 *o = b >> i & 1 != 0;
