@@ -102,10 +102,11 @@ pub struct PipelineParams {
     pub model: ModelCapacity,
 }
 
-/// The stereo point the pipeline runs by default, [`C2fParams::FAST`]:
-/// the half-size search refined to the frame's resolution by phase
-/// (docs/PIPELINE.md, "The stereo point").
-pub const STEREO_DEFAULT: C2fParams = C2fParams::FAST;
+/// The stereo point the pipeline runs by default,
+/// [`C2fParams::FAST_LOW_PENALTY`]: the half-size search refined to the
+/// frame's resolution by phase, with a low SGM penalty that keeps small
+/// objects' disparity steps (docs/PIPELINE.md, "The stereo point").
+pub const STEREO_DEFAULT: C2fParams = C2fParams::FAST_LOW_PENALTY;
 
 impl PipelineParams {
     /// The paper's settings: [`STEREO_DEFAULT`] with 32 disparities, the

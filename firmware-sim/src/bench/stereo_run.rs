@@ -36,11 +36,15 @@ pub const HEIGHT: usize = 120;
 pub const PARAMS: C2fParams = C2fParams::FULL;
 /// The other named operating points of the same engine
 /// ([`C2fParams::NAMED`]), run after [`PARAMS`] to measure what each
-/// costs (docs/STEREO.md, "Operating points"): the same tables, levels and
-/// penalties. Each needs no more scratch than [`PARAMS`] and the phase
+/// costs (docs/STEREO.md, "Operating points"): the same tables and levels.
+/// Each needs no more scratch than [`PARAMS`] and the phase
 /// buffers of [`len`], which the `const` assertion below checks at
 /// compile time.
-pub const POINTS: [(&str, C2fParams); 2] = [("fast", C2fParams::FAST), ("half", C2fParams::HALF)];
+pub const POINTS: [(&str, C2fParams); 3] = [
+    ("fast", C2fParams::FAST),
+    ("half", C2fParams::HALF),
+    ("fast-low-penalty", C2fParams::FAST_LOW_PENALTY),
+];
 
 const fn fits(p: &C2fParams) -> bool {
     c2f::grey_len(WIDTH, p) <= len::GREY

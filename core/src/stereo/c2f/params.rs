@@ -121,11 +121,27 @@ impl C2fParams {
         ..Self::FAST
     };
 
+    /// **Fast, low penalty**: [`C2fParams::FAST`] with one small SGM
+    /// penalty for every step, P1 = P2 = 0.25 mean cost gaps, instead of
+    /// P2 = 4. The large-step penalty that wins on the Motorcycle pair
+    /// smooths a small object's disparity step away, so the object takes
+    /// its background's disparity and figure-ground loses it; with the low
+    /// penalty the aggregation still votes along 3 paths but keeps those
+    /// steps. The same instructions as `fast` (the penalties are values,
+    /// not work); the pipeline's point (`pipeline::STEREO_DEFAULT`,
+    /// docs/PIPELINE.md, "The stereo point").
+    pub const FAST_LOW_PENALTY: Self = Self {
+        p1: 0.25,
+        p2: 0.25,
+        ..Self::FAST
+    };
+
     /// The named points, by the name `protogist stereo --point` takes.
-    pub const NAMED: [(&'static str, Self); 3] = [
+    pub const NAMED: [(&'static str, Self); 4] = [
         ("full", Self::FULL),
         ("fast", Self::FAST),
         ("half", Self::HALF),
+        ("fast-low-penalty", Self::FAST_LOW_PENALTY),
     ];
 
     /// The named point called `name` ([`C2fParams::NAMED`]).

@@ -1,0 +1,124 @@
+//! The pipeline's stereo point (`pipeline::STEREO_DEFAULT`,
+//! `C2fParams::FAST_LOW_PENALTY`) against `C2fParams::FAST`: a small object
+//! well in front of its background keeps its disparity with the low SGM
+//! penalty, where `fast`'s large-step penalty gives much of it the
+//! background's (docs/PIPELINE.md, "The stereo point").
+
+use protogist::disparity::DisparityCell;
+use protogist::image::{ImageView, ImageViewMut, Rgb8};
+use protogist::pipeline::{PipelineParams, STEREO_DEFAULT};
+use protogist::stereo::c2f::{C2f, C2fParams};
+use protogist::stereo::DemTable;
+use protogist::synth::{render_left, render_right, ObjectSpec, SceneSpec, Shape};
+use protogist_host::storage::C2fStorage;
+
+const W: usize = 160;
+const H: usize = 120;
+
+/// A textured background at disparity 3 and one small square at `d`.
+fn scene(seed: u64, d: u8) -> (SceneSpec, Vec<Rgb8>, Vec<Rgb8>) {
+    let mut spec = SceneSpec {
+        seed,
+        background_disparity: 3,
+        background_colour: Rgb8::new(150, 110, 70),
+        background_texture: 40,
+        ..SceneSpec::demo(W, H)
+    };
+    spec.objects[0] = ObjectSpec {
+        shape: Shape::Rectangle,
+        cx: 90,
+        cy: 60,
+        rx: 9,
+        ry: 9,
+        disparity: d,
+        colour: Rgb8::new(60, 150, 200),
+    };
+    let mut l = vec![Rgb8::default(); W * H];
+    let mut r = l.clone();
+    render_left(&spec, &mut ImageViewMut::packed(&mut l, W, H).unwrap()).unwrap();
+    render_right(&spec, &mut ImageViewMut::packed(&mut r, W, H).unwrap()).unwrap();
+    (spec, l, r)
+}
+
+/// The map of `p` on the pair.
+fn run(p: &C2fParams, l: &[Rgb8], r: &[Rgb8]) -> Vec<DisparityCell> {
+    let pipeline = PipelineParams {
+        stereo: *p,
+        ..PipelineParams::DEFAULT
+    }
+    .with_max_disp(31);
+    let bytes = protogist_host::product::tables_for(&pipeline).unwrap();
+    let tables: Vec<DemTable<'_>> = bytes.iter().map(|t| DemTable::parse(t).unwrap()).collect();
+    let e = C2f::new(&pipeline.stereo).unwrap();
+    let mut st = C2fStorage::new(W, H, &pipeline.stereo);
+    let mut out = vec![DisparityCell::OFF; W * H];
+    e.run(
+        &tables,
+        &ImageView::packed(l, W, H).unwrap(),
+        &ImageView::packed(r, W, H).unwrap(),
+        &mut st.buffers(),
+        &mut |x, y, c| out[y * W + x] = c,
+        &mut (),
+    )
+    .unwrap();
+    out
+}
+
+/// The fraction of the object's inner pixels (2 px from its outline)
+/// estimated within 2 px of its disparity.
+fn object_right(spec: &SceneSpec, map: &[DisparityCell]) -> f64 {
+    let o = &spec.objects[0];
+    let inner = ObjectSpec {
+        rx: o.rx - 2,
+        ry: o.ry - 2,
+        ..*o
+    };
+    let (mut n, mut good) = (0u32, 0u32);
+    for y in 0..H {
+        for x in 0..W {
+            if !inner.contains(x as i32, y as i32) {
+                continue;
+            }
+            n += 1;
+            let d = map[y * W + x].get().map(f64::from);
+            if d.is_some_and(|d| (d - f64::from(o.disparity)).abs() <= 2.0) {
+                good += 1;
+            }
+        }
+    }
+    f64::from(good) / f64::from(n)
+}
+
+#[test]
+fn the_pipeline_point_is_fast_with_one_low_penalty() {
+    assert_eq!(STEREO_DEFAULT, C2fParams::FAST_LOW_PENALTY);
+    let p = C2fParams::FAST_LOW_PENALTY;
+    assert_eq!((p.p1, p.p2), (0.25, 0.25));
+    assert_eq!(
+        C2fParams {
+            p1: C2fParams::FAST.p1,
+            p2: C2fParams::FAST.p2,
+            ..p
+        },
+        C2fParams::FAST
+    );
+    assert_eq!(C2fParams::from_name("fast-low-penalty"), Some(p));
+    assert_eq!(p.name(), Some("fast-low-penalty"));
+}
+
+#[test]
+fn a_small_near_object_keeps_its_disparity_at_the_pipeline_point() {
+    let (mut fast_sum, mut low_sum) = (0.0, 0.0);
+    for seed in 1..=4u64 {
+        let (spec, l, r) = scene(seed, 24);
+        let fast = object_right(&spec, &run(&C2fParams::FAST, &l, &r));
+        let low = object_right(&spec, &run(&STEREO_DEFAULT, &l, &r));
+        println!("seed {seed}: object right at fast {fast:.3}, at the pipeline's point {low:.3}");
+        assert!(low > fast + 0.25, "seed {seed}: {low} against {fast}");
+        fast_sum += fast;
+        low_sum += low;
+    }
+    // Over the seeds, a large part of the object is right at the
+    // pipeline's point.
+    assert!(low_sum / 4.0 >= 0.4, "{low_sum} against {fast_sum}");
+}
