@@ -12,12 +12,12 @@
 
 use core::hint::black_box;
 
-use crate::pg::complete::{complete, CompleteParams, RegionTables};
+use crate::pg::complete::{complete_runs, CompleteParams, RegionTables, RunBuffers};
 use crate::pg::conspicuity::{edge_conspicuity, EdgeBuffers, EdgeCell, EdgeParams, Luv, LuvTables};
 use crate::pg::disparity::DisparityCell;
 use crate::pg::image::{ImageError, ImageView, ImageViewMut, Rgb8};
 use crate::pg::mlp::{self, blob::Model, Ranked, Scratch};
-use crate::pg::segment::{segment, Labeller, SegmentBuffers, SegmentParams};
+use crate::pg::segment::{segment, SegmentBuffers, SegmentParams};
 use crate::pg::shape::{shape_vector, RadialProfile, ShapeVector, SHAPE_LEN};
 use crate::pg::stereo::c2f::{C2f, C2fBuffers, C2fParams};
 use crate::pg::stereo::phase::PhaseParams;
@@ -44,13 +44,14 @@ pub struct ProbeBuffers<'a> {
     pub disparity: &'a mut [DisparityCell],
     /// Stereo scratch.
     pub c2f: C2fBuffers<'a>,
-    /// Segmentation: bit maps and component table.
+    /// Segmentation: bit maps and component table; the completion's
+    /// trusted bit map and run-row index.
     pub seg: [&'a mut [u32]; 2],
-    /// Segmentation masks; the completion's edge map.
+    /// Segmentation masks (the second is unused).
     pub masks: [&'a mut [bool]; 2],
-    /// Labeller: labels, parents.
+    /// The completion's label rows and run table.
     pub labels: [&'a mut [u16]; 2],
-    /// Labeller areas, completion tables (total, below).
+    /// The completion's edge bit map and tables (total, below).
     pub counts: [&'a mut [u32]; 3],
     /// Completion tables (lo, hi).
     pub bounds: [&'a mut [u8]; 2],
@@ -92,7 +93,7 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
         disparity,
         mut c2f,
         seg: [maps, seg_table],
-        masks: [masks, edge_map],
+        masks: [masks, _],
         labels: [labels, parent],
         counts: [area, total, below],
         bounds: [lo, hi],
@@ -134,15 +135,18 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
         }
     }
 
-    // Border completion, on its own inputs.
+    // Border completion, on its own inputs (the runs form the pipeline
+    // takes, with full colour).
     let edges_v = view(edges, w, h);
-    if let (Ok(e), Ok(c), Ok(mut d), Ok(mut m), Ok(mut lab)) = (
-        &edges_v,
-        view(luv, w, h),
-        view_mut(&mut *disparity, w, h),
-        view_mut(edge_map, w, h),
-        Labeller::new(w, h, &mut *labels, &mut *parent, &mut *area),
-    ) {
+    if let (Ok(e), Ok(c), Ok(mut d)) = (&edges_v, view(luv, w, h), view_mut(&mut *disparity, w, h))
+    {
+        let mut bufs = RunBuffers {
+            open: &mut *area,
+            trusted: &mut *maps,
+            runs: &mut *parent,
+            rows: &mut *seg_table,
+            labels: &mut *labels,
+        };
         let mut t = RegionTables {
             total: &mut *total,
             below: &mut *below,
@@ -150,7 +154,7 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
             hi: &mut *hi,
         };
         let params = black_box(CompleteParams::default());
-        let r = complete(&params, e, &c, &mut d, &mut m, &mut lab, &mut t);
+        let r = complete_runs(&params, e, &c, &mut d, &mut bufs, &mut t);
         bits |= seen(&r, 4);
     }
 

@@ -1,17 +1,16 @@
 //! Disparity completion over conspicuity regions (`protogist::complete`):
-//! both forms (full-frame labelling, and runs with bounded tables as the
-//! pipeline runs it) bit for bit against the independent reference, a
-//! hand-worked case, and bad input.
+//! the runs form with bounded tables, as the pipeline runs it, bit for bit
+//! against the independent reference, a hand-worked case, and bad input.
 
 use proptest::prelude::*;
 use protogist::complete::{
-    complete, complete_runs, region_table_len, run_rows_len, run_table_len, CompleteError,
-    CompleteParams, CompleteReport, RegionTables, RunBuffers, SideColour, Tone, LABEL_ROWS,
+    complete_runs, region_table_len, run_rows_len, run_table_len, CompleteError, CompleteParams,
+    CompleteReport, RegionTables, RunBuffers, SideColour, Tone, LABEL_ROWS,
 };
 use protogist::conspicuity::{Conspicuity, EdgeCell, Luv};
 use protogist::disparity::{from_pixels, Disparity, DisparityCell};
 use protogist::image::{ImageView, ImageViewMut};
-use protogist::segment::{bit_map_len, label_capacity, Labeller};
+use protogist::segment::bit_map_len;
 use protogist_host::reference::complete as rf;
 use protogist_host::stages::run_complete;
 
@@ -90,18 +89,15 @@ proptest! {
         prop_assert_eq!(core_report, ref_report);
     }
 
-    /// Both core forms with the full colour against the reference.
+    /// The runs form with the full colour against the reference.
     #[test]
-    fn both_forms_match_the_reference_with_full_colour(
+    fn the_runs_form_matches_the_reference_with_full_colour(
         (edges, colour, disp, w, h, params) in case()
     ) {
         let (ref_out, ref_report) = rf::complete(&params, &edges, &colour, &disp, w, h);
         let (runs_out, runs_report) = by_runs(&params, &edges, &colour, &disp, w, h, run_table_len(w, h));
         prop_assert_eq!(&runs_out, &ref_out);
         prop_assert_eq!(runs_report, ref_report);
-        let (full_out, full_report) = full_frame(&params, &edges, &colour, &disp, w, h);
-        prop_assert_eq!(&full_out, &ref_out);
-        prop_assert_eq!(full_report, ref_report);
     }
 }
 
@@ -135,41 +131,6 @@ fn by_runs<C: SideColour>(
             rows: &mut rows,
             labels: &mut labels,
         },
-        &mut RegionTables {
-            total: &mut total,
-            below: &mut below,
-            lo: &mut lo,
-            hi: &mut hi,
-        },
-    )
-    .unwrap();
-    (out, report)
-}
-
-/// The full-frame [`complete`] with tables for every label.
-fn full_frame(
-    params: &CompleteParams,
-    edges: &[EdgeCell],
-    colour: &[Luv],
-    disp: &[DisparityCell],
-    w: usize,
-    h: usize,
-) -> (Vec<DisparityCell>, CompleteReport) {
-    let cap = label_capacity(w, h);
-    let (mut labels, mut parent, mut area) = (vec![0u16; w * h], vec![0u16; cap], vec![0u32; cap]);
-    let mut lab = Labeller::new(w, h, &mut labels, &mut parent, &mut area).unwrap();
-    let n = region_table_len(w, h);
-    let (mut total, mut below, mut lo, mut hi) =
-        (vec![0u32; n], vec![0u32; n], vec![0u8; n], vec![0u8; n]);
-    let mut out = disp.to_vec();
-    let mut edge_map = vec![false; w * h];
-    let report = complete(
-        params,
-        &ImageView::packed(edges, w, h).unwrap(),
-        &ImageView::packed(colour, w, h).unwrap(),
-        &mut ImageViewMut::packed(&mut out, w, h).unwrap(),
-        &mut ImageViewMut::packed(&mut edge_map, w, h).unwrap(),
-        &mut lab,
         &mut RegionTables {
             total: &mut total,
             below: &mut below,
@@ -329,67 +290,49 @@ fn bad_input_is_a_typed_error_or_a_reported_skip() {
     let (w, h) = (8, 4);
     let edges = vec![EdgeCell::OFF; w * h];
     let colour = vec![Luv::default(); w * h];
-    let mut disp = vec![from_pixels(2); w * h];
-    let mut edge_map = vec![false; w * h];
-    let cap = label_capacity(w, h);
-    let (mut labels, mut parent, mut area) = (vec![0u16; w * h], vec![0u16; cap], vec![0u32; cap]);
-    let (mut total, mut below, mut lo, mut hi) =
-        (vec![0u32; 1], vec![0u32; 1], vec![0u8; 1], vec![0u8; 1]);
-    let mut tables = RegionTables {
-        total: &mut total,
-        below: &mut below,
-        lo: &mut lo,
-        hi: &mut hi,
+    let disp = vec![from_pixels(2); w * h];
+    let run = |colour: &[Luv], cw: usize, ch: usize, regions: usize| {
+        let (mut open, mut trusted) =
+            (vec![0u32; bit_map_len(w, h)], vec![0u32; bit_map_len(w, h)]);
+        let (mut table, mut rows) = (vec![0u16; run_table_len(w, h)], vec![0u32; run_rows_len(w)]);
+        let mut labels = vec![0u16; LABEL_ROWS * w];
+        let (mut total, mut below, mut lo, mut hi) = (
+            vec![0u32; regions],
+            vec![0u32; regions],
+            vec![0u8; regions],
+            vec![0u8; regions],
+        );
+        let mut out = disp.clone();
+        complete_runs(
+            &CompleteParams::default(),
+            &ImageView::packed(&edges, w, h).unwrap(),
+            &ImageView::packed(colour, cw, ch).unwrap(),
+            &mut ImageViewMut::packed(&mut out, w, h).unwrap(),
+            &mut RunBuffers {
+                open: &mut open,
+                trusted: &mut trusted,
+                runs: &mut table,
+                rows: &mut rows,
+                labels: &mut labels,
+            },
+            &mut RegionTables {
+                total: &mut total,
+                below: &mut below,
+                lo: &mut lo,
+                hi: &mut hi,
+            },
+        )
     };
     // Maps of different sizes.
-    let mut lab = Labeller::new(w, h, &mut labels, &mut parent, &mut area).unwrap();
     let small = vec![Luv::default(); 4];
-    let err = complete(
-        &CompleteParams::default(),
-        &ImageView::packed(&edges, w, h).unwrap(),
-        &ImageView::packed(&small, 2, 2).unwrap(),
-        &mut ImageViewMut::packed(&mut disp, w, h).unwrap(),
-        &mut ImageViewMut::packed(&mut edge_map, w, h).unwrap(),
-        &mut lab,
-        &mut tables,
-    )
-    .unwrap_err();
+    let err = run(&small, 2, 2, 4).unwrap_err();
     assert!(matches!(err, CompleteError::Image(_)), "{err:?}");
     // Region tables of capacity 1 (label 0 only): the one region is skipped.
-    let report = complete(
-        &CompleteParams::default(),
-        &ImageView::packed(&edges, w, h).unwrap(),
-        &ImageView::packed(&colour, w, h).unwrap(),
-        &mut ImageViewMut::packed(&mut disp, w, h).unwrap(),
-        &mut ImageViewMut::packed(&mut edge_map, w, h).unwrap(),
-        &mut lab,
-        &mut tables,
-    )
-    .unwrap();
+    let report = run(&colour, w, h, 1).unwrap();
     assert_eq!((report.regions, report.regions_skipped), (1, 1));
-    // A labeller whose tables cannot hold a checkerboard's labels.
-    let checker: Vec<EdgeCell> = (0..w * h)
-        .map(|i| {
-            if (i % w + i / w) % 2 == 0 {
-                edge_on()
-            } else {
-                EdgeCell::OFF
-            }
-        })
-        .collect();
-    let (mut p2, mut a2) = (vec![0u16; 3], vec![0u32; 3]);
-    let mut tiny = Labeller::new(w, h, &mut labels, &mut p2, &mut a2).unwrap();
-    let err = complete(
-        &CompleteParams::default(),
-        &ImageView::packed(&checker, w, h).unwrap(),
-        &ImageView::packed(&colour, w, h).unwrap(),
-        &mut ImageViewMut::packed(&mut disp, w, h).unwrap(),
-        &mut ImageViewMut::packed(&mut edge_map, w, h).unwrap(),
-        &mut tiny,
-        &mut tables,
-    )
-    .unwrap_err();
-    assert!(matches!(err, CompleteError::Label(_)), "{err:?}");
+    // With room for it, it is not.
+    let report = run(&colour, w, h, 4).unwrap();
+    assert_eq!((report.regions, report.regions_skipped), (1, 0));
 }
 
 /// The pipeline's run table holds the runs of non-edge cells of seeded

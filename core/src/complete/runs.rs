@@ -1,5 +1,5 @@
-//! [`complete`](super::complete) on bit maps and runs, with bounded tables:
-//! the pipeline's completion.
+//! The completion (module [`super`]) on bit maps and runs, with bounded
+//! tables: the pipeline's completion.
 //!
 //! The regions are labelled by runs (maximal horizontal stretches of
 //! non-edge cells), one table entry per run, not a label per pixel. Every
@@ -12,8 +12,9 @@
 //!
 //! With tables large enough ([`run_table_len`], and region tables of
 //! [`region_table_len`](super::region_table_len)), and [`Luv`] as the
-//! colour, the result is that of [`complete`](super::complete). With fewer
-//! table entries it degrades as the full-frame stage does: runs past the
+//! colour, the result is that of the f32 reference (`host/src/reference/
+//! complete.rs`, checked bit for bit). With fewer table entries it
+//! degrades gracefully: runs past the
 //! run table's capacity belong to no region and are left unchanged (and
 //! counted), as are regions past the region tables' capacity.
 //!
@@ -105,7 +106,7 @@ pub struct RunBuffers<'a> {
     pub labels: &'a mut [u16],
 }
 
-/// [`complete`](super::complete) over bit maps and runs (module docs):
+/// The completion over bit maps and runs (module docs):
 /// completes `disparity` in place over the regions of the conspicuity map
 /// `edges`, with `colour` deciding the side of each edge cell.
 ///

@@ -7,7 +7,7 @@ use protogist::complete::{CompleteParams, CompleteReport};
 use protogist::conspicuity::{EdgeCell, Luv};
 use protogist::disparity::{from_pixels, DisparityCell};
 
-/// [`protogist::complete::complete`] on packed maps; returns the completed
+/// [`protogist::complete::complete_runs`] on packed maps; returns the completed
 /// disparity and the report (regions skipped is always 0: no capacity).
 pub fn complete(
     params: &CompleteParams,
