@@ -19,6 +19,8 @@ commands:
               stereo pairs into the data cache
   firmware    build the product and the bench firmware, run them under QEMU mps2-an386,
               and the product for the STM32F405 under QEMU netduinoplus2
+  product     build the firmware, run only the product under QEMU mps2-an386 and
+              netduinoplus2, and compare it with the host and the golden list
   bench       measure and write docs/BENCHMARKS.md
   fuzz [N]    run every fuzz target of host/tests/fuzz.rs for N cases (default 100000)
   setup       install missing system packages / rustup components";
@@ -28,9 +30,13 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci::run(),
         Some("fetch-data") => data::fetch().map(|_| ()),
-        Some("firmware") => firmware::build_and_run()
-            .and_then(|_| product::run())
-            .and_then(|p| {
+        Some(cmd @ ("firmware" | "product")) => {
+            let built = if cmd == "firmware" {
+                firmware::build_and_run().map(|_| ())
+            } else {
+                firmware::build_product()
+            };
+            built.and_then(|()| product::run()).and_then(|p| {
                 println!(
                     "{} product lines equal on host, QEMU and {}\n{}",
                     p.lines,
@@ -39,7 +45,8 @@ fn main() -> ExitCode {
                 );
                 println!("-- the product for the STM32F405 on QEMU netduinoplus2:");
                 product::run_f405(&p.qemu.stdout).map(|r| println!("{r}"))
-            }),
+            })
+        }
         Some("bench") => bench::run(),
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("setup") => setup::ensure_all(),
