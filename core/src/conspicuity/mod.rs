@@ -37,13 +37,14 @@
 //! ```
 
 mod luv;
+mod luv_table;
 mod ring;
 mod smooth;
 mod stream;
 
 pub use luv::{
-    lightness, srgb_to_linear, Luv, LuvTables, CIE_EPSILON, CIE_KAPPA, LUV_LIMIT_BITS, MAX_ERR_L,
-    MAX_ERR_U, MAX_ERR_V, SRGB_TO_XYZ, WHITE_U, WHITE_V,
+    lightness, srgb_to_linear, Luv, LuvTables, CIE_EPSILON, CIE_KAPPA, LUV_LIMIT_BITS, LUV_TABLES,
+    MAX_ERR_L, MAX_ERR_U, MAX_ERR_V, SRGB_TO_XYZ, WHITE_U, WHITE_V,
 };
 pub use ring::row_scratch_len;
 pub use smooth::{smooth, smooth_step, SmoothParams, MAX_ERR_SMOOTH_STEP_LSB};

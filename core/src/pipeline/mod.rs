@@ -52,7 +52,7 @@ pub mod layout;
 mod run;
 
 use crate::complete::{CompleteError, CompleteParams};
-use crate::conspicuity::{ConspicuityError, EdgeCell, EdgeParams, Luv, LuvTables};
+use crate::conspicuity::{ConspicuityError, EdgeCell, EdgeParams, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::{ImageError, ImageView};
 use crate::mlp::{blob::Model, MlpError, ModelError};
@@ -369,7 +369,6 @@ impl Observer for () {}
 pub struct Pipeline<'a, K = SafePhase> {
     params: PipelineParams,
     c2f: C2f<K>,
-    luv: LuvTables,
     tables: heapless::Vec<DemTable<'a>, { MAX_COARSE + 1 }>,
     model: Model<'a>,
     delta_q16: u32,
@@ -458,7 +457,6 @@ impl<'a, K: PhaseKernel> Pipeline<'a, K> {
         Ok(Self {
             params: *params,
             c2f,
-            luv: LuvTables::new(),
             tables: parsed,
             delta_q16: params.delta_q16.unwrap_or(model.delta_q16()),
             model,

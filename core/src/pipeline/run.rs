@@ -8,7 +8,7 @@ use crate::complete::{
     complete_runs, pipeline_run_capacity, run_rows_len, RegionTables, RunBuffers, Tone,
     DEFAULT_REGION_CAPACITY, LABEL_ROWS,
 };
-use crate::conspicuity::{self, EdgeCell, Luv};
+use crate::conspicuity::{self, EdgeCell, Luv, LUV_TABLES};
 use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, Ranked, Scratch};
@@ -143,7 +143,7 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel>(
             |y, out| {
                 left.rgb_row(y, rgb);
                 for (o, &px) in out.iter_mut().zip(rgb.iter()) {
-                    *o = p.luv.convert(px);
+                    *o = LUV_TABLES.convert(px);
                 }
             },
             |y, row| {
