@@ -245,9 +245,9 @@ pub struct EdgeParams {
 }
 
 impl EdgeParams {
-    /// Two smoothing passes and the paper's 10 % threshold.
+    /// One smoothing pass and the paper's 10 % threshold.
     pub const DEFAULT: Self = Self {
-        smooth: SmoothParams { iterations: 2 },
+        smooth: SmoothParams { iterations: 1 },
         threshold_percent: 10,
     };
 }

@@ -28,9 +28,9 @@ pub struct SmoothParams {
 }
 
 impl Default for SmoothParams {
-    /// Two passes: see `docs/CONSPICUITY.md` for the choice.
+    /// One pass: see `docs/CONSPICUITY.md` for the choice.
     fn default() -> Self {
-        Self { iterations: 2 }
+        Self { iterations: 1 }
     }
 }
 
