@@ -15,6 +15,7 @@ use embedded_hal::digital::{self, OutputPin};
 
 use crate::camera::CameraError;
 use crate::pg::checksum::Fnv1a;
+use crate::pg::conspicuity::ColourKernel;
 use crate::pg::image::ImageError;
 use crate::pg::mlp::Identity;
 use crate::pg::pipeline::{
@@ -283,7 +284,7 @@ pub struct Product<'a, C, P, K = SafePhase> {
     pipeline: Pipeline<'a, K>,
 }
 
-impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel> Product<'a, C, P, K> {
+impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel + ColourKernel> Product<'a, C, P, K> {
     /// The product around a set-up pipeline.
     pub fn new(camera: C, led: P, pipeline: Pipeline<'a, K>) -> Self {
         Self {

@@ -52,7 +52,7 @@ pub mod layout;
 mod run;
 
 use crate::complete::{CompleteError, CompleteParams};
-use crate::conspicuity::{ConspicuityError, EdgeCell, EdgeParams, Luv};
+use crate::conspicuity::{ColourKernel, ConspicuityError, EdgeCell, EdgeParams, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::{ImageError, ImageView};
 use crate::mlp::{blob::Model, MlpError, ModelError};
@@ -362,9 +362,10 @@ impl Observer for () {}
 
 /// The set-up pipeline: checked parameters, stereo kernels, colour
 /// tables, the parsed decoder tables and model. `K` is the stereo phase
-/// refinement's row step ([`PhaseKernel`]): the portable [`SafePhase`]
-/// from [`Pipeline::new`], a target's own (e.g. the firmware's assembly
-/// one) from [`Pipeline::with_kernel`]; the same bits either way.
+/// refinement's row step ([`PhaseKernel`]) and the colour stage's hot
+/// loops ([`ColourKernel`]): the portable [`SafePhase`] from
+/// [`Pipeline::new`], a target's own (e.g. the firmware's assembly one)
+/// from [`Pipeline::with_kernel`]; the same bits either way.
 #[derive(Clone, Debug)]
 pub struct Pipeline<'a, K = SafePhase> {
     params: PipelineParams,
@@ -482,7 +483,9 @@ impl<'a, K: PhaseKernel> Pipeline<'a, K> {
     pub fn delta_q16(&self) -> u32 {
         self.delta_q16
     }
+}
 
+impl<K: PhaseKernel + ColourKernel> Pipeline<'_, K> {
     /// Runs a frame pair through every stage (see the module docs).
     ///
     /// # Errors

@@ -42,7 +42,7 @@ impl<O: Observer> SegmentObserver for SegmentSteps<'_, O> {
     }
 }
 
-pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel>(
+pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuity::ColourKernel>(
     p: &Pipeline<'_, K>,
     left: &S,
     right: &S,
@@ -135,7 +135,7 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel>(
         let rgb: &mut [Rgb8] = s.take(w)?;
         let tone: &mut [Tone] = s.take(n)?;
         let mut c_v = ImageViewMut::packed(&mut *edges, w, h)?;
-        conspicuity::stream(
+        conspicuity::stream_with::<K>(
             smooth,
             params.edges.threshold_percent,
             rows,
