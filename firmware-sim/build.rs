@@ -51,11 +51,13 @@ fn bench_blob(hidden: u16) -> Vec<u8> {
     b
 }
 
-/// The linker script of the memory map: mps2-an386's, or with the `f405`
-/// feature QEMU netduinoplus2's STM32F405 (`memory-f405.x` is the real
-/// part's map, for a board build).
+/// The linker script of the memory map: mps2-an386's; with the `f405`
+/// feature QEMU netduinoplus2's STM32F405; with `f405-board` the real
+/// part's (`memory-f405.x`).
 fn memory_map() -> &'static str {
-    if env::var_os("CARGO_FEATURE_F405").is_some() {
+    if env::var_os("CARGO_FEATURE_F405_BOARD").is_some() {
+        "memory-f405.x"
+    } else if env::var_os("CARGO_FEATURE_F405").is_some() {
         "memory-f405-qemu.x"
     } else {
         "memory.x"

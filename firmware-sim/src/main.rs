@@ -32,8 +32,8 @@ mod mcu {
     use cortex_m_semihosting::hio;
     use firmware_sim::pg::pipeline::Pipeline;
     use firmware_sim::product::{
-        write_pipeline_error, write_ram_plans, Product, FRAME_LEN, HEIGHT, MODEL, PARAMS, STAGES,
-        STEPS, TABLES, WIDTH, WORKSPACE_WORDS,
+        write_pipeline_error, write_ram_plans, Product, FRAME_LEN, HEIGHT, KEPT_WORDS, MODEL,
+        PARAMS, SHARED_WORDS, STAGES, STEPS, TABLES, WIDTH,
     };
     use firmware_sim::stereo_camera::SimStereoCamera;
     use firmware_sim::write_ipp;
@@ -41,17 +41,46 @@ mod mcu {
     use super::board::{self, Led, SysTicks};
     use super::dsp::PhaseAsm;
 
+    /// The workspace's kept maps, once: a static in section `.ccm`, which
+    /// the memory map places in the F405's core-coupled RAM
+    /// (`memory-f405.x`; QEMU's model of it in `memory-f405-qemu.x`) and
+    /// mps2-an386's `memory.x` in RAM. `.ccm` is not zeroed at reset
+    /// (cortex-m-rt zeroes `.bss` only), so this zeroes it, and a flag in
+    /// `.bss` hands it out once, as `cortex_m::singleton!` would.
+    fn kept_region() -> Option<&'static mut [u64; KEPT_WORDS]> {
+        use core::mem::MaybeUninit;
+        use core::sync::atomic::{AtomicBool, Ordering};
+        static TAKEN: AtomicBool = AtomicBool::new(false);
+        #[allow(unsafe_code)]
+        #[link_section = ".ccm"]
+        static mut KEPT: MaybeUninit<[u64; KEPT_WORDS]> = MaybeUninit::uninit();
+        if TAKEN.swap(true, Ordering::AcqRel) {
+            return None;
+        }
+        let p = core::ptr::addr_of_mut!(KEPT);
+        // SAFETY: TAKEN lets this run once, so no other reference to KEPT
+        // exists; the words are written (zeroed) before they are read as
+        // `u64`s.
+        #[allow(unsafe_code)]
+        unsafe {
+            p.cast::<u64>().write_bytes(0, KEPT_WORDS);
+            Some((*p).assume_init_mut())
+        }
+    }
+
     /// Writes the report; false after writing an `error:` line.
     fn run(out: &mut impl Write) -> Result<bool, core::fmt::Error> {
         let Some(mut cp) = cortex_m::Peripherals::take() else {
             return writeln!(out, "error: core peripherals already taken").map(|()| false);
         };
         let to_instructions = board::start_counting(&mut cp.SYST, out)?;
-        // The pair and the workspace live in .bss, so the linker checks
-        // them against memory.x.
-        let (Some(frame), Some(workspace)) = (
+        // The pair and the workspace are statics, so the linker checks
+        // them against the memory map: the pair and the shared region in
+        // .bss, the kept maps in .bss or, on the F405, its CCM.
+        let (Some(frame), Some(shared), Some(kept)) = (
             singleton!(: [u16; FRAME_LEN] = [0; FRAME_LEN]),
-            singleton!(: [u64; WORKSPACE_WORDS] = [0; WORKSPACE_WORDS]),
+            singleton!(: [u64; SHARED_WORDS] = [0; SHARED_WORDS]),
+            kept_region(),
         ) else {
             return writeln!(out, "error: frame buffers already taken").map(|()| false);
         };
@@ -64,7 +93,7 @@ mod mcu {
             }
         };
         let mut product = Product::new(SimStereoCamera::new(), Led, pipeline);
-        let s = match product.frame((WIDTH, HEIGHT), frame, workspace, &mut SysTicks, out) {
+        let s = match product.frame((WIDTH, HEIGHT), frame, (kept, shared), &mut SysTicks, out) {
             Ok(s) => s,
             Err(e) => {
                 out.write_str("error: ")?;
@@ -111,8 +140,8 @@ mod host {
     use embedded_hal::digital::{ErrorType, OutputPin};
     use firmware_sim::pg::pipeline::Pipeline;
     use firmware_sim::product::{
-        write_ram_plans, Product, FRAME_LEN, HEIGHT, MODEL, PARAMS, STAGES, STEPS, TABLES, WIDTH,
-        WORKSPACE_WORDS,
+        write_ram_plans, Product, FRAME_LEN, HEIGHT, KEPT_WORDS, MODEL, PARAMS, SHARED_WORDS,
+        STAGES, STEPS, TABLES, WIDTH,
     };
     use firmware_sim::stereo_camera::SimStereoCamera;
     use firmware_sim::Ticks;
@@ -144,7 +173,7 @@ mod host {
 
     pub fn run() -> ExitCode {
         let mut frame = vec![0u16; FRAME_LEN];
-        let mut workspace = vec![0u64; WORKSPACE_WORDS];
+        let (mut kept, mut shared) = (vec![0u64; KEPT_WORDS], vec![0u64; SHARED_WORDS]);
         let pipeline = match Pipeline::new(&PARAMS, &TABLES, MODEL) {
             Ok(p) => p,
             Err(e) => {
@@ -155,7 +184,13 @@ mod host {
         let mut product = Product::new(SimStereoCamera::new(), NoLed, pipeline);
         let mut out = String::new();
         let ticks = &mut WallTicks(Instant::now());
-        let s = match product.frame((WIDTH, HEIGHT), &mut frame, &mut workspace, ticks, &mut out) {
+        let s = match product.frame(
+            (WIDTH, HEIGHT),
+            &mut frame,
+            (&mut kept, &mut shared),
+            ticks,
+            &mut out,
+        ) {
             Ok(s) => s,
             Err(e) => {
                 eprintln!("product: {e}");

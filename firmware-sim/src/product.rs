@@ -19,7 +19,8 @@ use crate::pg::conspicuity::ColourKernel;
 use crate::pg::image::ImageError;
 use crate::pg::mlp::Identity;
 use crate::pg::pipeline::{
-    self, layout, workspace_bytes, Frame, Observer, Pipeline, PipelineError, PipelineParams, Stage,
+    self, layout, workspace_bytes, Frame, Observer, Pipeline, PipelineError, PipelineParams,
+    Region, Stage,
 };
 use crate::pg::segment::{Step as SegmentStep, STAT_FRAC_BITS};
 use crate::pg::stereo::phase::{PhaseKernel, SafePhase};
@@ -41,6 +42,12 @@ pub const OBJECTS: u8 = 4;
 pub const PARAMS: PipelineParams = PipelineParams::DEFAULT.with_objects(OBJECTS);
 /// `u64` words of the pipeline's workspace at [`WIDTH`] x [`HEIGHT`].
 pub const WORKSPACE_WORDS: usize = pipeline::workspace_words(WIDTH, HEIGHT, &PARAMS);
+/// Its first part, the maps kept for the result ([`pipeline::kept_words`]):
+/// in the F405's core-coupled RAM on that board.
+pub const KEPT_WORDS: usize = pipeline::kept_words(WIDTH, HEIGHT, &PARAMS);
+/// Its second part, the region the stages share
+/// ([`pipeline::shared_words`]).
+pub const SHARED_WORDS: usize = pipeline::shared_words(WIDTH, HEIGHT, &PARAMS);
 /// `u16`s of a captured RGB565 pair at [`WIDTH`] x [`HEIGHT`].
 pub const FRAME_LEN: usize = pair_len(WIDTH, HEIGHT);
 
@@ -239,6 +246,20 @@ pub fn write_pipeline_error(out: &mut impl Write, e: &PipelineError) -> fmt::Res
                 "workspace of {got} bytes is too small: the run needs {needed}"
             )
         }
+        PipelineError::RegionTooSmall {
+            region,
+            needed,
+            got,
+        } => {
+            let part = match region {
+                Region::Kept => "kept maps",
+                Region::Shared => "shared region",
+            };
+            return write!(
+                out,
+                "workspace part '{part}' of {got} bytes is too small: the run needs {needed}"
+            );
+        }
         PipelineError::TableCount { .. } | PipelineError::Table(_) => "decoder tables",
         PipelineError::Model(_) | PipelineError::ModelMismatch { .. } => "model",
         PipelineError::WorkspaceAlignment => "workspace alignment",
@@ -300,8 +321,10 @@ impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel + ColourKernel> Product<'
     }
 
     /// One frame: captures a `width` x `height` pair into `frame`, runs
-    /// the pipeline in `workspace`, writes the report ([`write_frame`]) to
-    /// `out`; the LED is on meanwhile.
+    /// the pipeline in the workspace's two parts, `kept` ([`KEPT_WORDS`])
+    /// and `shared` ([`SHARED_WORDS`]), which may lie in different RAMs,
+    /// writes the report ([`write_frame`]) to `out`; the LED is on
+    /// meanwhile.
     ///
     /// # Errors
     /// [`ProductError`]: the camera's, a pair that does not fit `frame`,
@@ -311,7 +334,7 @@ impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel + ColourKernel> Product<'
         &mut self,
         size: (usize, usize),
         frame: &mut [u16],
-        workspace: &mut [u64],
+        (kept, shared): (&mut [u64], &mut [u64]),
         ticks: &mut T,
         out: &mut W,
     ) -> Result<FrameSummary, ProductError<C::Error>> {
@@ -338,7 +361,7 @@ impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel + ColourKernel> Product<'
         };
         let result = self
             .pipeline
-            .run_observed(&left, &right, workspace, &mut clock)
+            .run_split_observed(&left, &right, kept, shared, &mut clock)
             .map_err(ProductError::Pipeline)?;
         let (mut spent, steps) = (clock.spent, clock.steps);
         let total = clock.ticks.now() - t0;

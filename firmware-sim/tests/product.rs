@@ -16,12 +16,12 @@ use embedded_hal::digital::{ErrorType, OutputPin};
 use firmware_sim::pg::conspicuity::ColourKernel;
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::{ImageViewMut, Rgb8};
-use firmware_sim::pg::pipeline::{Pipeline, PipelineError, RgbRows};
+use firmware_sim::pg::pipeline::{Pipeline, PipelineError, Region, RgbRows};
 use firmware_sim::pg::stereo::phase::{phase_row3, PhaseKernel};
 use firmware_sim::pg::synth::{render_left, render_mask, render_right, SceneSpec};
 use firmware_sim::product::{
-    is_compared, Product, ProductError, FRAME_LEN, HEIGHT, MODEL, PARAMS, TABLES, WIDTH,
-    WORKSPACE_WORDS,
+    is_compared, Product, ProductError, FRAME_LEN, HEIGHT, KEPT_WORDS, MODEL, PARAMS, SHARED_WORDS,
+    TABLES, WIDTH, WORKSPACE_WORDS,
 };
 use firmware_sim::stereo_camera::{
     expand_rgb565, pack_rgb565, pair_len, PairLayout, Rgb565Camera, SideBySide, SideBySideError,
@@ -56,16 +56,28 @@ fn pipeline() -> Pipeline<'static> {
     Pipeline::new(&PARAMS, &TABLES, MODEL).unwrap()
 }
 
+/// The workspace's two parts, kept maps and shared region.
+fn workspace() -> (Vec<u64>, Vec<u64>) {
+    assert_eq!(KEPT_WORDS + SHARED_WORDS, WORKSPACE_WORDS);
+    (vec![0u64; KEPT_WORDS], vec![0u64; SHARED_WORDS])
+}
+
 /// One frame of `camera`: the report and the LED.
 fn report<C: StereoCamera>(camera: C) -> (String, MockLed)
 where
     C::Error: std::fmt::Debug,
 {
     let mut product = Product::new(camera, MockLed::default(), pipeline());
-    let (mut frame, mut ws) = (vec![0u16; FRAME_LEN], vec![0u64; WORKSPACE_WORDS]);
+    let (mut frame, (mut kept, mut shared)) = (vec![0u16; FRAME_LEN], workspace());
     let mut out = String::new();
     let s = product
-        .frame((WIDTH, HEIGHT), &mut frame, &mut ws, &mut NoTicks, &mut out)
+        .frame(
+            (WIDTH, HEIGHT),
+            &mut frame,
+            (&mut kept, &mut shared),
+            &mut NoTicks,
+            &mut out,
+        )
         .unwrap();
     assert_eq!(
         out.lines().filter(|l| l.starts_with("object ")).count(),
@@ -130,10 +142,16 @@ fn the_pipeline_runs_the_kernel_it_is_given() {
     // list's (the portable pipeline's).
     let p = Pipeline::<CountingPhase>::with_kernel(&PARAMS, &TABLES, MODEL).unwrap();
     let mut product = Product::new(SimStereoCamera::new(), MockLed::default(), p);
-    let (mut frame, mut ws) = (vec![0u16; FRAME_LEN], vec![0u64; WORKSPACE_WORDS]);
+    let (mut frame, (mut kept, mut shared)) = (vec![0u16; FRAME_LEN], workspace());
     let mut out = String::new();
     product
-        .frame((WIDTH, HEIGHT), &mut frame, &mut ws, &mut NoTicks, &mut out)
+        .frame(
+            (WIDTH, HEIGHT),
+            &mut frame,
+            (&mut kept, &mut shared),
+            &mut NoTicks,
+            &mut out,
+        )
         .unwrap();
     assert_eq!(PHASE_ROWS.load(Ordering::Relaxed), HEIGHT);
     assert!(PHASE_REFINED.load(Ordering::Relaxed) > WIDTH);
@@ -243,12 +261,18 @@ fn rgb565_expands_by_bit_replication() {
 #[test]
 fn bad_input_gets_typed_errors() {
     let mut product = Product::new(SimStereoCamera::new(), MockLed::default(), pipeline());
-    let mut ws = vec![0u64; WORKSPACE_WORDS];
+    let (mut kept, mut shared) = workspace();
     let mut out = String::new();
     // A frame buffer short of one pixel.
     let mut short = vec![0u16; FRAME_LEN - 1];
     let e = product
-        .frame((WIDTH, HEIGHT), &mut short, &mut ws, &mut NoTicks, &mut out)
+        .frame(
+            (WIDTH, HEIGHT),
+            &mut short,
+            (&mut kept, &mut shared),
+            &mut NoTicks,
+            &mut out,
+        )
         .unwrap_err();
     assert!(matches!(
         e,
@@ -258,33 +282,50 @@ fn bad_input_gets_typed_errors() {
     // A zero-sized frame.
     let mut frame = vec![0u16; FRAME_LEN];
     let e = product
-        .frame((0, HEIGHT), &mut frame, &mut ws, &mut NoTicks, &mut out)
-        .unwrap_err();
-    assert!(matches!(e, ProductError::Camera(SimStereoError::BadSize)));
-    // A workspace short of one word, with the bytes needed.
-    let mut ws_short = vec![0u64; WORKSPACE_WORDS - 1];
-    let e = product
         .frame(
-            (WIDTH, HEIGHT),
+            (0, HEIGHT),
             &mut frame,
-            &mut ws_short,
+            (&mut kept, &mut shared),
             &mut NoTicks,
             &mut out,
         )
         .unwrap_err();
-    let ProductError::Pipeline(PipelineError::WorkspaceTooSmall { needed, got }) = e else {
+    assert!(matches!(e, ProductError::Camera(SimStereoError::BadSize)));
+    // A workspace part short of one word, named, with the bytes needed.
+    let mut kept_short = vec![0u64; KEPT_WORDS - 1];
+    let e = product
+        .frame(
+            (WIDTH, HEIGHT),
+            &mut frame,
+            (&mut kept_short, &mut shared),
+            &mut NoTicks,
+            &mut out,
+        )
+        .unwrap_err();
+    let ProductError::Pipeline(PipelineError::RegionTooSmall {
+        region: Region::Kept,
+        needed,
+        got,
+    }) = e
+    else {
         panic!("{e:?}");
     };
-    assert_eq!(got, (WORKSPACE_WORDS - 1) * 8);
-    assert!(needed > got);
+    assert_eq!((needed, got), (KEPT_WORDS * 8, (KEPT_WORDS - 1) * 8));
     let mut plain = String::new();
-    ProductError::<SimStereoError>::Pipeline(PipelineError::WorkspaceTooSmall { needed, got })
-        .write_plain(&mut plain)
-        .unwrap();
-    assert!(plain.contains(&needed.to_string()), "{plain}");
+    e.write_plain(&mut plain).unwrap();
+    assert!(
+        plain.contains("kept maps") && plain.contains(&needed.to_string()),
+        "{plain}"
+    );
     // A frame the engine cannot run (smaller than its coarsest level).
     let e = product
-        .frame((8, 6), &mut frame, &mut ws, &mut NoTicks, &mut out)
+        .frame(
+            (8, 6),
+            &mut frame,
+            (&mut kept, &mut shared),
+            &mut NoTicks,
+            &mut out,
+        )
         .unwrap_err();
     assert!(
         matches!(e, ProductError::Pipeline(PipelineError::Stereo(_))),
@@ -328,13 +369,13 @@ impl firmware_sim::Ticks for Counter {
 #[test]
 fn every_stage_and_step_is_timed() {
     let mut product = Product::new(SimStereoCamera::new(), MockLed::default(), pipeline());
-    let (mut frame, mut ws) = (vec![0u16; FRAME_LEN], vec![0u64; WORKSPACE_WORDS]);
+    let (mut frame, (mut kept, mut shared)) = (vec![0u16; FRAME_LEN], workspace());
     let mut ticks = Counter(0);
     let s = product
         .frame(
             (WIDTH, HEIGHT),
             &mut frame,
-            &mut ws,
+            (&mut kept, &mut shared),
             &mut ticks,
             &mut String::new(),
         )

@@ -142,8 +142,35 @@ pub fn build_f405() -> std::result::Result<PathBuf, FirmwareError> {
         "f405",
     ];
     let what = "the product for the STM32F405 (firmware-sim --features f405, 128x96)";
-    build_checked(&args, F405_TARGET_DIR, Machine::Netduinoplus2, what)?;
+    build_checked(
+        &args,
+        F405_TARGET_DIR,
+        Machine::Netduinoplus2.memory_map(),
+        what,
+    )?;
     Ok(f405_elf())
+}
+
+/// Links the F405 product with the real part's map (`--features
+/// f405-board`, `memory-f405.x`: the kept maps in the CCM at 0x10000000,
+/// the rest and the stack in the SRAM), which no QEMU machine runs: the
+/// linker checks that each part fits. Replaces [`f405_elf`]'s ELF, so run
+/// the QEMU build first.
+///
+/// # Errors
+/// As [`build_f405`].
+pub fn link_f405_board() -> std::result::Result<Sizes, FirmwareError> {
+    let args = [
+        "-p",
+        "firmware-sim",
+        "--bin",
+        "firmware-sim",
+        "--features",
+        "f405-board",
+    ];
+    let what = "the product for the STM32F405 board (firmware-sim --features f405-board)";
+    build_checked(&args, F405_TARGET_DIR, "memory-f405.x", what)?;
+    sizes(&f405_elf()).map_err(FirmwareError::Build)
 }
 
 /// `cargo build --profile firmware` for thumbv7em: rustup's prebuilt target if it
@@ -155,7 +182,12 @@ pub fn build_f405() -> std::result::Result<PathBuf, FirmwareError> {
 /// [`FirmwareError::Build`].
 pub fn build_thumb(package: &str) -> std::result::Result<(), FirmwareError> {
     let what = format!("{package} for mps2-an386");
-    build_checked(&["-p", package], "target/thumb", Machine::Mps2An386, &what)
+    build_checked(
+        &["-p", package],
+        "target/thumb",
+        Machine::Mps2An386.memory_map(),
+        &what,
+    )
 }
 
 /// Runs a thumbv7em build of `args` into `target_dir`, linked with
@@ -164,7 +196,7 @@ pub fn build_thumb(package: &str) -> std::result::Result<(), FirmwareError> {
 fn build_checked(
     args: &[&str],
     target_dir: &str,
-    machine: Machine,
+    map: &'static str,
     what: &str,
 ) -> std::result::Result<(), FirmwareError> {
     let mut cmd = thumb_cargo(args, target_dir);
@@ -183,7 +215,7 @@ fn build_checked(
     match overflows(&stderr).into_iter().max_by_key(|o| o.1) {
         Some((region, by)) => Err(FirmwareError::Overflow {
             elf: what.to_string(),
-            map: machine.memory_map(),
+            map,
             region,
             by,
         }),
@@ -483,17 +515,36 @@ pub fn budget_of(machine: Machine) -> Result<(u64, u64)> {
     Ok((length("FLASH")?, length("RAM")?))
 }
 
+/// The CCM region's length in the F405's QEMU map (`memory-f405-qemu.x`).
+pub fn f405_ccm_budget() -> Result<u64> {
+    let name = Machine::Netduinoplus2.memory_map();
+    let path = root().join("firmware-sim").join(name);
+    let text =
+        std::fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
+    text.lines()
+        .find(|l| l.trim_start().starts_with("CCM") && l.contains("LENGTH"))
+        .and_then(|l| l.split("LENGTH").nth(1))
+        .map(|v| v.trim_start_matches([' ', '=']).trim())
+        .and_then(|v| v.strip_suffix('K')?.parse::<u64>().ok())
+        .map(|k| k * 1024)
+        .ok_or(format!("{name} has no CCM region in K"))
+}
+
 /// Bytes of an ELF in flash and in static RAM, and its section rows.
 pub struct Sizes {
     pub flash: u64,
+    /// Static RAM, `.ccm` included.
     pub ram: u64,
+    /// Of it, section `.ccm` (the pipeline's kept maps): the STM32F405's
+    /// core-coupled RAM on its maps, ordinary RAM on mps2-an386's.
+    pub ccm: u64,
     pub rows: String,
 }
 
 /// Section sizes of `elf` from `arm-none-eabi-size -A`.
 pub fn sizes(elf: &std::path::Path) -> Result<Sizes> {
     let text = output(Command::new("arm-none-eabi-size").arg("-A").arg(elf))?;
-    let (mut flash, mut ram, mut rows) = (0u64, 0u64, String::new());
+    let (mut flash, mut ram, mut ccm, mut rows) = (0u64, 0u64, 0u64, String::new());
     for line in text.lines() {
         let mut it = line.split_whitespace();
         let (Some(name), Some(size)) = (it.next(), it.next().and_then(|s| s.parse::<u64>().ok()))
@@ -504,14 +555,20 @@ pub fn sizes(elf: &std::path::Path) -> Result<Sizes> {
             name,
             ".vector_table" | ".text" | ".rodata" | ".data" | ".gnu.sgstubs"
         );
-        let in_ram = matches!(name, ".data" | ".bss" | ".uninit");
+        let in_ram = matches!(name, ".data" | ".bss" | ".uninit" | ".ccm");
+        ccm += if name == ".ccm" { size } else { 0 };
         if in_flash || in_ram {
             rows.push_str(&format!("  {name:<14} {size:>8} B\n"));
         }
         flash += if in_flash { size } else { 0 };
         ram += if in_ram { size } else { 0 };
     }
-    Ok(Sizes { flash, ram, rows })
+    Ok(Sizes {
+        flash,
+        ram,
+        ccm,
+        rows,
+    })
 }
 
 /// Section sizes of the bench firmware, summed against memory.x.
@@ -521,7 +578,9 @@ pub fn size_report() -> Result<String> {
 
 /// Section sizes of a firmware-sim ELF, summed against memory.x.
 pub fn size_report_of(elf: &std::path::Path) -> Result<String> {
-    let Sizes { flash, ram, rows } = sizes(elf)?;
+    let Sizes {
+        flash, ram, rows, ..
+    } = sizes(elf)?;
     let (flash_budget, ram_budget) = budget()?;
     let pct = |a: u64, b: u64| a as f64 * 100.0 / b as f64;
     let report = format!(

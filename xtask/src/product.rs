@@ -5,8 +5,8 @@
 //! ([`run_f405`]).
 
 use crate::firmware::{
-    budget, budget_of, build_f405, check_no_panic, product_elf, run_qemu, sizes, FirmwareError,
-    Machine, QemuRun, Sizes,
+    budget, budget_of, build_f405, check_no_panic, f405_ccm_budget, link_f405_board, product_elf,
+    run_qemu, sizes, FirmwareError, Machine, QemuRun, Sizes,
 };
 use crate::util::{host_cargo, output, root, Result, Section};
 
@@ -295,7 +295,26 @@ pub fn run_f405(mps2_stdout: &str) -> Result<String> {
     let lines = compare("host", &host, "QEMU netduinoplus2", &qemu.stdout)?;
     let elf_sizes = sizes(&elf)?;
     let (flash_budget, ram_budget) = budget_of(Machine::Netduinoplus2)?;
-    let r = f405_report(&qemu.stdout, &elf_sizes, (flash_budget, ram_budget))?;
+    let ccm_budget = f405_ccm_budget()?;
+    let mut r = f405_report(
+        &qemu.stdout,
+        &elf_sizes,
+        (flash_budget, ram_budget, ccm_budget),
+    )?;
+    let board = link_f405_board()?;
+    if (board.ram, board.ccm) != (elf_sizes.ram, elf_sizes.ccm) {
+        return Err(format!(
+            "the board's map (memory-f405.x) places {} B of statics, {} B of them in the CCM; \
+             QEMU's model of it {} B and {} B",
+            board.ram, board.ccm, elf_sizes.ram, elf_sizes.ccm
+        ));
+    }
+    r.push_str(&format!(
+        "  linked with the real part's map too (--features f405-board, memory-f405.x: CCM at \
+         0x10000000): the same {} B of statics, {} B in the CCM\n",
+        grouped(board.ram),
+        grouped(board.ccm)
+    ));
     Ok(format!(
         "{lines} product lines equal on host and QEMU netduinoplus2 (QEMU run {:.1} s)\n{r}",
         qemu.secs
@@ -352,11 +371,13 @@ fn f405_plan(stdout: &str) -> Result<String> {
     Ok(r)
 }
 
-/// The F405 run's flash, RAM and instructions against the part's budgets.
+/// The F405 run's flash, RAM and instructions against the part's budgets:
+/// the SRAM (`ram_budget`: the statics but `.ccm`, and the stack) and the
+/// CCM (`ccm_budget`: section `.ccm`, the pipeline's kept maps).
 fn f405_report(
     stdout: &str,
     elf: &Sizes,
-    (flash_budget, ram_budget): (u64, u64),
+    (flash_budget, ram_budget, ccm_budget): (u64, u64, u64),
 ) -> Result<String> {
     let number = |prefix: &str, nth: usize| {
         stdout
@@ -372,27 +393,36 @@ fn f405_report(
     let stack = number("stack peak ", 2)?;
     let total = number("instr total ", 2)?;
     let capture = number("instr stage capture ", 3)?;
-    let ram = elf.ram + stack;
+    let sram_statics = elf.ram - elf.ccm.min(elf.ram);
+    let sram = sram_statics + stack;
     let pct = |a: u64, b: u64| a as f64 * 100.0 / b as f64;
     let r = format!(
         "product ELF for the STM32F405 (firmware-sim --features f405, {size}, K = 4, QEMU \
-         netduinoplus2, memory-f405-qemu.x):\n\
+         netduinoplus2, memory-f405-qemu.x: the real part's SRAM and CCM as two regions):\n\
          \x20 flash {} B of {} B ({:.0} %)\n\
-         \x20 RAM: static {} B + stack peak {} B = {} B of {} B ({:.0} %)\n\
+         \x20 SRAM: static {} B (the RGB565 pair, the shared region) + stack peak {} B = {} B of \
+         {} B ({:.0} %)\n\
+         \x20 CCM: the kept maps, {} B of {} B ({:.0} %)\n\
+         \x20 RAM in all: {} B of {} B\n\
          \x20 instructions per frame (QEMU -icount, SysTick): {} total, {} without the simulated \
          camera's rendering\n",
         grouped(elf.flash),
         grouped(flash_budget),
         pct(elf.flash, flash_budget),
-        grouped(elf.ram),
+        grouped(sram_statics),
         grouped(stack),
-        grouped(ram),
+        grouped(sram),
         grouped(ram_budget),
-        pct(ram, ram_budget),
+        pct(sram, ram_budget),
+        grouped(elf.ccm),
+        grouped(ccm_budget),
+        pct(elf.ccm, ccm_budget),
+        grouped(sram + elf.ccm),
+        grouped(ram_budget + ccm_budget),
         grouped(total),
         grouped(total - capture.min(total)),
     );
-    if ram > ram_budget || elf.flash > flash_budget {
+    if sram > ram_budget || elf.ccm > ccm_budget || elf.flash > flash_budget {
         return Err(format!(
             "the F405 product does not fit: the stack would run into the statics\n{r}"
         ));
@@ -457,24 +487,32 @@ stack peak 39524 bytes
     fn f405_report_fails_when_the_stack_meets_the_statics() {
         let out = "product 128x96 K=4 searches=1 objects=1\ninstr stage capture 100\n\
                    instr total 1000\nstack peak 30000 bytes\n";
-        let elf = |ram| Sizes {
+        let elf = |ram, ccm| Sizes {
             flash: 500_000,
             ram,
+            ccm,
             rows: String::new(),
         };
-        let r = f405_report(out, &elf(160_000), (1 << 20, 192 * 1024)).unwrap();
+        let budgets = (1 << 20, 128 * 1024, 64 * 1024);
+        let r = f405_report(out, &elf(160_000, 60_000), budgets).unwrap();
         assert!(
-            r.contains("static 160,000 B + stack peak 30,000 B = 190,000 B of 196,608 B"),
+            r.contains("static 100,000 B (the RGB565 pair, the shared region) + stack peak 30,000 B = 130,000 B of 131,072 B"),
+            "{r}"
+        );
+        assert!(
+            r.contains("CCM: the kept maps, 60,000 B of 65,536 B"),
             "{r}"
         );
         assert!(r.contains("1,000 total, 900 without"), "{r}");
         assert!(r.contains("--features f405, 128x96, K = 4"), "{r}");
-        let e = f405_report(out, &elf(170_000), (1 << 20, 192 * 1024)).unwrap_err();
+        // The stack into the statics, or a CCM overflow.
+        let e = f405_report(out, &elf(170_000, 60_000), budgets).unwrap_err();
         assert!(
-            e.contains("does not fit") && e.contains("200,000 B of 196,608 B"),
+            e.contains("does not fit") && e.contains("140,000 B of 131,072 B"),
             "{e}"
         );
-        assert!(f405_report("instr total 1\n", &elf(1), (1, 1)).is_err());
+        assert!(f405_report(out, &elf(160_000, 66_000), budgets).is_err());
+        assert!(f405_report("instr total 1\n", &elf(1, 0), (1, 1, 1)).is_err());
     }
 
     #[test]
@@ -482,6 +520,7 @@ stack peak 39524 bytes
         let elf = Sizes {
             flash: 400_000,
             ram: 413_040,
+            ccm: 0,
             rows: String::new(),
         };
         let r = report(OUT, &elf, 512 * 1024).unwrap();
@@ -503,6 +542,7 @@ stack peak 39524 bytes
         let small = Sizes {
             flash: 1,
             ram: 100_000,
+            ccm: 0,
             rows: String::new(),
         };
         let r = report(OUT, &small, 512 * 1024).unwrap();
