@@ -36,7 +36,6 @@
 //! map, and no worst-case label tables. (A full-frame form with a label
 //! per pixel preceded it; git keeps it, at 57b22a2.)
 
-use crate::disparity::DisparityCell;
 use crate::image::ImageError;
 use crate::segment::{bit_map_len, label_capacity};
 
@@ -162,8 +161,69 @@ impl RegionTables<'_> {
     }
 }
 
-/// Whole px of a disparity cell, rounded half up (U8F8 bits ≤ 65534).
-fn whole_px(c: DisparityCell) -> Option<u8> {
-    c.get()
-        .map(|d| u8::try_from((u32::from(d.to_bits()) + 128) >> 8).unwrap_or(u8::MAX))
+/// The whole px of the ON cell with U8F8 bits `b` (≤ 65 534), rounded half
+/// up, at most 255: non-decreasing in `b`,
+/// so the whole px of the least and greatest bits of a set of cells are
+/// the least and greatest whole px.
+#[inline(always)]
+fn whole_bits(b: u16) -> u8 {
+    u8::try_from((u32::from(b) + 128) >> 8).unwrap_or(u8::MAX)
+}
+
+/// The raw cell bits below which a cell is ON with [`whole_bits`] at most
+/// `mid`: for ON bits `b` (≤ 65 534), `min(255, (b + 128) >> 8) <= mid` is
+/// `b + 128 < 256 (mid + 1)` when `mid < 255` and always true when
+/// `mid = 255`; OFF (65 535) is never below the limit.
+#[inline(always)]
+fn at_most_limit(mid: u8) -> u32 {
+    if mid == u8::MAX {
+        u32::from(u16::MAX)
+    } else {
+        (u32::from(mid) + 1) * 256 - 128
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::disparity::DisparityCell;
+    use crate::fixed::U8F8;
+    use crate::off::MaybeOff;
+
+    /// Whole px of a disparity cell, rounded half up, as the medians
+    /// count them.
+    fn whole_px(c: DisparityCell) -> Option<u8> {
+        c.get()
+            .map(|d| u8::try_from((u32::from(d.to_bits()) + 128) >> 8).unwrap_or(u8::MAX))
+    }
+
+    #[test]
+    fn the_bit_limit_is_the_whole_px_compare_for_every_cell() {
+        let check = |mid: u8, b: u16| {
+            let c: DisparityCell = MaybeOff::from_raw(U8F8::from_bits(b));
+            let want = whole_px(c).is_some_and(|v| v <= mid);
+            assert_eq!(
+                u32::from(b) < at_most_limit(mid),
+                want,
+                "bits {b}, mid {mid}"
+            );
+            if c.is_on() {
+                assert_eq!(whole_px(c), Some(whole_bits(b)), "bits {b}");
+            }
+        };
+        // Every cell for the ends and a middle value of `mid`; every
+        // `mid` at each rounding boundary and the top of the range.
+        for mid in [0, 1, 127, 254, 255] {
+            (0..=u16::MAX).for_each(|b| check(mid, b));
+        }
+        for mid in 0..=u8::MAX {
+            for k in 0..=256u32 {
+                let edge = (k * 256).saturating_sub(128);
+                for b in edge.saturating_sub(2)..=(edge + 2).min(65_535) {
+                    check(mid, b as u16);
+                }
+            }
+            (65_400..=u16::MAX).for_each(|b| check(mid, b));
+        }
+    }
 }

@@ -20,6 +20,8 @@ mod board;
 // takes no kernel.
 #[allow(dead_code)]
 mod dsp;
+#[cfg(target_os = "none")]
+mod dsp_colour;
 
 #[cfg(target_os = "none")]
 mod mcu {

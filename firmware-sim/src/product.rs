@@ -15,6 +15,7 @@ use embedded_hal::digital::{self, OutputPin};
 
 use crate::camera::CameraError;
 use crate::pg::checksum::Fnv1a;
+use crate::pg::conspicuity::ColourKernel;
 use crate::pg::image::ImageError;
 use crate::pg::mlp::Identity;
 use crate::pg::pipeline::{
@@ -283,7 +284,7 @@ pub struct Product<'a, C, P, K = SafePhase> {
     pipeline: Pipeline<'a, K>,
 }
 
-impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel> Product<'a, C, P, K> {
+impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel + ColourKernel> Product<'a, C, P, K> {
     /// The product around a set-up pipeline.
     pub fn new(camera: C, led: P, pipeline: Pipeline<'a, K>) -> Self {
         Self {
@@ -420,7 +421,7 @@ impl fmt::Display for Fixed {
 ///
 /// ```text
 /// product 160x120 K=4 searches=4 objects=1
-/// object 0 box=64,26,53x69 area=2769 centroid=90.00,60.00 delta=11 slice=9.64..12.36 score=2596 class=09_ring cos=0.8671 verdict=known
+/// object 0 box=64,26,53x69 area=2769 centroid=90.00,60.00 delta=11 slice=9.64..12.36 score=2596 class=09_ring cos=0.7953 verdict=known
 /// objects-checksum 160x120 0x1234abcd
 /// ```
 ///

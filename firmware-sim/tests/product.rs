@@ -13,6 +13,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use embedded_hal::digital::{ErrorType, OutputPin};
 
+use firmware_sim::pg::conspicuity::ColourKernel;
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::{ImageViewMut, Rgb8};
 use firmware_sim::pg::pipeline::{Pipeline, PipelineError, RgbRows};
@@ -119,6 +120,8 @@ impl PhaseKernel for CountingPhase {
         n
     }
 }
+
+impl ColourKernel for CountingPhase {}
 
 #[test]
 fn the_pipeline_runs_the_kernel_it_is_given() {

@@ -1,5 +1,6 @@
-//! Why the smoothing cell runs twice by default: edge precision on the
-//! synthetic scene, whose object boundary is known, against passes K.
+//! Why the smoothing cell runs once by default: edge precision on the
+//! synthetic scene, whose object boundary is known, against passes K
+//! (the end-to-end measure that decided it is in `docs/CONSPICUITY.md`).
 //!
 //! `cargo test -p protogist-tests --test smoothing_choice -- --nocapture`
 //! prints the table quoted in `docs/CONSPICUITY.md`.
@@ -57,17 +58,18 @@ fn score(k: u8) -> Score {
 }
 
 #[test]
-fn two_passes_take_most_of_the_gain() {
+fn one_pass_takes_most_of_the_gain() {
     let s: Vec<Score> = (0..=4).map(score).collect();
     eprintln!("| passes K | edge precision | outline recall |\n|---|---|---|");
     for (k, sc) in s.iter().enumerate() {
         eprintln!("| {k} | {:.3} | {:.3} |", sc.precision, sc.recall);
     }
     let default = usize::from(SmoothParams::default().iterations);
-    assert_eq!(default, 2);
+    assert_eq!(default, 1);
+    assert_eq!(EdgeParams::DEFAULT.smooth, SmoothParams::default());
     // Smoothing must remove texture edges without losing the outline...
-    assert!(s[2].precision > s[0].precision + 0.05);
-    assert!(s[2].recall >= 0.95);
-    // ...and a third pass must buy little.
-    assert!(s[3].precision - s[2].precision < 0.02);
+    assert!(s[1].precision > s[0].precision + 0.05);
+    assert!(s[1].recall >= 0.95);
+    // ...and a second pass must buy little.
+    assert!(s[2].precision - s[1].precision < 0.03);
 }

@@ -23,7 +23,9 @@
 //! needs (5 for disparities up to 31 px), not 8; a pass skips the runs of
 //! regions whose median is already found.
 
-use super::{whole_px, CompleteError, CompleteParams, CompleteReport, RegionTables};
+use super::{
+    at_most_limit, whole_bits, CompleteError, CompleteParams, CompleteReport, RegionTables,
+};
 use crate::conspicuity::{EdgeCell, Luv};
 use crate::disparity::{from_pixels, DisparityCell};
 use crate::image::{ImageError, ImageView, ImageViewMut};
@@ -205,12 +207,23 @@ pub fn complete_runs<C: SideColour>(
         ) else {
             return;
         };
+        // Per run in registers: the count and the least and greatest ON
+        // bits, whose whole px are the run's least and greatest.
+        let (mut n, mut least, mut most) = (0u32, u16::MAX, 0u16);
         for x in xs {
-            if let Some(v) = drow.get(x).and_then(|&c| whole_px(c)) {
-                *t += 1;
-                *lo = (*lo).min(v);
-                *hi = (*hi).max(v);
+            if let Some(&c) = drow.get(x) {
+                if c.is_on() {
+                    let b = c.raw().to_bits();
+                    n += 1;
+                    least = least.min(b);
+                    most = most.max(b);
+                }
             }
+        }
+        if n > 0 {
+            *t += n;
+            *lo = (*lo).min(whole_bits(least));
+            *hi = (*hi).max(whole_bits(most));
         }
     });
     let widest = tables
@@ -234,12 +247,15 @@ pub fn complete_runs<C: SideColour>(
                 // Converged: the update below keeps it whatever the count.
                 return;
             }
-            let mid = (u16::from(a) + u16::from(b)) / 2;
+            // `whole_px(c) <= mid` as one compare of the bits.
+            let lim = at_most_limit(((u16::from(a) + u16::from(b)) / 2) as u8);
+            let mut n = 0u32;
             for x in xs {
-                if let Some(v) = drow.get(x).and_then(|&c| whole_px(c)) {
-                    *c += u32::from(u16::from(v) <= mid);
+                if let Some(&d) = drow.get(x) {
+                    n += u32::from(u32::from(d.raw().to_bits()) < lim);
                 }
             }
+            *c += n;
         });
         for (((lo, hi), &below), &total) in tables
             .lo

@@ -111,7 +111,7 @@ const fn clamp_bits(x: i16) -> i16 {
 }
 
 /// The tables of the conversion: 3 KB, built once by [`LuvTables::new`].
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LuvTables {
     /// sRGB code to linear light, Q20.
     lin: [u32; 256],
@@ -152,6 +152,17 @@ pub fn lightness(y: f64) -> f64 {
 fn quantise(x: f64, frac: u32) -> u32 {
     libm::round(x * f64::from(1u32 << frac)) as u32
 }
+
+/// The tables of [`LuvTables::new`], as constants: in flash on a board,
+/// so that a holder of the stage's tables (the pipeline) carries a
+/// reference, not 3 KB of RAM that moves with it. Equal to
+/// [`LuvTables::new`]'s (the test `the_static_tables_are_their_definition`).
+pub static LUV_TABLES: LuvTables = LuvTables {
+    lin: super::luv_table::LIN,
+    m: super::luv_table::M,
+    l: super::luv_table::L,
+    white: super::luv_table::WHITE,
+};
 
 impl Default for LuvTables {
     fn default() -> Self {
@@ -257,6 +268,11 @@ mod tests {
             let exact = (u64::from(n) << 18) / u64::from(d);
             assert_eq!(u64::from(div_q18(n, d)), exact, "{n}/{d}");
         }
+    }
+
+    #[test]
+    fn the_static_tables_are_their_definition() {
+        assert_eq!(LUV_TABLES, LuvTables::new());
     }
 
     #[test]

@@ -36,18 +36,21 @@
 //! assert_eq!(report.max.to_num::<u32>(), 100);
 //! ```
 
+mod kernel;
 mod luv;
+mod luv_table;
 mod ring;
 mod smooth;
 mod stream;
 
+pub use kernel::ColourKernel;
 pub use luv::{
-    lightness, srgb_to_linear, Luv, LuvTables, CIE_EPSILON, CIE_KAPPA, LUV_LIMIT_BITS, MAX_ERR_L,
-    MAX_ERR_U, MAX_ERR_V, SRGB_TO_XYZ, WHITE_U, WHITE_V,
+    lightness, srgb_to_linear, Luv, LuvTables, CIE_EPSILON, CIE_KAPPA, LUV_LIMIT_BITS, LUV_TABLES,
+    MAX_ERR_L, MAX_ERR_U, MAX_ERR_V, SRGB_TO_XYZ, WHITE_U, WHITE_V,
 };
 pub use ring::row_scratch_len;
-pub use smooth::{smooth, smooth_step, SmoothParams, MAX_ERR_SMOOTH_STEP_LSB};
-pub use stream::{stream, stream_scratch_len};
+pub use smooth::{smooth, smooth_step, snn_row, SmoothParams, MAX_ERR_SMOOTH_STEP_LSB};
+pub use stream::{stream, stream_scratch_len, stream_with};
 
 use crate::checksum::Fnv1a;
 use crate::fixed::{isqrt_round, U10F6};
@@ -185,9 +188,9 @@ fn conspicuity_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [EdgeCell]
 }
 
 /// The largest squared CIELUV distance (Q12) over the 4 pairs of a 3x3
-/// window given as its three rows.
+/// window given as its three rows (3 pixels each; 0 for shorter slices).
 #[inline(always)]
-fn pair_dist2(up: &[Luv], mid: &[Luv], down: &[Luv]) -> u32 {
+pub fn pair_dist2(up: &[Luv], mid: &[Luv], down: &[Luv]) -> u32 {
     let (&[a0, a1, a2], &[b0, _, b2], &[c0, c1, c2]) = (up, mid, down) else {
         return 0;
     };
@@ -244,9 +247,9 @@ pub struct EdgeParams {
 }
 
 impl EdgeParams {
-    /// Two smoothing passes and the paper's 10 % threshold.
+    /// One smoothing pass and the paper's 10 % threshold.
     pub const DEFAULT: Self = Self {
-        smooth: SmoothParams { iterations: 2 },
+        smooth: SmoothParams { iterations: 1 },
         threshold_percent: 10,
     };
 }

@@ -28,9 +28,9 @@ pub struct SmoothParams {
 }
 
 impl Default for SmoothParams {
-    /// Two passes: see `docs/CONSPICUITY.md` for the choice.
+    /// One pass: see `docs/CONSPICUITY.md` for the choice.
     fn default() -> Self {
-        Self { iterations: 2 }
+        Self { iterations: 1 }
     }
 }
 
@@ -107,7 +107,11 @@ fn div5_round(s: i32) -> i16 {
     ((biased / 10) as i32 - 32_768) as i16
 }
 
-pub(super) fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) {
+/// One output row of the cell: `out[x]` from the 3x3 window of columns
+/// `x..x + 3` of `prev`, `cur` and `next` (rows padded by one pixel on each
+/// side, so `out` is 2 shorter; extra pixels are ignored). The portable
+/// [`ColourKernel::snn_row`](super::ColourKernel::snn_row).
+pub fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) {
     let cells = prev.windows(3).zip(cur.windows(3)).zip(next.windows(3));
     for (((up, mid), down), o) in cells.zip(out.iter_mut()) {
         let (&[a0, a1, a2], &[b0, b1, b2], &[c0, c1, c2]) = (up, mid, down) else {

@@ -12,11 +12,12 @@
 //! functions' output bit for bit.
 
 use super::ring::row_scratch_len;
-use super::smooth::{snn_row, SmoothParams};
-use super::{pair_dist2, threshold, to_conspicuity, ConspicuityError, EdgeCell, EdgeReport, Luv};
+use super::smooth::SmoothParams;
+use super::{threshold, to_conspicuity, ColourKernel, ConspicuityError, EdgeCell, EdgeReport, Luv};
 use crate::fixed::U10F6;
 use crate::image::ImageViewMut;
 use crate::off::MaybeOff;
+use crate::stereo::phase::SafePhase;
 
 /// [`Luv`] elements of row scratch [`stream`] needs: one ring of three
 /// padded rows per smoothing pass, and one for C~.
@@ -66,6 +67,21 @@ fn slot_mut(ring: &mut [Luv], r: usize, pw: usize) -> &mut [Luv] {
 /// [`stream_scratch_len`], [`ConspicuityError::BadThreshold`] for a
 /// `percent` above 100.
 pub fn stream(
+    smooth: &SmoothParams,
+    percent: u8,
+    rows: &mut [Luv],
+    dst: &mut ImageViewMut<'_, EdgeCell>,
+    source: impl FnMut(usize, &mut [Luv]),
+    smoothed: impl FnMut(usize, &[Luv]),
+) -> Result<EdgeReport, ConspicuityError> {
+    stream_with::<SafePhase>(smooth, percent, rows, dst, source, smoothed)
+}
+
+/// [`stream`] with the hot loops by kernel `K` (the same bits).
+///
+/// # Errors
+/// As [`stream`].
+pub fn stream_with<K: ColourKernel>(
     smooth: &SmoothParams,
     percent: u8,
     rows: &mut [Luv],
@@ -120,7 +136,7 @@ pub fn stream(
             if k < passes {
                 let s = slot_mut(rest, y, pw);
                 if let Some(body) = s.get_mut(1..=w) {
-                    snn_row(prev, cur, next, body);
+                    K::snn_row(prev, cur, next, body);
                 }
                 pad(s);
                 if k + 1 == passes {
@@ -129,7 +145,7 @@ pub fn stream(
             } else if let Some(out) = dst.row_mut(y) {
                 let cells = prev.windows(3).zip(cur.windows(3)).zip(next.windows(3));
                 for (((up, mid), down), o) in cells.zip(out.iter_mut()) {
-                    let d = pair_dist2(up, mid, down);
+                    let d = K::pair_dist2(up, mid, down);
                     dmax = dmax.max(d);
                     *o = if d <= bound {
                         EdgeCell::OFF

@@ -52,7 +52,7 @@ pub mod layout;
 mod run;
 
 use crate::complete::{CompleteError, CompleteParams};
-use crate::conspicuity::{ConspicuityError, EdgeCell, EdgeParams, Luv, LuvTables};
+use crate::conspicuity::{ColourKernel, ConspicuityError, EdgeCell, EdgeParams, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::{ImageError, ImageView};
 use crate::mlp::{blob::Model, MlpError, ModelError};
@@ -362,14 +362,14 @@ impl Observer for () {}
 
 /// The set-up pipeline: checked parameters, stereo kernels, colour
 /// tables, the parsed decoder tables and model. `K` is the stereo phase
-/// refinement's row step ([`PhaseKernel`]): the portable [`SafePhase`]
-/// from [`Pipeline::new`], a target's own (e.g. the firmware's assembly
-/// one) from [`Pipeline::with_kernel`]; the same bits either way.
+/// refinement's row step ([`PhaseKernel`]) and the colour stage's hot
+/// loops ([`ColourKernel`]): the portable [`SafePhase`] from
+/// [`Pipeline::new`], a target's own (e.g. the firmware's assembly one)
+/// from [`Pipeline::with_kernel`]; the same bits either way.
 #[derive(Clone, Debug)]
 pub struct Pipeline<'a, K = SafePhase> {
     params: PipelineParams,
     c2f: C2f<K>,
-    luv: LuvTables,
     tables: heapless::Vec<DemTable<'a>, { MAX_COARSE + 1 }>,
     model: Model<'a>,
     delta_q16: u32,
@@ -458,7 +458,6 @@ impl<'a, K: PhaseKernel> Pipeline<'a, K> {
         Ok(Self {
             params: *params,
             c2f,
-            luv: LuvTables::new(),
             tables: parsed,
             delta_q16: params.delta_q16.unwrap_or(model.delta_q16()),
             model,
@@ -484,7 +483,9 @@ impl<'a, K: PhaseKernel> Pipeline<'a, K> {
     pub fn delta_q16(&self) -> u32 {
         self.delta_q16
     }
+}
 
+impl<K: PhaseKernel + ColourKernel> Pipeline<'_, K> {
     /// Runs a frame pair through every stage (see the module docs).
     ///
     /// # Errors

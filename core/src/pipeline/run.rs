@@ -8,7 +8,7 @@ use crate::complete::{
     complete_runs, pipeline_run_capacity, run_rows_len, RegionTables, RunBuffers, Tone,
     DEFAULT_REGION_CAPACITY, LABEL_ROWS,
 };
-use crate::conspicuity::{self, EdgeCell, Luv};
+use crate::conspicuity::{self, EdgeCell, Luv, LUV_TABLES};
 use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, Ranked, Scratch};
@@ -42,7 +42,7 @@ impl<O: Observer> SegmentObserver for SegmentSteps<'_, O> {
     }
 }
 
-pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel>(
+pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuity::ColourKernel>(
     p: &Pipeline<'_, K>,
     left: &S,
     right: &S,
@@ -135,7 +135,7 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel>(
         let rgb: &mut [Rgb8] = s.take(w)?;
         let tone: &mut [Tone] = s.take(n)?;
         let mut c_v = ImageViewMut::packed(&mut *edges, w, h)?;
-        conspicuity::stream(
+        conspicuity::stream_with::<K>(
             smooth,
             params.edges.threshold_percent,
             rows,
@@ -143,7 +143,7 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel>(
             |y, out| {
                 left.rgb_row(y, rgb);
                 for (o, &px) in out.iter_mut().zip(rgb.iter()) {
-                    *o = p.luv.convert(px);
+                    *o = LUV_TABLES.convert(px);
                 }
             },
             |y, row| {

@@ -66,16 +66,19 @@ pub const fn ground_rows_len(height: usize) -> usize {
 /// cells lie within a plane of its most common whole-pixel plane.
 fn row_disparity(row: &[DisparityCell], hist: &mut [u16; PLANES]) -> Option<u32> {
     hist.fill(0);
+    // The mode as the histogram fills: the most common plane, the lowest
+    // on a tie (a plane reaching the leader's count later wins only if it
+    // is lower), so no pass over all the planes is needed.
+    let (mut top, mut mode) = (0u16, 0u16);
     for d in row.iter().filter_map(|c| c.get()) {
-        if let Some(k) = hist.get_mut(usize::from(plane(d.to_bits()))) {
+        let p = plane(d.to_bits());
+        if let Some(k) = hist.get_mut(usize::from(p)) {
             *k = k.saturating_add(1);
+            if *k > top || (*k == top && p < mode) {
+                (top, mode) = (*k, p);
+            }
         }
     }
-    let (mode, _) = hist
-        .iter()
-        .enumerate()
-        .max_by_key(|&(i, &n)| (n, core::cmp::Reverse(i)))?;
-    let mode = u16::try_from(mode).ok()?;
     let (mut n, mut sum) = (0u32, 0u32);
     for d in row.iter().filter_map(|c| c.get()) {
         let b = d.to_bits();
@@ -96,21 +99,24 @@ fn row_disparity(row: &[DisparityCell], hist: &mut [u16; PLANES]) -> Option<u32>
 /// Least squares of `d = a·y + b` over the rows within `band` bits of
 /// `line`.
 fn least_squares(rows: &[u32], line: &GroundLine, band: i64) -> Option<GroundLine> {
-    let (mut n, mut sy, mut sd, mut syy, mut syd) = (0i128, 0i128, 0i128, 0i128, 0i128);
+    // The sums in i64 (no 128-bit multiply per row): with y < 2^16 rows
+    // and d < 2^16 bits, Σy² < 2^48 and Σy·d < 2^48; the checks only turn
+    // an absurd frame into "no line". The products of sums take i128.
+    let (mut n, mut sy, mut sd, mut syy, mut syd) = (0i64, 0i64, 0i64, 0i64, 0i64);
     for (y, &r) in rows.iter().enumerate() {
         let Some(d) = r.checked_sub(1) else { continue };
         let d = i64::from(d);
         if (d - line.at(y)).abs() > band {
             continue;
         }
-        let y = i128::try_from(y).ok()?;
-        let d = i128::from(d);
+        let y = i64::try_from(y).ok()?;
         n += 1;
         sy += y;
         sd += d;
-        syy += y * y;
-        syd += y * d;
+        syy = syy.checked_add(y.checked_mul(y)?)?;
+        syd = syd.checked_add(y.checked_mul(d)?)?;
     }
+    let [n, sy, sd, syy, syd] = [n, sy, sd, syy, syd].map(i128::from);
     let den = n * syy - sy * sy;
     let slope = ((n * syd - sy * sd) << 16).checked_div(den)?;
     let offset = ((sd << 16) - slope * sy).checked_div(n)?;
@@ -149,11 +155,13 @@ pub fn fit_ground(
     // most rows.
     let mut best: Option<(u32, i64, i64)> = None;
     let mut votes = [0u16; BINS];
+    let bottom = i64::try_from(h).unwrap_or(i64::MAX) - 1;
     for slope in (MIN_SLOPE..=MAX_SLOPE).step_by(SLOPE_STEP) {
-        votes.fill(0);
         // Intercepts at the bottom row (never below the row's own
-        // disparity: the slopes are positive).
-        let bottom = i64::try_from(h).unwrap_or(i64::MAX) - 1;
+        // disparity: the slopes are positive). Only the bins between the
+        // lowest and the highest vote are cleared and searched: the
+        // windows outside hold no vote and cannot lead.
+        let (mut lo, mut hi) = (BINS, 0);
         let mut above = 0u32;
         for (y, &r) in rows.iter().enumerate() {
             // A row as far as the one above it is a frontal surface (a
@@ -165,24 +173,37 @@ pub fn fit_ground(
             };
             let y = i64::try_from(y).unwrap_or(i64::MAX);
             let at_bottom = i64::from(d) + slope * (bottom - y);
-            let bin = (at_bottom + 64) >> 7;
-            if let Some(v) = usize::try_from(bin).ok().and_then(|b| votes.get_mut(b)) {
+            let Some(bin) = usize::try_from((at_bottom + 64) >> 7).ok() else {
+                continue;
+            };
+            if let Some(v) = votes.get_mut(bin) {
                 *v = v.saturating_add(1);
+                (lo, hi) = (lo.min(bin), hi.max(bin));
             }
         }
-        for (bin, w) in votes.windows(2).enumerate() {
+        if best.is_none() {
+            // The first window leads until a fuller one comes.
+            let n = votes.iter().take(2).map(|&v| u32::from(v)).sum();
+            best = Some((n, slope, 64));
+        }
+        if lo > hi {
+            continue;
+        }
+        let first = lo.saturating_sub(1);
+        let span = votes.get_mut(first..=hi).unwrap_or(&mut []);
+        for (i, w) in span.windows(2).enumerate() {
             let n: u32 = w.iter().map(|&v| u32::from(v)).sum();
             if best.is_none_or(|(m, _, _)| n > m) {
                 // Between the two bins, in bits.
-                let b = i64::try_from(2 * bin + 1).unwrap_or(0) * 64;
+                let b = i64::try_from(2 * (first + i) + 1).unwrap_or(0) * 64;
                 best = Some((n, slope, b));
             }
         }
+        span.fill(0);
     }
     let Some((_, slope, b)) = best else {
         return Ok(None);
     };
-    let bottom = i64::try_from(h).unwrap_or(i64::MAX) - 1;
     let mut line = GroundLine {
         slope: slope << 16,
         offset: (b - slope * bottom) << 16,
@@ -219,4 +240,37 @@ pub fn inhibit_ground(
         }
     }
     Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::disparity::Disparity;
+
+    fn cells(px: &[u16]) -> [DisparityCell; 8] {
+        core::array::from_fn(|i| {
+            px.get(i).map_or(DisparityCell::OFF, |&p| {
+                DisparityCell::on(Disparity::from_bits(p * 256)).unwrap_or(DisparityCell::OFF)
+            })
+        })
+    }
+
+    #[test]
+    fn a_row_takes_the_most_common_plane_and_the_lower_on_a_tie() {
+        let mut hist = [0; PLANES];
+        // Planes 9 and 5 twice each, then 30: the tie goes to 5 although 9
+        // reached the count first; 5's neighbours within a plane (4, 6)
+        // join its mean.
+        let row = cells(&[9, 9, 5, 30, 5, 6, 20, 12]);
+        assert_eq!(
+            row_disparity(&row, &mut hist),
+            Some(((5 + 5 + 6) * 256 + 1) / 3)
+        );
+        // 12 three times leads.
+        let row = cells(&[9, 9, 12, 12, 5, 12, 20, 3]);
+        assert_eq!(row_disparity(&row, &mut hist), Some(12 * 256));
+        // Under a quarter of the row agrees: no disparity.
+        let row = cells(&[1, 9, 20, 30]);
+        assert_eq!(row_disparity(&row, &mut hist), None);
+    }
 }

@@ -26,8 +26,12 @@ pub const KERNEL_FRAC: u32 = 14;
 pub const GREY_FRAC: u32 = 8;
 /// Fraction bits of a response (`I10F6`).
 pub const Z_FRAC: u32 = 6;
-/// Largest kernel radius core supports (sizes the kernel arrays).
-pub const MAX_RADIUS: usize = 15;
+/// Largest kernel radius core supports (sizes the kernel arrays): the
+/// design's ⌈3σ⌉ at λ = 4 px, σ = 0.56λ (docs/STEREO.md); longer
+/// wavelengths come from the pyramid, not from wider kernels. Every kernel
+/// array, and every copy of the set-up stereo engine on a board's stack,
+/// is sized by it (15 took 8 KB more of the product's stack).
+pub const MAX_RADIUS: usize = 7;
 /// Largest number of taps.
 pub const MAX_TAPS: usize = 2 * MAX_RADIUS + 1;
 

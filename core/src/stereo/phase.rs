@@ -395,7 +395,12 @@ impl<'p, 'b, S: RgbRows, K: PhaseKernel> Refiner<'p, 'b, S, K> {
             let Some(zrow) = z.get_mut(pad..pad + w) else {
                 return;
             };
-            x_pass::<N>(self.v, &self.phase.c_half, &self.phase.s_half, zrow);
+            let (ch, sh) = (&self.phase.c_half, &self.phase.s_half);
+            if N == 5 {
+                x_pass5(self.v, ch, sh, zrow);
+            } else {
+                x_pass::<N>(self.v, ch, sh, zrow);
+            }
             let (first, last) = (
                 zrow.first().copied().unwrap_or([0; 2]),
                 zrow.last().copied().unwrap_or([0; 2]),
@@ -613,6 +618,40 @@ fn x_pass<const N: usize>(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]])
     }
 }
 
+/// [`x_pass`] for 5 taps (the default radius 2), the same integers: the
+/// real parts, then the imaginary ones, each in one [`sweep5`], so that
+/// each pixel loads one grey value per sweep and the taps stay in
+/// registers.
+#[inline(always)]
+fn x_pass5(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
+    let shift = TAP_FRAC + 8 - Z_FRAC;
+    let half = 1 << (shift - 1);
+    let [c0, c1, c2, ..] = *ch;
+    let [_, s1, s2, ..] = *sh;
+    sweep5(v, out, |[a, b, c, d, e], o| {
+        o[0] = ((c0 * c + c1 * (b + d) + c2 * (a + e) + half) >> shift) as i16;
+    });
+    sweep5(v, out, |[a, b, _, d, e], o| {
+        o[1] = ((s1 * (d - b) + s2 * (e - a) + half) >> shift) as i16;
+    });
+}
+
+/// `f(window, out[x])` for the 5-wide windows of `v`, the window sliding
+/// through locals (one load per pixel).
+#[inline(always)]
+fn sweep5(v: &[i32], out: &mut [[i16; 2]], f: impl Fn([i32; 5], &mut [i16; 2])) {
+    let mut it = v.iter().copied();
+    let (Some(mut a), Some(mut b), Some(mut c), Some(mut d)) =
+        (it.next(), it.next(), it.next(), it.next())
+    else {
+        return;
+    };
+    for (o, e) in out.iter_mut().zip(it) {
+        f([a, b, c, d, e], o);
+        (a, b, c, d) = (b, c, d, e);
+    }
+}
+
 /// `atan2(y, x)` in turns, `Q16` (`−2^15..=2^15`; `y = 0 > x` gives
 /// `+2^15`, half a turn, as `atan2(+0, x)`), or `None` at the origin:
 /// octant reduction, `t = min/max` in `Q15` (one division, after both are
@@ -667,4 +706,40 @@ pub fn refine<S: RgbRows>(
         refiner.refine_row(y, row);
     }
     Ok(refiner.refined)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    #[test]
+    fn the_five_tap_x_pass_gives_the_general_bits() {
+        let mut rng = SplitMix64::new(0x5eed);
+        let phase = Phase::new(&PhaseParams::DEFAULT, 31).unwrap();
+        for case in 0..2_000u64 {
+            let w = 1 + rng.below(40) as usize;
+            let mut v = [0i32; 44];
+            for g in v.iter_mut().take(w + 4) {
+                // Grey in `U8F8` (0..=255·256), often at its ends.
+                *g = match rng.below(4) {
+                    0 => 0,
+                    1 => 255 << 8,
+                    _ => rng.below((255 << 8) + 1) as i32,
+                };
+            }
+            // Random taps within the format (Σ|k| ≤ 2^15) as well as the
+            // default's.
+            let (mut ch, mut sh) = (phase.c_half, phase.s_half);
+            if case % 2 == 1 {
+                for k in ch.iter_mut().chain(sh.iter_mut()).take(3) {
+                    *k = rng.below(1 << 13) as i32 - (1 << 12);
+                }
+            }
+            let (mut want, mut got) = ([[0i16; 2]; 40], [[0i16; 2]; 40]);
+            x_pass::<5>(&v[..w + 4], &ch, &sh, &mut want[..w]);
+            x_pass5(&v[..w + 4], &ch, &sh, &mut got[..w]);
+            assert_eq!(got[..w], want[..w], "case {case}, width {w}");
+        }
+    }
 }

@@ -6,6 +6,8 @@ use super::decision::{decision, right_from_left, OffTests, Verdict};
 use super::rows::{level_row, Cells};
 use super::votes::{costs_of, Voter};
 use super::{C2f, LeftRight, PATHS};
+use crate::disparity::DisparityCell;
+use crate::fixed::U8F8;
 use crate::image::RgbRows;
 use crate::stereo::filters::{grey_row, Bank, MAX_TAPS};
 use crate::stereo::phase::PhaseKernel;
@@ -300,38 +302,53 @@ impl<'e, K> Pass<'e, K> {
     /// rows `y·2^k ..` (to the frame's last row after the level's last
     /// row), each level pixel's verdict in `col` (its disparity times
     /// `2^k`) over frame columns `x·2^k ..` (to the frame's last column
-    /// after the level's last pixel).
-    fn spread(&self, y: usize, col: &[[i32; 3]], sink: &mut impl Cells, report: &mut StereoReport) {
+    /// after the level's last pixel). Each verdict is counted once for its
+    /// whole block and its cell kept in `col` (`[1]`, the bits), so that
+    /// each frame row is only filled.
+    fn spread(
+        &self,
+        y: usize,
+        col: &mut [[i32; 3]],
+        sink: &mut impl Cells,
+        report: &mut StereoReport,
+    ) {
         let (fw, fh) = self.full;
-        let first = y << self.k;
-        let end = if y + 1 >= self.h {
-            fh
-        } else {
-            first + (1 << self.k)
-        };
+        let k = self.k;
+        let step = 1usize << k;
+        let first = y << k;
+        let end = if y + 1 >= self.h { fh } else { first + step };
+        let rows = end.saturating_sub(first);
+        let last = self.w.saturating_sub(1);
+        let col = col.get_mut(..self.w).unwrap_or(&mut []);
+        for (x, c) in col.iter_mut().enumerate() {
+            let cols = if x == last {
+                fw.saturating_sub(x << k)
+            } else {
+                step
+            };
+            let cell = Verdict::from_code(c[0])
+                .scaled(k)
+                .count_n(report, cols * rows);
+            c[1] = i32::from(cell.raw().to_bits());
+        }
+        let cell = |c: &[i32; 3]| DisparityCell::from_raw(U8F8::from_bits(c[1] as u16));
+        // The level's last pixel also takes the frame's leftover columns.
+        let body = (last << k).min(fw);
         for fy in first..end {
-            // Each level pixel's cell, counted once for its columns.
-            let mut cells = col.iter().take(self.w).enumerate().map(|(x, c)| {
-                let cols = if x + 1 == self.w {
-                    (x << self.k)..fw
-                } else {
-                    (x << self.k)..(x + 1) << self.k
-                };
-                let verdict = Verdict::from_code(c[0]).scaled(self.k);
-                (verdict.count_n(report, cols.len()), cols)
-            });
             if let Some(row) = sink.row() {
-                for (cell, cols) in &mut cells {
-                    row.get_mut(cols)
-                        .into_iter()
-                        .flatten()
-                        .for_each(|c| *c = cell);
+                let (head, tail) = row.split_at_mut(body.min(row.len()));
+                for (dst, c) in head.chunks_exact_mut(step).zip(col.iter()) {
+                    dst.fill(cell(c));
+                }
+                if let (Some(c), Some(dst)) = (col.last(), tail.get_mut(..fw - body)) {
+                    dst.fill(cell(c));
                 }
                 sink.row_done(fy);
             } else {
-                for (cell, cols) in cells {
-                    for fx in cols {
-                        sink.cell(fx, fy, cell);
+                for (x, c) in col.iter().enumerate() {
+                    let end = if x == last { fw } else { (x + 1) << k };
+                    for fx in x << k..end {
+                        sink.cell(fx, fy, cell(c));
                     }
                 }
             }

@@ -60,7 +60,8 @@ pub(super) fn costs_of<const N: usize>(
     let valid = if N > 0 { N } else { valid };
     let sh = (64 - total.leading_zeros()).saturating_sub(30);
     // Below 2^30 for the callers' `total > 0`, so `i32`.
-    let t = i64::from(i32::try_from(total >> sh).unwrap_or(i32::MAX));
+    let t32 = i32::try_from(total >> sh).unwrap_or(i32::MAX);
+    let t = i64::from(t32);
     // `n(d) = 2^m·u(d)`, `m = min(wf, bf)`: `u(d) = (raw(d) >> sh)·2^(bf −
     // m) − bias(d)·t·2^(wf − m)`. Exact, and far from overflow (so the
     // reference's saturation never acts): `|raw| <= 2^14·total + 2^27`
@@ -71,35 +72,39 @@ pub(super) fn costs_of<const N: usize>(
     // a shorter chained iterator cost 240 instructions/px on the M4.
     let (wf, bf) = (u32::from(table.weight_frac), u32::from(table.bias_frac));
     let m = wf.min(bf);
-    let (pb, pw) = (i64::from(1u32 << (bf - m)), i64::from(1u32 << (wf - m)));
+    let (kb, kw) = (bf - m, wf - m);
     let scores = raw.get_mut(..valid).unwrap_or(&mut []);
-    if sh > 0 {
-        for r in scores.iter_mut() {
-            *r >>= sh;
+    let bias = table.bias_bytes().get(2 * lo..2 * (lo + valid));
+    // One of `2^kb`, `2^kw` is 1. With `kw = 0` (the firmware's tables,
+    // `bf > wf`), `(raw >> sh) << kb` is one shift of `raw` with low bits
+    // cleared: `(raw >> (sh − kb))` without its low `kb` bits, or `raw`
+    // without its low `sh` bits `<< (kb − sh)`, by less than 32 here; and
+    // `− bias·t` is one 32x32 multiply-accumulate. The same integers as
+    // the general form below, in fewer M4 instructions.
+    let nt = i64::from(t32.saturating_neg());
+    let (best, worst) = match bias {
+        Some(bias) if kw == 0 && sh >= kb && sh - kb < 32 => {
+            let (a, keep) = ((sh - kb) & 31, !i64::from((1u32 << kb) - 1));
+            fold(scores, bias, |r, b| ((r >> a) & keep) + i64::from(b) * nt)
         }
-    }
-    let (mut best, mut worst) = (i64::MIN, i64::MAX);
-    let mut fold = |r: &mut i64, bias: i16| {
-        *r = r
-            .wrapping_mul(pb)
-            .wrapping_sub((i64::from(bias) * t).wrapping_mul(pw));
-        best = best.max(*r);
-        worst = worst.min(*r);
-    };
-    match table.bias_bytes().get(2 * lo..2 * (lo + valid)) {
-        Some(bias) => {
-            for (r, b) in scores.iter_mut().zip(bias.chunks_exact(2)) {
-                if let [b0, b1] = *b {
-                    fold(r, i16::from_le_bytes([b0, b1]));
-                }
-            }
+        Some(bias) if kw == 0 && sh < kb => {
+            let (a, keep) = ((kb - sh) & 31, !i64::from((1u32 << sh) - 1));
+            fold(scores, bias, |r, b| ((r & keep) << a) + i64::from(b) * nt)
         }
+        Some(bias) => fold(scores, bias, |r, b| {
+            ((r >> sh) << kb).wrapping_sub((i64::from(b) * t) << kw)
+        }),
         None => {
+            let (mut best, mut worst) = (i64::MIN, i64::MAX);
             for (d, r) in (lo..).zip(scores.iter_mut()) {
-                fold(r, table.bias_at(d));
+                let bt = i64::from(table.bias_at(d)) * t;
+                *r = ((*r >> sh) << kb).wrapping_sub(bt << kw);
+                best = best.max(*r);
+                worst = worst.min(*r);
             }
+            (best, worst)
         }
-    }
+    };
     // Gaps `best − n(d) = 2^m·(best − u(d))` truncated to 15 significant
     // bits (so they fit `out` until they become costs).
     let span = best.abs_diff(worst);
@@ -109,18 +114,21 @@ pub(super) fn costs_of<const N: usize>(
         64 - span.leading_zeros() + m
     };
     let sh2 = bits.saturating_sub(15);
-    let mut total_gap = 0u32;
-    for (o, &v) in out.iter_mut().zip(scores.iter()) {
-        // `best >= v`, both within ±2^61: the difference is exact.
-        let du = best.wrapping_sub(v) as u64;
-        let gap = if sh2 >= m {
-            du >> (sh2 - m)
-        } else {
-            du << (m - sh2)
-        } as u16;
-        *o = gap;
-        total_gap += u32::from(gap);
-    }
+    // `best >= v`, both within ±2^61: the difference is exact. The
+    // shift, by less than 32 in the first two forms (so that the M4 shifts
+    // one word pair), is chosen once.
+    let total_gap = if sh2 >= m && sh2 - m < 32 {
+        let k = (sh2 - m) & 31;
+        gaps(out, scores, |v| (best.wrapping_sub(v) as u64 >> k) as u16)
+    } else if sh2 < m {
+        let k = (m - sh2) & 31;
+        gaps(out, scores, |v| {
+            (best.wrapping_sub(v) as u64).wrapping_shl(k) as u16
+        })
+    } else {
+        let k = sh2 - m;
+        gaps(out, scores, |v| (best.wrapping_sub(v) as u64 >> k) as u16)
+    };
     // At most 2^15 · 256 · 256 = 2^31: no overflow.
     let scale = 256 * valid as u32;
     let mut hi = 0u16;
@@ -134,6 +142,33 @@ pub(super) fn costs_of<const N: usize>(
     for o in out.iter_mut().skip(valid) {
         *o = hi;
     }
+}
+
+/// [`costs_of`]'s scores: each `r` of `scores` becomes `score(r, bias)`
+/// with its candidate's bias from `bias` (little-endian `i16`); returns
+/// their largest and smallest.
+#[inline(always)]
+fn fold(scores: &mut [i64], bias: &[u8], score: impl Fn(i64, i16) -> i64) -> (i64, i64) {
+    let (mut best, mut worst) = (i64::MIN, i64::MAX);
+    for (r, b) in scores.iter_mut().zip(bias.chunks_exact(2)) {
+        if let [b0, b1] = *b {
+            *r = score(*r, i16::from_le_bytes([b0, b1]));
+            best = best.max(*r);
+            worst = worst.min(*r);
+        }
+    }
+    (best, worst)
+}
+
+/// [`costs_of`]'s gaps: `out[d] = gap(score d)`; returns their sum.
+#[inline(always)]
+fn gaps(out: &mut [u16], scores: &[i64], gap: impl Fn(i64) -> u16) -> u32 {
+    let mut total = 0u32;
+    for (o, &v) in out.iter_mut().zip(scores) {
+        *o = gap(v);
+        total += u32::from(*o);
+    }
+    total
 }
 
 /// One level's geometry of the votes: the row width, the window length,
@@ -392,15 +427,29 @@ mod tests {
     fn costs_equal_the_plain_rule_with_and_without_a_known_length() {
         // The firmware's level-0 table (32 candidates).
         let bytes = include_bytes!("../../../../firmware-sim/data/dem_c2f_l0.bin");
-        let table = DemTable::parse(bytes).unwrap();
+        let product = DemTable::parse(bytes).unwrap();
         let mut rng = SplitMix64::new(0xc057);
-        for case in 0..20_000u64 {
+        for case in 0..25_000u64 {
+            // The table's own fractions (weights 11, bias 14 bits) and
+            // the other orders and ends of `0..=15`.
+            let mut table = product;
+            let fr = [[11, 14], [14, 11], [12, 12], [0, 15], [15, 0]];
+            let [wf, bf] = fr[(case / 5 % 5) as usize];
+            (table.weight_frac, table.bias_frac) = (wf, bf);
             let total = 1 + rng.below(1 << (1 + case % 40)) as i64;
             // |raw| <= 2^14·total + 2^27 (the engine's bound).
             let bound = (total << 14) + (1 << 27);
             let mut raw = [0i64; 9];
             for r in &mut raw {
                 *r = rng.below(2 * bound as u64 + 1) as i64 - bound;
+            }
+            // Now and then scores within a few units of each other: gaps
+            // of fewer than 15 bits (shifted left).
+            if case % 7 == 3 {
+                let (spread, base) = (1 << rng.below(12), raw[0]);
+                for r in &mut raw[1..] {
+                    *r = base + rng.below(spread) as i64;
+                }
             }
             let (n, valid) = [(5, 5), (3, 3), (5, 2), (9, 9), (3, 1)][(case % 5) as usize];
             let lo = rng.below(30 - n as u64) as usize;
@@ -413,7 +462,11 @@ mod tests {
                 (9, 9) => costs_of::<9>(&mut r, total, &table, lo, valid, &mut out[..n]),
                 _ => costs_of::<0>(&mut r, total, &table, lo, valid, &mut out[..n]),
             }
-            assert_eq!(out[..n], want[..n], "case {case}: total {total} lo {lo}");
+            assert_eq!(
+                out[..n],
+                want[..n],
+                "case {case}: total {total} lo {lo} fractions {wf} {bf}"
+            );
             let mut general = [0u16; 9];
             costs_of::<0>(&mut raw, total, &table, lo, valid, &mut general[..n]);
             assert_eq!(general[..n], want[..n], "case {case}, general path");
