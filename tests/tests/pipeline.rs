@@ -4,7 +4,8 @@
 use protogist::image::{ImageView, ImageViewMut, Rgb8};
 use protogist::mlp::Identity;
 use protogist::pipeline::{
-    workspace_bytes, workspace_words, Observer, Pipeline, PipelineError, PipelineParams, Stage,
+    kept_words, shared_words, workspace_bytes, workspace_words, Observer, Pipeline, PipelineError,
+    PipelineParams, Region, Stage,
 };
 use protogist::synth::{render_left, render_mask, render_right, SceneSpec};
 
@@ -96,6 +97,51 @@ fn the_demo_scene_gives_its_object_with_a_category() {
     ws.iter_mut().for_each(|w| *w = 0xdead_beef_dead_beef);
     let again = p.run(&lv, &rv, &mut ws).unwrap();
     assert_eq!(again.objects(), &first[..]);
+}
+
+#[test]
+fn a_split_workspace_gives_the_same_frame() {
+    // As the F405 runs it: the kept maps in one RAM, the shared region in
+    // another.
+    let (l, r, _) = demo_pair();
+    let params = PipelineParams::DEFAULT;
+    let p = Pipeline::new(&params, &TABLES, MODEL).unwrap();
+    let lv = ImageView::packed(&l, W, H).unwrap();
+    let rv = ImageView::packed(&r, W, H).unwrap();
+    let (kw, sw) = (kept_words(W, H, &params), shared_words(W, H, &params));
+    assert_eq!(kw + sw, workspace_words(W, H, &params));
+    let mut ws = vec![0u64; workspace_words(W, H, &params)];
+    let one = p.run(&lv, &rv, &mut ws).unwrap();
+    let (mut kept, mut shared) = (vec![0u64; kw], vec![0u64; sw]);
+    let split = p.run_split(&lv, &rv, &mut kept, &mut shared).unwrap();
+    assert!(!one.objects().is_empty());
+    assert_eq!(one.objects(), split.objects());
+    for (a, b) in one.objects().iter().zip(split.objects()) {
+        assert_eq!(one.shape(a), split.shape(b));
+        assert_eq!(
+            one.mask(a).map(|m| m.count()),
+            split.mask(b).map(|m| m.count())
+        );
+    }
+    // A short part is an error naming it, with the bytes it needs.
+    let mut short = vec![0u64; kw - 1];
+    assert_eq!(
+        p.run_split(&lv, &rv, &mut short, &mut shared).err(),
+        Some(PipelineError::RegionTooSmall {
+            region: Region::Kept,
+            needed: kw * 8,
+            got: (kw - 1) * 8,
+        })
+    );
+    let mut short = vec![0u64; sw - 1];
+    assert_eq!(
+        p.run_split(&lv, &rv, &mut kept, &mut short).err(),
+        Some(PipelineError::RegionTooSmall {
+            region: Region::Shared,
+            needed: sw * 8,
+            got: (sw - 1) * 8,
+        })
+    );
 }
 
 #[test]

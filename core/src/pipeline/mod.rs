@@ -199,6 +199,30 @@ pub const fn workspace_words(width: usize, height: usize, params: &PipelineParam
     workspace_bytes(width, height, params).div_ceil(8)
 }
 
+/// Bytes of the workspace's first part, the maps kept for the result
+/// (the edge map C, the completed disparity, and per object a bit mask and
+/// a shape vector), as `u64` words: the `kept` slice of
+/// [`Pipeline::run_split`].
+pub const fn kept_words(width: usize, height: usize, params: &PipelineParams) -> usize {
+    layout::kept_bytes(width, height, params).div_ceil(8)
+}
+
+/// The workspace's second part, the region the stages share in turn, as
+/// `u64` words: the `shared` slice of [`Pipeline::run_split`].
+/// `kept_words + shared_words == workspace_words`.
+pub const fn shared_words(width: usize, height: usize, params: &PipelineParams) -> usize {
+    layout::shared_bytes(width, height, params).div_ceil(8)
+}
+
+/// The two parts of a split workspace ([`Pipeline::run_split`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Region {
+    /// The maps kept for the result ([`kept_words`]).
+    Kept,
+    /// The region the stages share ([`shared_words`]).
+    Shared,
+}
+
 /// Why a pipeline could not be set up or run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
@@ -228,6 +252,16 @@ pub enum PipelineError {
     },
     /// The workspace is smaller than [`workspace_bytes`].
     WorkspaceTooSmall {
+        /// Bytes needed.
+        needed: usize,
+        /// Bytes given.
+        got: usize,
+    },
+    /// One part of a split workspace is smaller than it needs
+    /// ([`kept_words`], [`shared_words`]).
+    RegionTooSmall {
+        /// The part.
+        region: Region,
         /// Bytes needed.
         needed: usize,
         /// Bytes given.
@@ -284,6 +318,20 @@ impl fmt::Display for PipelineError {
                 f,
                 "workspace of {got} bytes is too small: the run needs {needed}"
             ),
+            Self::RegionTooSmall {
+                region,
+                needed,
+                got,
+            } => {
+                let part = match region {
+                    Region::Kept => "kept maps",
+                    Region::Shared => "shared region",
+                };
+                write!(
+                    f,
+                    "workspace part '{part}' of {got} bytes is too small: the run needs {needed}"
+                )
+            }
             Self::WorkspaceAlignment => f.write_str("workspace buffer could not be typed"),
             Self::Image(e) => write!(f, "frame: {e}"),
             Self::Stereo(e) => write!(f, "stereo: {e}"),
@@ -514,5 +562,40 @@ impl<K: PhaseKernel + ColourKernel> Pipeline<'_, K> {
         observer: &mut O,
     ) -> Result<Frame<'w>, PipelineError> {
         run::run(self, left, right, workspace, observer)
+    }
+
+    /// [`Pipeline::run`] in a workspace of two slices, for boards whose
+    /// RAM comes in parts: `kept` ([`kept_words`]) holds the maps the
+    /// result borrows, `shared` ([`shared_words`]) the stages' scratch. On
+    /// the STM32F405 the kept maps fit the core-coupled RAM, which no DMA
+    /// reaches, and the frames stay in the SRAM (docs/PIPELINE.md).
+    ///
+    /// # Errors
+    /// As [`Pipeline::run`], with [`PipelineError::RegionTooSmall`] for
+    /// a short part.
+    pub fn run_split<'w, S: RgbRows>(
+        &self,
+        left: &S,
+        right: &S,
+        kept: &'w mut [u64],
+        shared: &'w mut [u64],
+    ) -> Result<Frame<'w>, PipelineError> {
+        self.run_split_observed(left, right, kept, shared, &mut ())
+    }
+
+    /// [`Pipeline::run_split`], showing the intermediate maps to
+    /// `observer`.
+    ///
+    /// # Errors
+    /// As [`Pipeline::run_split`].
+    pub fn run_split_observed<'w, S: RgbRows, O: Observer>(
+        &self,
+        left: &S,
+        right: &S,
+        kept: &'w mut [u64],
+        shared: &'w mut [u64],
+        observer: &mut O,
+    ) -> Result<Frame<'w>, PipelineError> {
+        run::run_split(self, left, right, kept, shared, observer)
     }
 }

@@ -2,7 +2,8 @@
 
 use super::arena::Arena;
 use super::{
-    layout, Frame, Object, Observer, Pipeline, PipelineError, RgbRows, Stage, MAX_OBJECTS, TOP_K,
+    layout, Frame, Object, Observer, Pipeline, PipelineError, Region, RgbRows, Stage, MAX_OBJECTS,
+    TOP_K,
 };
 use crate::complete::{
     complete_runs, pipeline_run_capacity, run_rows_len, RegionTables, RunBuffers, Tone,
@@ -51,26 +52,51 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuity::Col
 ) -> Result<Frame<'w>, PipelineError> {
     let params = &p.params;
     let (w, h) = left.size();
-    let tables = p.tables.as_slice();
-    p.c2f.check(tables, (w, h), right.size())?;
+    p.c2f.check(p.tables.as_slice(), (w, h), right.size())?;
     let needed = super::workspace_bytes(w, h, params);
-    if workspace.len() * 8 < needed {
-        return Err(PipelineError::WorkspaceTooSmall {
-            needed,
-            got: workspace.len() * 8,
-        });
+    let got = workspace.len() * 8;
+    let too_small = PipelineError::WorkspaceTooSmall { needed, got };
+    if got < needed {
+        return Err(too_small);
     }
-    let n = w * h;
-    let k = usize::from(params.segment.max_objects);
-    let workspace_len = workspace.len();
     // Checked above; `split_at_mut` would link a panic path the optimiser
     // cannot remove (run-time sizes).
     let (kept, shared) = workspace
-        .split_at_mut_checked(layout::kept_bytes(w, h, params).div_ceil(8))
-        .ok_or(PipelineError::WorkspaceTooSmall {
-            needed,
-            got: workspace_len * 8,
-        })?;
+        .split_at_mut_checked(super::kept_words(w, h, params))
+        .ok_or(too_small)?;
+    run_split(p, left, right, kept, shared, obs)
+}
+
+pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuity::ColourKernel>(
+    p: &Pipeline<'_, K>,
+    left: &S,
+    right: &S,
+    kept: &'w mut [u64],
+    shared: &'w mut [u64],
+    obs: &mut O,
+) -> Result<Frame<'w>, PipelineError> {
+    let params = &p.params;
+    let (w, h) = left.size();
+    let tables = p.tables.as_slice();
+    p.c2f.check(tables, (w, h), right.size())?;
+    for (region, words, needed) in [
+        (Region::Kept, kept.len(), layout::kept_bytes(w, h, params)),
+        (
+            Region::Shared,
+            shared.len(),
+            layout::shared_bytes(w, h, params),
+        ),
+    ] {
+        if words * 8 < needed {
+            return Err(PipelineError::RegionTooSmall {
+                region,
+                needed,
+                got: words * 8,
+            });
+        }
+    }
+    let n = w * h;
+    let k = usize::from(params.segment.max_objects);
     let mut a = Arena::new(kept);
     let edges: &'w mut [EdgeCell] = a.take(n)?;
     let disparity: &'w mut [DisparityCell] = a.take(n)?;
