@@ -17,7 +17,7 @@ use protogist_host::classify::pipeline_data::PipelineTraining;
 use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
 use protogist_host::classify::shipped::SHIPPED_MODEL;
 
-const META: &str = "protogist train --dataset shapes --features shape --hidden 128 --epochs 300 --test-fraction 0.5 --seed 1 --gamma 0.2 --through-pipeline --views 4 --with-clean";
+const META: &str = "protogist train --dataset shapes --features shape --hidden 128 --epochs 300 --test-fraction 0.1 --seed 1 --gamma 0.5 --through-pipeline --views 2 --with-clean";
 
 #[test]
 fn shipped_model_parses_and_records_its_parameters() {
@@ -29,9 +29,10 @@ fn shipped_model_parses_and_records_its_parameters() {
     assert!(m.delta_q16() > 0 && m.delta_q16() < 65536);
 }
 
-/// `gen-shapes --out shapes --classes 19 --per-class 40 --seed 1 --size 64`
+/// `gen-shapes --out shapes --classes 19 --per-class 120 --seed 1 --size 64`
 /// then `train --dataset shapes --hidden 128 --epochs 300 --seed 1
-/// --through-pipeline --views 4 --with-clean --out shapes_model.bin`.
+/// --gamma 0.5 --test-fraction 0.1 --through-pipeline --views 2
+/// --with-clean --out shapes_model.bin`.
 #[test]
 fn documented_commands_regenerate_the_shipped_model() {
     let tmp = tempfile::tempdir().unwrap();
@@ -39,7 +40,7 @@ fn documented_commands_regenerate_the_shipped_model() {
     gen_shapes(&GenShapesOptions {
         out: ds.clone(),
         classes: 19,
-        per_class: 40,
+        per_class: 120,
         seed: 1,
         size: 64,
     })
@@ -51,14 +52,14 @@ fn documented_commands_regenerate_the_shipped_model() {
             hidden: 128,
             epochs: 300,
             out: out.clone(),
-            test_fraction: 0.5,
+            test_fraction: 0.1,
             seed: 1,
-            gamma: 0.2,
+            gamma: 0.5,
             features: Features::Shape,
         },
         &PipelineTraining {
             through_pipeline: true,
-            views: 4,
+            views: 2,
             with_clean: true,
         },
     )
