@@ -48,14 +48,18 @@
 //! the same bits. docs/MODEL_FORMAT.md, section Kernel, has the costs.
 
 pub mod blob;
+mod kernel;
 pub mod logsig_table;
 pub mod requant;
+mod rules;
 
 pub use blob::{crc32, InputKind, Model, ModelError};
+pub use kernel::{safe_dot_rows, MacKernel, SafeKernel};
+pub use rules::{cosine_q16, identify, scores, top_k, verify};
 
-use crate::fixed::isqrt_floor_u128;
 use crate::shape::ShapeElem;
-use blob::{le_i32, le_u16};
+use blob::le_i32;
+use kernel::{hi16, lo16};
 use requant::{logsig_q12, logsig_u8, requantize, requantize_i16};
 
 /// Ranked classes the demo prints.
@@ -257,45 +261,6 @@ fn check_scratch(buffer: &'static str, needed: usize, got: usize) -> Result<(), 
     Ok(())
 }
 
-/// The low half of a word, sign-extended.
-#[inline(always)]
-fn lo16(v: i32) -> i32 {
-    i32::from(v as i16)
-}
-
-/// The high half of a word, sign-extended.
-#[inline(always)]
-fn hi16(v: i32) -> i32 {
-    v >> 16
-}
-
-/// Four multiply-accumulates: weight bytes `w` (excess-128, byte `i` for
-/// input `i`) against inputs `x0 | x2 << 16` and `x1 | x3 << 16`. `mask`
-/// is `0x00FF_00FF`: it puts bytes 0 and 2 (and 1 and 3) in the two 16-bit
-/// halves of a register, so each product reads its operands' halves
-/// directly (the Cortex-M4 `SMLAxy` forms). The caller passes the mask
-/// through `black_box` so that LLVM keeps the two-lane registers instead of
-/// extracting every byte on its own.
-#[inline(always)]
-fn mac4(acc: i32, w: u32, x02: i32, x13: i32, mask: u32) -> i32 {
-    let even = (w & mask) as i32;
-    // An arithmetic shift, so that LLVM cannot prove the top half
-    // non-negative and turn `hi16` into a logical shift (which `SMLAxT`
-    // cannot fold).
-    let odd = ((w as i32) >> 8) & mask as i32;
-    acc.wrapping_add(lo16(even).wrapping_mul(lo16(x02)))
-        .wrapping_add(lo16(odd).wrapping_mul(lo16(x13)))
-        .wrapping_add(hi16(even).wrapping_mul(hi16(x02)))
-        .wrapping_add(hi16(odd).wrapping_mul(hi16(x13)))
-}
-
-/// Four weight bytes as a little-endian word (0 if short: never, the
-/// callers pass `chunks_exact(4)`).
-#[inline(always)]
-fn word(b: &[u8]) -> u32 {
-    <[u8; 4]>::try_from(b).map_or(0, u32::from_le_bytes)
-}
-
 /// Input value `j` of packed words.
 #[inline]
 fn x_at(x: &[u32], j: usize) -> i32 {
@@ -305,99 +270,6 @@ fn x_at(x: &[u32], j: usize) -> i32 {
     } else {
         hi16(w)
     }
-}
-
-/// `[x02, x13]` of a group's two words.
-#[inline(always)]
-fn xpair(xs: &[u32]) -> (i32, i32) {
-    match *xs {
-        [a, b] => (a as i32, b as i32),
-        _ => (0, 0),
-    }
-}
-
-/// The inner dot-product kernel of [`forward_with`] (CMSIS-NN style: the
-/// portable default is [`SafeKernel`]; a target may supply an optimised
-/// one, e.g. with `SMLAD`, as the firmware does).
-///
-/// Contract of [`MacKernel::dot_rows`]: `w` holds `acc.len()` rows of
-/// excess-128 weight bytes, row `r` at `w[r · stride..][..len]` (byte `i`
-/// for input `i`), `len` a multiple of 4; `x` holds at least `len / 2`
-/// words, inputs packed as [`input_len`] describes (`x0 | x2 << 16`,
-/// `x1 | x3 << 16` per group of four). Set `acc[r] = Σ_i u[r][i] · x[i]`
-/// with wrapping `i32` arithmetic. Addition modulo 2^32 does not depend on
-/// order, so any kernel that honours this gives the same bits as the
-/// default. Rows that do not fit in `w` are never passed by `layer`; the
-/// default gives them partial sums rather than panicking.
-pub trait MacKernel {
-    /// `acc[r] = Σ_{i < len} u[r · stride + i] · x[i]`, wrapping.
-    #[inline(always)]
-    fn dot_rows(w: &[u8], stride: usize, len: usize, x: &[u32], acc: &mut [i32]) {
-        safe_dot_rows(w, stride, len, x, acc);
-    }
-}
-
-/// The portable kernel (`SMLAxy` forms on Cortex-M4), used by [`forward`].
-#[derive(Clone, Copy, Debug, Default)]
-pub struct SafeKernel;
-
-impl MacKernel for SafeKernel {}
-
-/// The default [`MacKernel::dot_rows`]: four rows at a time sharing each
-/// input load, then single rows.
-#[inline(always)]
-pub fn safe_dot_rows(w: &[u8], stride: usize, len: usize, x: &[u32], acc: &mut [i32]) {
-    let xs = x.get(..len / 2).unwrap_or(&[]);
-    let row = |r: usize| {
-        w.get(r.saturating_mul(stride)..)
-            .and_then(|t| t.get(..len))
-            .unwrap_or(&[])
-    };
-    let mut blocks = acc.chunks_exact_mut(4);
-    let mut r = 0;
-    for a in &mut blocks {
-        let s = dot4_rows([row(r), row(r + 1), row(r + 2), row(r + 3)], xs);
-        a.copy_from_slice(&s);
-        r += 4;
-    }
-    for a in blocks.into_remainder() {
-        *a = dot1_row(row(r), xs);
-        r += 1;
-    }
-}
-
-/// Four rows sharing the inputs.
-#[inline(always)]
-fn dot4_rows(rows: [&[u8]; 4], x: &[u32]) -> [i32; 4] {
-    let mask = core::hint::black_box(0x00FF_00FFu32);
-    let [r0, r1, r2, r3] = rows;
-    let (mut a0, mut a1, mut a2, mut a3) = (0i32, 0i32, 0i32, 0i32);
-    for ((((c0, c1), c2), c3), xs) in r0
-        .chunks_exact(4)
-        .zip(r1.chunks_exact(4))
-        .zip(r2.chunks_exact(4))
-        .zip(r3.chunks_exact(4))
-        .zip(x.chunks_exact(2))
-    {
-        let (x02, x13) = xpair(xs);
-        a0 = mac4(a0, word(c0), x02, x13, mask);
-        a1 = mac4(a1, word(c1), x02, x13, mask);
-        a2 = mac4(a2, word(c2), x02, x13, mask);
-        a3 = mac4(a3, word(c3), x02, x13, mask);
-    }
-    [a0, a1, a2, a3]
-}
-
-/// One row.
-#[inline(always)]
-fn dot1_row(row: &[u8], x: &[u32]) -> i32 {
-    let mask = core::hint::black_box(0x00FF_00FFu32);
-    row.chunks_exact(4)
-        .zip(x.chunks_exact(2))
-        .fold(0i32, |a, (c, xs)| {
-            let (x02, x13) = xpair(xs);
-            mac4(a, word(c), x02, x13, mask)
-        })
 }
 
 /// Rows per [`MacKernel::dot_rows`] call of [`layer`] (a multiple of 3 and
@@ -524,123 +396,4 @@ pub fn forward_with<'s, K: MacKernel>(
         logsig_q12,
     );
     Ok(scratch.output.get(..k).unwrap_or(&[]))
-}
-
-/// The cosine of `v` and a template given as little-endian u16 bytes, in
-/// Q16 (65536 = 1), rounded; 0 when either is all zero.
-pub fn cosine_q16(v: &[u16], template_le: &[u8]) -> u32 {
-    let (mut vt, mut vv, mut tt) = (0u64, 0u64, 0u64);
-    for (&a, t) in v.iter().zip(template_le.chunks_exact(2)) {
-        let (a, t) = (u64::from(a), u64::from(le_u16(t, 0)));
-        vt += a * t;
-        vv += a * a;
-        tt += t * t;
-    }
-    // Each sum is below 2^32 · MAX_CLASSES = 2^42: the product fits u128.
-    let norm = isqrt_floor_u128(u128::from(vv) * u128::from(tt));
-    if norm == 0 {
-        return 0;
-    }
-    let q = ((u128::from(vt) << 16) + norm / 2) / norm;
-    q.min(1 << 16) as u32
-}
-
-/// The Q16 cosine of `outputs` with every class template, in `scores`.
-///
-/// # Errors
-/// [`MlpError::FeatureSize`] when `outputs` or `scores` is not one per class.
-pub fn scores(model: &Model<'_>, outputs: &[u16], scores: &mut [u32]) -> Result<(), MlpError> {
-    let k = model.classes();
-    for len in [outputs.len(), scores.len()] {
-        if len != k {
-            return Err(MlpError::FeatureSize {
-                expected: k,
-                got: len,
-            });
-        }
-    }
-    for (c, s) in scores.iter_mut().enumerate() {
-        *s = model.template(c).map_or(0, |t| cosine_q16(outputs, t));
-    }
-    Ok(())
-}
-
-/// The best `ranked.len()` classes by score, best first, ties to the lower
-/// class; returns how many entries were filled (`min(len, classes)`).
-///
-/// # Errors
-/// [`MlpError::FeatureSize`] when `outputs` is not one per class.
-pub fn top_k(model: &Model<'_>, outputs: &[u16], ranked: &mut [Ranked]) -> Result<usize, MlpError> {
-    let k = model.classes();
-    if outputs.len() != k {
-        return Err(MlpError::FeatureSize {
-            expected: k,
-            got: outputs.len(),
-        });
-    }
-    let mut filled = 0usize;
-    for c in 0..k {
-        let score = model.template(c).map_or(0, |t| cosine_q16(outputs, t));
-        let entry = Ranked {
-            class: c as u16,
-            score,
-        };
-        // Insert after every entry with a score >= this one (stable).
-        let pos = ranked
-            .iter()
-            .take(filled)
-            .position(|r| r.score < score)
-            .unwrap_or(filled);
-        if pos >= ranked.len() {
-            continue;
-        }
-        let end = filled.min(ranked.len().saturating_sub(1));
-        if let Some(tail) = ranked.get_mut(pos..=end) {
-            // Shift the tail one place right, dropping its last entry, with
-            // `entry` first.
-            let mut carry = entry;
-            for slot in tail.iter_mut() {
-                core::mem::swap(slot, &mut carry);
-            }
-        }
-        filled = (filled + 1).min(ranked.len());
-    }
-    Ok(filled)
-}
-
-/// Identification: the best class if its score reaches `Δ`, else
-/// [`Identity::Unknown`].
-///
-/// # Errors
-/// As [`top_k`].
-pub fn identify(model: &Model<'_>, outputs: &[u16]) -> Result<(Identity, Ranked), MlpError> {
-    let mut best = [Ranked::default()];
-    top_k(model, outputs, &mut best)?;
-    let [b] = best;
-    let id = if b.score >= model.delta_q16() {
-        Identity::Known(b.class)
-    } else {
-        Identity::Unknown
-    };
-    Ok((id, b))
-}
-
-/// Verification: accept the claim "class `claim`" when its score reaches
-/// `Δ`.
-///
-/// # Errors
-/// [`MlpError::ClassOutOfRange`], or as [`top_k`].
-pub fn verify(model: &Model<'_>, outputs: &[u16], claim: usize) -> Result<bool, MlpError> {
-    let k = model.classes();
-    if outputs.len() != k {
-        return Err(MlpError::FeatureSize {
-            expected: k,
-            got: outputs.len(),
-        });
-    }
-    let t = model.template(claim).ok_or(MlpError::ClassOutOfRange {
-        class: claim,
-        classes: k,
-    })?;
-    Ok(cosine_q16(outputs, t) >= model.delta_q16())
 }
