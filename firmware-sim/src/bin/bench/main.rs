@@ -12,7 +12,7 @@
 #[path = "../../board.rs"]
 mod board;
 #[cfg(target_os = "none")]
-#[path = "../../dsp.rs"]
+#[path = "../../dsp/mod.rs"]
 mod dsp;
 #[cfg(target_os = "none")]
 mod mcu;
