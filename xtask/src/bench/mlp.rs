@@ -99,7 +99,7 @@ pub(super) fn mlp_qemu(stdout: &str) -> Section {
         None => body = format!("{NOT_YET}: the firmware printed no `ipm mlp` lines.\n"),
         Some(w) => body.push_str(&format!(
             "\n**Target {}: at most {w:.2} instructions / MAC** over both networks, against \
-             1.5. The inner loop is the firmware's `SMLAD` kernel (`firmware-sim/src/dsp.rs`, \
+             1.5. The inner loop is the firmware's `SMLAD` kernel (`firmware-sim/src/dsp/mlp.rs`, \
              through core's `MacKernel` hook; its outputs equal the portable kernel's, the \
              `checksum mlp` lines); where the rest goes: docs/MODEL_FORMAT.md, section \
              Kernel.\n",

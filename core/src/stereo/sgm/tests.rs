@@ -125,7 +125,7 @@ fn check(v: &Volume, frames: usize) {
 /// Steps the [`Lanes`] kernel took.
 static LANE_STEPS: core::sync::atomic::AtomicUsize = core::sync::atomic::AtomicUsize::new(0);
 
-/// The firmware's assembly step (`firmware-sim/src/dsp.rs`) written
+/// The firmware's assembly step (`firmware-sim/src/dsp/sgm.rs`) written
 /// plainly: 16-bit lanes, `min(h(d ± 1)) + P1` saturating at 65535,
 /// the pads as `min(pad, 65535)`.
 struct Lanes;
