@@ -431,3 +431,78 @@ pub const SGM_P1: f32 = 0.25;
 pub const SGM_P2: f32 = 16.0;
 /// SGM paths of the reference's read-out tests (one top-to-bottom pass).
 pub const SGM_PATHS: u8 = 5;
+
+/// The coarse-to-fine engine's shared fixtures: decoder tables trained once
+/// per layout, the reference's parameters, and a core run on an RGB pair.
+pub mod c2f {
+    use protogist::disparity::DisparityCell;
+    use protogist::image::{ImageView, Rgb8};
+    use protogist::stereo::c2f::{C2f, C2fParams};
+    use protogist::stereo::{self as qs, StereoError, StereoReport};
+    use protogist_host::reference::stereo::c2f::level_params;
+    use protogist_host::reference::stereo::table::DemTable as HostTable;
+    use protogist_host::reference::stereo::{self as dem};
+    use protogist_host::storage::C2fStorage;
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+
+    /// The reference's parameters for `p` (what `protogist stereo --engine
+    /// reference` runs).
+    pub fn host_params(p: &C2fParams) -> dem::DemParams {
+        protogist_host::dem_tables::params_of(p)
+    }
+
+    /// The decoder tables of every level of `p` (trained once per layout).
+    pub fn tables(p: &C2fParams) -> Vec<Vec<u8>> {
+        static CACHE: OnceLock<Mutex<HashMap<u8, Vec<u8>>>> = OnceLock::new();
+        let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+        let hp = host_params(p);
+        (0..=usize::from(p.coarse))
+            .map(|k| {
+                let lp = level_params(&hp, k);
+                let mut c = cache.lock().unwrap();
+                c.entry(lp.max_disp)
+                    .or_insert_with(|| HostTable::from_decoder(&dem::train(&lp)).to_bytes())
+                    .clone()
+            })
+            .collect()
+    }
+
+    /// Runs core on an RGB pair.
+    pub fn run_core(
+        p: &C2fParams,
+        tables: &[Vec<u8>],
+        l: &[Rgb8],
+        r: &[Rgb8],
+        w: usize,
+        h: usize,
+    ) -> Result<(Vec<DisparityCell>, StereoReport), StereoError> {
+        let e = C2f::new(p)?;
+        let ts: Vec<qs::DemTable<'_>> = tables
+            .iter()
+            .map(|t| qs::DemTable::parse(t))
+            .collect::<Result<_, _>>()?;
+        let mut st = C2fStorage::new(w, h, p);
+        let mut out = vec![DisparityCell::OFF; w * h];
+        let rep = e.run(
+            &ts,
+            &ImageView::packed(l, w, h).unwrap(),
+            &ImageView::packed(r, w, h).unwrap(),
+            &mut st.buffers(),
+            &mut |x, y, c| out[y * w + x] = c,
+            &mut (),
+        )?;
+        Ok((out, rep))
+    }
+
+    /// The full engine settings with `max_disp` disparities.
+    pub fn params(max_disp: u8) -> C2fParams {
+        C2fParams {
+            dem: qs::DemParams {
+                max_disp,
+                ..C2fParams::FULL.dem
+            },
+            ..C2fParams::FULL
+        }
+    }
+}

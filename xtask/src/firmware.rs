@@ -8,6 +8,12 @@ use std::time::{Duration, Instant};
 use crate::setup::{rustup_has_thumb, THUMB};
 use crate::util::{host_cargo, output, root, Result};
 
+mod budget;
+mod panics;
+
+pub use budget::{budget, budget_of, f405_ccm_budget, size_report, sizes, Sizes};
+pub use panics::check_no_panic;
+
 const QEMU_TIMEOUT: Duration = Duration::from_secs(300);
 /// Lines that must be bit-identical between the host and the QEMU run.
 const COMPARED_PREFIXES: [&str; 2] = ["checksum ", "edges "];
@@ -352,91 +358,6 @@ pub fn build_product() -> Result<()> {
     Ok(())
 }
 
-/// Symbols whose presence in the linked ELF means a panic is reachable:
-/// the panic entry points of `core` and the `#[panic_handler]`.
-const PANIC_MARKERS: [&str; 2] = ["core::panicking::", "rust_begin_unwind"];
-
-/// The symbols of `nm -C` output that are panic entry points.
-pub fn panic_symbols(nm: &str) -> Vec<&str> {
-    nm.lines()
-        .filter_map(|l| l.splitn(3, ' ').nth(2))
-        .filter(|name| PANIC_MARKERS.iter().any(|m| name.contains(m)))
-        .collect()
-}
-
-/// The functions of `objdump -d -C` output that branch to a panic entry
-/// point (`core::` itself excluded), each once, in address order.
-pub fn panic_callers(objdump: &str) -> Vec<String> {
-    let mut current: Option<&str> = None;
-    let mut callers: Vec<String> = Vec::new();
-    for line in objdump.lines() {
-        // A function starts with `0001165e <name>:`.
-        if let Some(name) = line
-            .strip_suffix(">:")
-            .and_then(|l| l.split_once(" <"))
-            .map(|(_, name)| name)
-        {
-            current = Some(name);
-            continue;
-        }
-        // `   addr:\tbytes\top\toperand`: a branch's operand is
-        // `addr <name>` or `addr <name+0x4c>` (a branch inside `name`).
-        let mut fields = line.split('\t').skip(2);
-        let (Some(op), Some(operand)) = (fields.next(), fields.next()) else {
-            continue;
-        };
-        let Some(target) = operand.split_once(" <").map(|(_, t)| t) else {
-            continue;
-        };
-        let callee = target.strip_suffix('>').unwrap_or(target);
-        let callee = callee.split_once("+0x").map_or(callee, |(name, _)| name);
-        if op.starts_with('b') && PANIC_MARKERS.iter().any(|m| callee.contains(m)) {
-            let caller = current.filter(|f| !f.starts_with("core::") && *f != callee);
-            if let Some(f) = caller {
-                if callers.last().map(String::as_str) != Some(f) {
-                    callers.push(f.to_string());
-                }
-            }
-        }
-    }
-    callers
-}
-
-/// Fails if the firmware ELF links any panic entry point: the link-time
-/// proof that no panic is reachable (the optimiser removed every path, so
-/// `--gc-sections` dropped `core`'s panic functions and the handler).
-/// On failure, lists the functions that still branch to one.
-pub fn check_no_panic(elf: &std::path::Path) -> Result<String> {
-    let nm = output(Command::new("arm-none-eabi-nm").arg("-C").arg(elf))?;
-    let found = panic_symbols(&nm);
-    if found.is_empty() {
-        return Ok(format!(
-            "no panic path: {} links none of {PANIC_MARKERS:?}",
-            elf.display()
-        ));
-    }
-    let dis = output(
-        Command::new("arm-none-eabi-objdump")
-            .args(["-d", "-C"])
-            .arg(elf),
-    )?;
-    let callers = panic_callers(&dis);
-    let mut msg = format!(
-        "{} can panic: it links {} panic symbol(s):\n",
-        elf.display(),
-        found.len()
-    );
-    for s in &found {
-        msg.push_str(&format!("  {s}\n"));
-    }
-    msg.push_str("called from:\n");
-    for c in &callers {
-        msg.push_str(&format!("  {c}\n"));
-    }
-    msg.push_str("(`arm-none-eabi-addr2line -i -e ELF ADDR` on a call site gives its source line)");
-    Err(msg)
-}
-
 /// Output of the host build of the bench firmware.
 pub fn host_output() -> Result<String> {
     let out = output(host_cargo().args([
@@ -481,152 +402,9 @@ pub fn compare(host: &str, qemu: &str) -> Result<usize> {
     Ok(h.len())
 }
 
-/// Parses `LENGTH = 2M` style values for FLASH and RAM from memory.x.
-pub fn budget() -> Result<(u64, u64)> {
-    budget_of(Machine::Mps2An386)
-}
-
-/// FLASH and RAM lengths of `machine`'s memory map.
-pub fn budget_of(machine: Machine) -> Result<(u64, u64)> {
-    let name = machine.memory_map();
-    let path = root().join("firmware-sim").join(name);
-    let text =
-        std::fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
-    let length = |region: &str| -> Result<u64> {
-        let line = text
-            .lines()
-            .find(|l| l.trim_start().starts_with(region) && l.contains("LENGTH"))
-            .ok_or(format!("{name} has no {region} region"))?;
-        let v = line
-            .split("LENGTH")
-            .nth(1)
-            .unwrap_or("")
-            .trim_start_matches([' ', '='])
-            .trim();
-        let (num, mult) = match v.chars().last() {
-            Some('K') => (&v[..v.len() - 1], 1024),
-            Some('M') => (&v[..v.len() - 1], 1024 * 1024),
-            _ => (v, 1),
-        };
-        num.parse::<u64>()
-            .map(|n| n * mult)
-            .map_err(|_| format!("{name}: cannot parse LENGTH '{v}'"))
-    };
-    Ok((length("FLASH")?, length("RAM")?))
-}
-
-/// The CCM region's length in the F405's QEMU map (`memory-f405-qemu.x`).
-pub fn f405_ccm_budget() -> Result<u64> {
-    let name = Machine::Netduinoplus2.memory_map();
-    let path = root().join("firmware-sim").join(name);
-    let text =
-        std::fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
-    text.lines()
-        .find(|l| l.trim_start().starts_with("CCM") && l.contains("LENGTH"))
-        .and_then(|l| l.split("LENGTH").nth(1))
-        .map(|v| v.trim_start_matches([' ', '=']).trim())
-        .and_then(|v| v.strip_suffix('K')?.parse::<u64>().ok())
-        .map(|k| k * 1024)
-        .ok_or(format!("{name} has no CCM region in K"))
-}
-
-/// Bytes of an ELF in flash and in static RAM, and its section rows.
-pub struct Sizes {
-    pub flash: u64,
-    /// Static RAM, `.ccm` included.
-    pub ram: u64,
-    /// Of it, section `.ccm` (the pipeline's kept maps): the STM32F405's
-    /// core-coupled RAM on its maps, ordinary RAM on mps2-an386's.
-    pub ccm: u64,
-    pub rows: String,
-}
-
-/// Section sizes of `elf` from `arm-none-eabi-size -A`.
-pub fn sizes(elf: &std::path::Path) -> Result<Sizes> {
-    let text = output(Command::new("arm-none-eabi-size").arg("-A").arg(elf))?;
-    let (mut flash, mut ram, mut ccm, mut rows) = (0u64, 0u64, 0u64, String::new());
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        let (Some(name), Some(size)) = (it.next(), it.next().and_then(|s| s.parse::<u64>().ok()))
-        else {
-            continue;
-        };
-        let in_flash = matches!(
-            name,
-            ".vector_table" | ".text" | ".rodata" | ".data" | ".gnu.sgstubs"
-        );
-        let in_ram = matches!(name, ".data" | ".bss" | ".uninit" | ".ccm");
-        ccm += if name == ".ccm" { size } else { 0 };
-        if in_flash || in_ram {
-            rows.push_str(&format!("  {name:<14} {size:>8} B\n"));
-        }
-        flash += if in_flash { size } else { 0 };
-        ram += if in_ram { size } else { 0 };
-    }
-    Ok(Sizes {
-        flash,
-        ram,
-        ccm,
-        rows,
-    })
-}
-
-/// Section sizes of the bench firmware, summed against memory.x.
-pub fn size_report() -> Result<String> {
-    size_report_of(&bench_elf())
-}
-
-/// Section sizes of a firmware-sim ELF, summed against memory.x.
-pub fn size_report_of(elf: &std::path::Path) -> Result<String> {
-    let Sizes {
-        flash, ram, rows, ..
-    } = sizes(elf)?;
-    let (flash_budget, ram_budget) = budget()?;
-    let pct = |a: u64, b: u64| a as f64 * 100.0 / b as f64;
-    let report = format!(
-        "{rows}  flash: {flash} / {flash_budget} B ({:.1}%)\n  RAM (static): {ram} / {ram_budget} B ({:.1}%), {} B left for the stack\n",
-        pct(flash, flash_budget),
-        pct(ram, ram_budget),
-        ram_budget.saturating_sub(ram)
-    );
-    if flash > flash_budget || ram > ram_budget {
-        return Err(format!("firmware exceeds the memory.x budget:\n{report}"));
-    }
-    Ok(report)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    const NM: &str = "\
-0000f60e t __rustc::rust_begin_unwind
-000115cc t core::panicking::panic_fmt
-00012362 t core::panicking::panic_const::panic_const_div_by_zero
-00022e40 t <protogist::stereo::c2f::Pass>::votes
-";
-
-    const DIS: &str = "\
-00022e40 <<protogist::stereo::c2f::Pass>::votes>:
-   22e40:\tb5f0      \tpush\t{r4, r5, r6, r7, lr}
-   22fa4:\tf002 8263 \tbeq.w\t2546e <<protogist::stereo::c2f::Pass>::votes+0x262e>
-   25476:\tf7ed f8a9 \tbl\t12362 <core::panicking::panic_const::panic_const_div_by_zero>
-   25480:\tf7ed f8a9 \tbl\t115cc <core::panicking::panic_fmt>
-
-00030000 <firmware_sim::mcu::run<cortex_m_semihosting::hio::HostStream>>:
-   30004:\tf7ed f8a9 \tbl\t11700 <core::panicking::assert_failed<usize, usize>>
-
-0002547a <<protogist::stereo::c2f::Pass>::decision>:
-   2547a:\tb5f0      \tpush\t{r4, r5, r6, r7, lr}
-   2547c:\tf7ed f8a9 \tbl\t2547a <<protogist::stereo::c2f::Pass>::decision>
-
-000115cc <core::panicking::panic_fmt>:
-   115d0:\tf7ed f8a9 \tbl\tf60e <__rustc::rust_begin_unwind>
-   115d4:\t6818      \tldr\tr0, [r3, #0]\t@ <core::panicking::panic_fmt>
-
-0000f60e <__rustc::rust_begin_unwind>:
-   f630:\tf7ed f8a9 \tb.n\tf65a <__rustc::rust_begin_unwind+0x4c>
-";
 
     #[test]
     fn overflows_reads_gnu_ld_regions() {
@@ -648,35 +426,6 @@ mod tests {
         assert_eq!(
             String::from(e),
             "p does not fit firmware-sim/memory-f405-qemu.x: region RAM overflowed by 74064 bytes"
-        );
-    }
-
-    #[test]
-    fn panic_symbols_finds_the_entry_points_only() {
-        assert_eq!(
-            panic_symbols(NM),
-            [
-                "__rustc::rust_begin_unwind",
-                "core::panicking::panic_fmt",
-                "core::panicking::panic_const::panic_const_div_by_zero"
-            ]
-        );
-        let clean: String = NM.lines().skip(3).map(|l| format!("{l}\n")).collect();
-        assert!(panic_symbols(&clean).is_empty());
-    }
-
-    #[test]
-    fn panic_callers_names_each_branching_function_once() {
-        // `run` calls a generic panic function. Not `decision` (it branches
-        // to itself), not core's own panic_fmt, not the handler's branches
-        // inside itself, and a load that merely names a panic symbol is not
-        // a branch.
-        assert_eq!(
-            panic_callers(DIS),
-            [
-                "<protogist::stereo::c2f::Pass>::votes",
-                "firmware_sim::mcu::run<cortex_m_semihosting::hio::HostStream>"
-            ]
         );
     }
 }
