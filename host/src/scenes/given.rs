@@ -78,26 +78,7 @@ pub(super) fn fit_silhouette(mask: &GrayImage, side: f64) -> Option<GrayImage> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn params() -> SceneParams {
-        SceneParams {
-            width: 160,
-            height: 120,
-            classes: 19,
-            objects: (1, 4),
-        }
-    }
-
-    /// A 40x20 bar at (10, 30) in a 64x64 frame.
-    fn bar() -> GrayImage {
-        GrayImage::from_fn(64, 64, |x, y| {
-            Luma([if (10..50).contains(&x) && (30..50).contains(&y) {
-                255
-            } else {
-                0
-            }])
-        })
-    }
+    use crate::scenes::fixtures::{bar, params};
 
     #[test]
     fn given_silhouettes_are_placed_first_and_scaled() {

@@ -486,26 +486,7 @@ fn visible_mask(layout: &Layout, w: u32, h: u32, k: usize) -> GrayImage {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn params() -> SceneParams {
-        SceneParams {
-            width: 160,
-            height: 120,
-            classes: 19,
-            objects: (1, 4),
-        }
-    }
-
-    /// A 40x20 bar at (10, 30) in a 64x64 frame.
-    fn bar() -> GrayImage {
-        GrayImage::from_fn(64, 64, |x, y| {
-            Luma([if (10..50).contains(&x) && (30..50).contains(&y) {
-                255
-            } else {
-                0
-            }])
-        })
-    }
+    use crate::scenes::fixtures::{bar, params};
 
     #[test]
     fn visible_area_counts_the_visible_mask() {
