@@ -52,7 +52,7 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuity::Col
 ) -> Result<Frame<'w>, PipelineError> {
     let params = &p.params;
     let (w, h) = left.size();
-    p.c2f.check(p.tables.as_slice(), (w, h), right.size())?;
+    // The frames are checked once, by `run_split`.
     let needed = super::workspace_bytes(w, h, params);
     let got = workspace.len() * 8;
     let too_small = PipelineError::WorkspaceTooSmall { needed, got };
