@@ -19,8 +19,7 @@ use crate::pg::conspicuity::ColourKernel;
 use crate::pg::image::ImageError;
 use crate::pg::mlp::Identity;
 use crate::pg::pipeline::{
-    self, layout, workspace_bytes, Frame, Observer, Pipeline, PipelineError, PipelineParams,
-    Region, Stage,
+    self, layout, workspace_bytes, Frame, Observer, Pipeline, PipelineError, PipelineParams, Stage,
 };
 use crate::pg::segment::{Step as SegmentStep, STAT_FRAC_BITS};
 use crate::pg::stereo::phase::{PhaseKernel, SafePhase};
@@ -251,13 +250,9 @@ pub fn write_pipeline_error(out: &mut impl Write, e: &PipelineError) -> fmt::Res
             needed,
             got,
         } => {
-            let part = match region {
-                Region::Kept => "kept maps",
-                Region::Shared => "shared region",
-            };
             return write!(
                 out,
-                "workspace part '{part}' of {got} bytes is too small: the run needs {needed}"
+                "workspace part '{region}' of {got} bytes is too small: the run needs {needed}"
             );
         }
         PipelineError::TableCount { .. } | PipelineError::Table(_) => "decoder tables",

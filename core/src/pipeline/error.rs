@@ -18,6 +18,16 @@ pub enum Region {
     Shared,
 }
 
+impl fmt::Display for Region {
+    /// The part's name in messages: `kept maps` or `shared region`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Kept => "kept maps",
+            Self::Shared => "shared region",
+        })
+    }
+}
+
 /// Why a pipeline could not be set up or run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
@@ -117,16 +127,10 @@ impl fmt::Display for PipelineError {
                 region,
                 needed,
                 got,
-            } => {
-                let part = match region {
-                    Region::Kept => "kept maps",
-                    Region::Shared => "shared region",
-                };
-                write!(
-                    f,
-                    "workspace part '{part}' of {got} bytes is too small: the run needs {needed}"
-                )
-            }
+            } => write!(
+                f,
+                "workspace part '{region}' of {got} bytes is too small: the run needs {needed}"
+            ),
             Self::WorkspaceAlignment => f.write_str("workspace buffer could not be typed"),
             Self::Image(e) => write!(f, "frame: {e}"),
             Self::Stereo(e) => write!(f, "stereo: {e}"),
