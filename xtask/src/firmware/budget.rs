@@ -13,46 +13,41 @@ pub fn budget() -> Result<(u64, u64)> {
 
 /// FLASH and RAM lengths of `machine`'s memory map.
 pub fn budget_of(machine: Machine) -> Result<(u64, u64)> {
-    let name = machine.memory_map();
-    let path = root().join("firmware-sim").join(name);
-    let text =
-        std::fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
-    let length = |region: &str| -> Result<u64> {
-        let line = text
-            .lines()
-            .find(|l| l.trim_start().starts_with(region) && l.contains("LENGTH"))
-            .ok_or(format!("{name} has no {region} region"))?;
-        let v = line
-            .split("LENGTH")
-            .nth(1)
-            .unwrap_or("")
-            .trim_start_matches([' ', '='])
-            .trim();
-        let (num, mult) = match v.chars().last() {
-            Some('K') => (&v[..v.len() - 1], 1024),
-            Some('M') => (&v[..v.len() - 1], 1024 * 1024),
-            _ => (v, 1),
-        };
-        num.parse::<u64>()
-            .map(|n| n * mult)
-            .map_err(|_| format!("{name}: cannot parse LENGTH '{v}'"))
-    };
-    Ok((length("FLASH")?, length("RAM")?))
+    Ok((
+        region_length(machine, "FLASH")?,
+        region_length(machine, "RAM")?,
+    ))
 }
 
 /// The CCM region's length in the F405's QEMU map (`memory-f405-qemu.x`).
 pub fn f405_ccm_budget() -> Result<u64> {
-    let name = Machine::Netduinoplus2.memory_map();
+    region_length(Machine::Netduinoplus2, "CCM")
+}
+
+/// The LENGTH of `region` in `machine`'s memory map (`64K`, `1M` or bytes).
+fn region_length(machine: Machine, region: &str) -> Result<u64> {
+    let name = machine.memory_map();
     let path = root().join("firmware-sim").join(name);
     let text =
         std::fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
-    text.lines()
-        .find(|l| l.trim_start().starts_with("CCM") && l.contains("LENGTH"))
-        .and_then(|l| l.split("LENGTH").nth(1))
-        .map(|v| v.trim_start_matches([' ', '=']).trim())
-        .and_then(|v| v.strip_suffix('K')?.parse::<u64>().ok())
-        .map(|k| k * 1024)
-        .ok_or(format!("{name} has no CCM region in K"))
+    let line = text
+        .lines()
+        .find(|l| l.trim_start().starts_with(region) && l.contains("LENGTH"))
+        .ok_or(format!("{name} has no {region} region"))?;
+    let v = line
+        .split("LENGTH")
+        .nth(1)
+        .unwrap_or("")
+        .trim_start_matches([' ', '='])
+        .trim();
+    let (num, mult) = match v.chars().last() {
+        Some('K') => (&v[..v.len() - 1], 1024),
+        Some('M') => (&v[..v.len() - 1], 1024 * 1024),
+        _ => (v, 1),
+    };
+    num.parse::<u64>()
+        .map(|n| n * mult)
+        .map_err(|_| format!("{name}: cannot parse LENGTH '{v}'"))
 }
 
 /// Bytes of an ELF in flash and in static RAM, and its section rows.
