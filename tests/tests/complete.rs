@@ -112,17 +112,34 @@ fn by_runs<C: SideColour>(
     h: usize,
     runs: usize,
 ) -> (Vec<DisparityCell>, CompleteReport) {
+    let tables = (runs, region_table_len(w, h));
+    try_by_runs(params, edges, (colour, w, h), disp, (w, h), tables).unwrap()
+}
+
+/// [`complete_runs`] on a `colour` map of its own size, with `(runs,
+/// regions)` entries in the run and region tables.
+fn try_by_runs<C: SideColour>(
+    params: &CompleteParams,
+    edges: &[EdgeCell],
+    (colour, cw, ch): (&[C], usize, usize),
+    disp: &[DisparityCell],
+    (w, h): (usize, usize),
+    (runs, regions): (usize, usize),
+) -> Result<(Vec<DisparityCell>, CompleteReport), CompleteError> {
     let (mut open, mut trusted) = (vec![0u32; bit_map_len(w, h)], vec![0u32; bit_map_len(w, h)]);
     let (mut table, mut rows) = (vec![0u16; runs], vec![0u32; run_rows_len(w)]);
     let mut labels = vec![0u16; LABEL_ROWS * w];
-    let n = region_table_len(w, h);
-    let (mut total, mut below, mut lo, mut hi) =
-        (vec![0u32; n], vec![0u32; n], vec![0u8; n], vec![0u8; n]);
+    let (mut total, mut below, mut lo, mut hi) = (
+        vec![0u32; regions],
+        vec![0u32; regions],
+        vec![0u8; regions],
+        vec![0u8; regions],
+    );
     let mut out = disp.to_vec();
     let report = complete_runs(
         params,
         &ImageView::packed(edges, w, h).unwrap(),
-        &ImageView::packed(colour, w, h).unwrap(),
+        &ImageView::packed(colour, cw, ch).unwrap(),
         &mut ImageViewMut::packed(&mut out, w, h).unwrap(),
         &mut RunBuffers {
             open: &mut open,
@@ -137,9 +154,8 @@ fn by_runs<C: SideColour>(
             lo: &mut lo,
             hi: &mut hi,
         },
-    )
-    .unwrap();
-    (out, report)
+    )?;
+    Ok((out, report))
 }
 
 #[test]
@@ -292,36 +308,9 @@ fn bad_input_is_a_typed_error_or_a_reported_skip() {
     let colour = vec![Luv::default(); w * h];
     let disp = vec![from_pixels(2); w * h];
     let run = |colour: &[Luv], cw: usize, ch: usize, regions: usize| {
-        let (mut open, mut trusted) =
-            (vec![0u32; bit_map_len(w, h)], vec![0u32; bit_map_len(w, h)]);
-        let (mut table, mut rows) = (vec![0u16; run_table_len(w, h)], vec![0u32; run_rows_len(w)]);
-        let mut labels = vec![0u16; LABEL_ROWS * w];
-        let (mut total, mut below, mut lo, mut hi) = (
-            vec![0u32; regions],
-            vec![0u32; regions],
-            vec![0u8; regions],
-            vec![0u8; regions],
-        );
-        let mut out = disp.clone();
-        complete_runs(
-            &CompleteParams::default(),
-            &ImageView::packed(&edges, w, h).unwrap(),
-            &ImageView::packed(colour, cw, ch).unwrap(),
-            &mut ImageViewMut::packed(&mut out, w, h).unwrap(),
-            &mut RunBuffers {
-                open: &mut open,
-                trusted: &mut trusted,
-                runs: &mut table,
-                rows: &mut rows,
-                labels: &mut labels,
-            },
-            &mut RegionTables {
-                total: &mut total,
-                below: &mut below,
-                lo: &mut lo,
-                hi: &mut hi,
-            },
-        )
+        let tables = (run_table_len(w, h), regions);
+        let params = CompleteParams::default();
+        try_by_runs(&params, &edges, (colour, cw, ch), &disp, (w, h), tables).map(|r| r.1)
     };
     // Maps of different sizes.
     let small = vec![Luv::default(); 4];
