@@ -393,7 +393,7 @@ fn f405_report(
     let stack = number("stack peak ", 2)?;
     let total = number("instr total ", 2)?;
     let capture = number("instr stage capture ", 3)?;
-    let sram_statics = elf.ram - elf.ccm.min(elf.ram);
+    let sram_statics = elf.ram.saturating_sub(elf.ccm);
     let sram = sram_statics + stack;
     let pct = |a: u64, b: u64| a as f64 * 100.0 / b as f64;
     let r = format!(
