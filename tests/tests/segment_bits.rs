@@ -87,7 +87,7 @@ fn by_steps(
         }
     }
     let mw = p.max_object_width;
-    let searches = if p.min_object.num == 0 && mw.num >= mw.den {
+    let searches = if p.min_object.num == 0 && mw.num >= mw.den && p.max_aspect == 0 {
         k
     } else {
         k * sg::SEARCHES_PER_OBJECT
@@ -123,11 +123,15 @@ fn by_steps(
         sg::fill_holes(&v!(m.closed), vm!(m.filled), &mut lab).unwrap();
         let regions = sg::area_filter(&v!(m.filled), vm!(mask), &mut lab, p.min_area).unwrap();
         // Masks under `min_object` of the frame are not objects.
-        // ... and nor are boxes wider than `max_object_width` of it.
+        // ... and nor are boxes wider than `max_object_width` of it, or
+        // more than `max_aspect` times as long as wide.
         let bbox = sg::bounding_box(&v!(mask));
+        let (bw, bh) = bbox.map_or((0, 0), |b| (b.width, b.height));
+        let a = usize::from(p.max_aspect);
         let object = u64::from(regions.area) * u64::from(p.min_object.den)
             >= (n as u64) * u64::from(p.min_object.num)
-            && bbox.map_or(0, |b| b.width) * usize::from(mw.den) <= w * usize::from(mw.num);
+            && bw * usize::from(mw.den) <= w * usize::from(mw.num)
+            && (a == 0 || (bw <= a * bh && bh <= a * bw));
         if object {
             let det = sg::Detection {
                 index,
@@ -216,10 +220,10 @@ fn params() -> impl Strategy<Value = SegmentParams> {
         any::<bool>(),
         1u8..=4,
         0u8..3,
-        (proptest::option::of(0u16..2048), 0u16..3, 1u16..=4),
+        (proptest::option::of(0u16..2048), 0u16..3, 1u16..=4, 0u8..4),
     )
         .prop_map(
-            |(disk, refine, close, on_cells, k, exponent, (ground, min_object, width))| {
+            |(disk, refine, close, on_cells, k, exponent, (ground, min_object, width, aspect))| {
                 SegmentParams {
                     disk,
                     refine_dilations: refine,
@@ -234,6 +238,7 @@ fn params() -> impl Strategy<Value = SegmentParams> {
                     ground_band: ground,
                     min_object: sg::Ratio::new(min_object, 64),
                     max_object_width: sg::Ratio::new(width, 4),
+                    max_aspect: aspect,
                     ..SegmentParams::default()
                 }
             },

@@ -310,6 +310,35 @@ fn frame_wide_masks_are_not_objects() {
 }
 
 #[test]
+fn elongated_masks_are_not_objects() {
+    // A 30x5 strip at 14 px (a horizon's band, 6 times as long as wide),
+    // a 5x26 post at 9 px, and a 12x10 box at 6 px, all clear of the
+    // border (where the closing may grow a mask).
+    let (d, c) = boxes(&[(6, 5, 36, 10, 14), (38, 5, 43, 31, 9), (10, 18, 22, 28, 6)]);
+    let (all, _) = detect(&OPEN, &d, &c).unwrap();
+    let long = |b: sg::BoundingBox| b.width > 4 * b.height || b.height > 4 * b.width;
+    assert!(
+        all.objects
+            .iter()
+            .filter(|o| o.bbox.is_some_and(long))
+            .count()
+            >= 2,
+        "{:?}",
+        all.objects
+    );
+    let p = SegmentParams {
+        max_aspect: 4,
+        ..OPEN
+    };
+    let (r, _) = detect(&p, &d, &c).unwrap();
+    assert!(!r.objects.is_empty(), "{all:?} {r:?}");
+    for o in &r.objects {
+        assert!(!o.bbox.is_some_and(long), "{o:?}");
+    }
+    assert!(r.objects[0].bbox.is_some_and(|b| b.x >= 9 && b.y >= 17));
+}
+
+#[test]
 fn bad_filter_and_ground_parameters_are_typed_errors() {
     let (d, c) = boxes(&[(10, 10, 30, 26, 9)]);
     let p = OPEN;

@@ -132,8 +132,9 @@ impl PipelineParams {
     /// sixteenth (the paper leaves out the top and bottom sixths and the
     /// left eighth, cutting objects near the border); with the ground
     /// plane inhibited up to 4 px above its fitted line; and with masks
-    /// under 1/128 of the frame or boxes over 3/4 of its width not taken
-    /// as objects (docs/PIPELINE.md, "Choices").
+    /// under 1/128 of the frame, boxes over 3/4 of its width or boxes more
+    /// than 4 times as long as wide not taken as objects
+    /// (docs/PIPELINE.md, "Choices").
     pub const DEFAULT: Self = Self {
         segment: SegmentParams {
             fg_high: Ratio::new(100, 1),
@@ -142,6 +143,7 @@ impl PipelineParams {
             ground_band: Some(4 * 256),
             min_object: Ratio::new(1, 128),
             max_object_width: Ratio::new(3, 4),
+            max_aspect: 4,
             ..Self::PAPER.segment
         },
         ..Self::PAPER

@@ -165,11 +165,16 @@ pub struct SegmentParams {
     /// most 1). A wider mask (a horizon, a wall's edge across the frame)
     /// is not an object, as with `min_object`. 1 (the paper): any width.
     pub max_object_width: Ratio,
+    /// Most elongated object box: a mask whose box's longer side is more
+    /// than this many times its shorter side (a strip along the horizon,
+    /// a wall's edge) is not an object, as with `min_object`. 0 (the
+    /// paper): any shape.
+    pub max_aspect: u8,
 }
 
 /// Searches [`segment`] runs per object of `max_objects` at most, when
 /// some masks are not objects ([`SegmentParams::min_object`],
-/// [`SegmentParams::max_object_width`]).
+/// [`SegmentParams::max_object_width`], [`SegmentParams::max_aspect`]).
 pub const SEARCHES_PER_OBJECT: usize = 2;
 
 /// Largest [`SegmentParams::ground_band`]: 16 px.
@@ -200,6 +205,7 @@ impl SegmentParams {
         ground_band: None,
         min_object: Ratio::new(0, 1),
         max_object_width: Ratio::new(1, 1),
+        max_aspect: 0,
     };
 
     /// Checks the parameters.
@@ -246,6 +252,32 @@ impl SegmentParams {
             return Err(SegmentError::BadParams("max_objects"));
         }
         Ok(())
+    }
+
+    /// Whether every mask is an object (the paper): no least area, no
+    /// widest box and no most elongated box, so one search per object.
+    pub fn every_mask_is_an_object(&self) -> bool {
+        self.min_object.num == 0
+            && self.max_object_width.num >= self.max_object_width.den
+            && self.max_aspect == 0
+    }
+
+    /// Whether a mask of `area` px with a `box_width` x `box_height` box is
+    /// an object in a `width` x `height` frame: at least `min_object` of
+    /// the frame, at most `max_object_width` of its width, and at most
+    /// `max_aspect` times as long as it is wide (either way).
+    pub fn is_object(
+        &self,
+        area: u32,
+        (box_width, box_height): (usize, usize),
+        (width, height): (usize, usize),
+    ) -> bool {
+        let (mo, mw) = (self.min_object, self.max_object_width);
+        let frame = u64::try_from(width * height).unwrap_or(u64::MAX);
+        let a = usize::from(self.max_aspect);
+        u64::from(area) * u64::from(mo.den) >= frame * u64::from(mo.num)
+            && box_width * usize::from(mw.den) <= width * usize::from(mw.num)
+            && (a == 0 || (box_width <= a * box_height && box_height <= a * box_width))
     }
 }
 

@@ -333,14 +333,11 @@ pub fn segment_into(
     let ground = report.ground.as_ref().zip(params.ground_band);
     report.foreground = passes::foreground(params, disparity, &t, ground, g, bufs.d_fg);
     observer.step(Step::Foreground);
-    let searches = if params.min_object.num == 0
-        && params.max_object_width.num >= params.max_object_width.den
-    {
+    let searches = if params.every_mask_is_an_object() {
         k
     } else {
         k * SEARCHES_PER_OBJECT
     };
-    let frame = u64::try_from(w * h).unwrap_or(u64::MAX);
     // `w·h >= 1` (`check_size`); `max` shows the compiler, so that the
     // chunk loops have no panic path.
     for search in 0..searches {
@@ -420,10 +417,8 @@ pub fn segment_into(
             area,
         };
         let bbox = bits::bbox(g, bufs.mask);
-        let (mo, mw) = (params.min_object, params.max_object_width);
-        let box_width = bbox.map_or(0, |(x0, _, x1, _)| x1 + 1 - x0);
-        let object = u64::from(area) * u64::from(mo.den) >= frame * u64::from(mo.num)
-            && box_width * usize::from(mw.den) <= w * usize::from(mw.num);
+        let box_size = bbox.map_or((0, 0), |(x0, y0, x1, y1)| (x1 + 1 - x0, y1 + 1 - y0));
+        let object = params.is_object(area, box_size, (w, h));
         let span = index * chunk..(index + 1) * chunk;
         match &mut masks {
             _ if !object => {}

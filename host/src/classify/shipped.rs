@@ -7,9 +7,10 @@
 //! ([`super::pipeline_data`]):
 //!
 //! ```text
-//! protogist gen-shapes --out shapes --classes 19 --per-class 40 --seed 1 --size 64
-//! protogist train --dataset shapes --hidden 128 --epochs 300 --seed 1 \
-//!                 --through-pipeline --views 4 --with-clean --out host/data/shapes_model.bin
+//! protogist gen-shapes --out shapes --classes 19 --per-class 120 --seed 1 --size 64
+//! protogist train --dataset shapes --hidden 128 --epochs 300 --seed 1 --gamma 0.5 \
+//!                 --test-fraction 0.1 --through-pipeline --views 2 --with-clean \
+//!                 --out host/data/shapes_model.bin
 //! ```
 
 use super::dataset::shape_inputs;
