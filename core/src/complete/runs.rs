@@ -34,7 +34,7 @@ use crate::segment::{bit_map_len, row_runs, words_per_row};
 mod tone;
 mod walk;
 pub use tone::Tone;
-use walk::{bit, get16, label_row, label_runs, trusted_row, Walk};
+use walk::{bit, count_below, get16, label_row, label_runs, trusted_row, Walk};
 
 /// A colour the completion compares to give an edge cell to the side it
 /// looks like.
@@ -239,7 +239,7 @@ pub fn complete_runs<C: SideColour>(
     for _ in 0..passes {
         tables.below.fill(0);
         let (lo, hi, below) = (&*tables.lo, &*tables.hi, &mut *tables.below);
-        walk.for_each_trusted(&disp, |l, drow, xs| {
+        walk.for_each_run(&disp, |l, drow, trow, span| {
             let (Some(&a), Some(&b), Some(c)) = (lo.get(l), hi.get(l), below.get_mut(l)) else {
                 return;
             };
@@ -249,13 +249,7 @@ pub fn complete_runs<C: SideColour>(
             }
             // `whole_px(c) <= mid` as one compare of the bits.
             let lim = at_most_limit(((u16::from(a) + u16::from(b)) / 2) as u8);
-            let mut n = 0u32;
-            for x in xs {
-                if let Some(&d) = drow.get(x) {
-                    n += u32::from(u32::from(d.raw().to_bits()) < lim);
-                }
-            }
-            *c += n;
+            *c += count_below(trow, drow, span, lim);
         });
         for (((lo, hi), &below), &total) in tables
             .lo

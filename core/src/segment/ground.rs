@@ -62,31 +62,57 @@ pub const fn ground_rows_len(height: usize) -> usize {
     height
 }
 
+/// Per whole-pixel plane of a row: its cells and the sum of their bits.
+struct RowPlanes {
+    count: [u16; PLANES],
+    sum: [u32; PLANES],
+}
+
+impl RowPlanes {
+    const fn new() -> Self {
+        Self {
+            count: [0; PLANES],
+            sum: [0; PLANES],
+        }
+    }
+}
+
 /// One row's dominant disparity, bits, when at least a quarter of its
 /// cells lie within a plane of its most common whole-pixel plane.
-fn row_disparity(row: &[DisparityCell], hist: &mut [u16; PLANES]) -> Option<u32> {
-    hist.fill(0);
+fn row_disparity(row: &[DisparityCell], planes: &mut RowPlanes) -> Option<u32> {
+    planes.count.fill(0);
+    planes.sum.fill(0);
     // The mode as the histogram fills: the most common plane, the lowest
     // on a tie (a plane reaching the leader's count later wins only if it
-    // is lower), so no pass over all the planes is needed.
+    // is lower), so no pass over all the planes is needed. Each plane's
+    // sum of bits fills in the same pass, so the mean around the mode
+    // needs no second pass over the row. The counts saturate at 65,535 and
+    // the sums are `u32`, as before: exact for rows of up to 65,535 cells.
     let (mut top, mut mode) = (0u16, 0u16);
     for d in row.iter().filter_map(|c| c.get()) {
-        let p = plane(d.to_bits());
-        if let Some(k) = hist.get_mut(usize::from(p)) {
+        let b = d.to_bits();
+        let p = plane(b);
+        if let (Some(k), Some(s)) = (
+            planes.count.get_mut(usize::from(p)),
+            planes.sum.get_mut(usize::from(p)),
+        ) {
             *k = k.saturating_add(1);
+            *s += u32::from(b);
             if *k > top || (*k == top && p < mode) {
                 (top, mode) = (*k, p);
             }
         }
     }
-    let (mut n, mut sum) = (0u32, 0u32);
-    for d in row.iter().filter_map(|c| c.get()) {
-        let b = d.to_bits();
-        if plane(b).abs_diff(mode) <= 1 {
-            n += 1;
-            sum += u32::from(b);
-        }
-    }
+    // The planes within one of the mode.
+    let near = usize::from(mode.saturating_sub(1))..=(usize::from(mode) + 1).min(PLANES - 1);
+    let n: u32 = planes
+        .count
+        .get(near.clone())
+        .unwrap_or(&[])
+        .iter()
+        .map(|&k| u32::from(k))
+        .sum();
+    let sum: u32 = planes.sum.get(near).unwrap_or(&[]).iter().sum();
     let need = u32::try_from(row.len().div_ceil(4))
         .unwrap_or(u32::MAX)
         .max(1);
@@ -145,10 +171,10 @@ pub fn fit_ground(
             needed: ground_rows_len(h),
             got,
         }))?;
-    let mut hist = [0u16; PLANES];
+    let mut planes = RowPlanes::new();
     for (r, row) in rows.iter_mut().zip(disparity.rows()) {
         // 0: no estimate; else the disparity bits + 1.
-        *r = row_disparity(row, &mut hist).map_or(0, |d| d + 1);
+        *r = row_disparity(row, &mut planes).map_or(0, |d| d + 1);
     }
     // Hough vote: per slope, the rows' intercepts at the bottom row in
     // half pixels; the best (slope, two neighbouring bins) collects the
@@ -257,7 +283,7 @@ mod tests {
 
     #[test]
     fn a_row_takes_the_most_common_plane_and_the_lower_on_a_tie() {
-        let mut hist = [0; PLANES];
+        let mut hist = RowPlanes::new();
         // Planes 9 and 5 twice each, then 30: the tie goes to 5 although 9
         // reached the count first; 5's neighbours within a plane (4, 6)
         // join its mean.
@@ -272,5 +298,13 @@ mod tests {
         // Under a quarter of the row agrees: no disparity.
         let row = cells(&[1, 9, 20, 30]);
         assert_eq!(row_disparity(&row, &mut hist), None);
+        // The top plane (256: bits from 65,408 to 65,534) and the one below it.
+        let top = |bits: u16| DisparityCell::on(Disparity::from_bits(bits)).unwrap();
+        let mut row = [DisparityCell::OFF; 8];
+        row[..3].copy_from_slice(&[top(65_534), top(65_500), top(255 * 256)]);
+        assert_eq!(
+            row_disparity(&row, &mut hist),
+            Some((2 * (65_534 + 65_500 + 255 * 256) + 3) / 6)
+        );
     }
 }

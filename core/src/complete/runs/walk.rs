@@ -221,6 +221,28 @@ pub(super) struct Walk<'a> {
 }
 
 impl Walk<'_> {
+    /// Calls `f(region, disparity row, trusted row, (first, last))` for
+    /// every run of a region within the tables, in raster order.
+    pub(super) fn for_each_run<'d>(
+        &self,
+        disp: &ImageView<'d, DisparityCell>,
+        mut f: impl FnMut(usize, &'d [DisparityCell], &[u32], (usize, usize)),
+    ) {
+        let mut i = 0usize;
+        let s = self.stride.max(1);
+        let rows = self.open.chunks_exact(s).zip(self.trusted.chunks_exact(s));
+        for (y, (orow, trow)) in rows.take(self.height).enumerate() {
+            let drow = disp.row(y).unwrap_or(&[]);
+            for_each_run(orow, |s, e| {
+                let l = usize::from(get16(self.table, i));
+                i += 1;
+                if l != 0 && l < self.cap {
+                    f(l, drow, trow, (s as usize, e as usize));
+                }
+            });
+        }
+    }
+
     /// Calls `f(region, disparity row, trusted x)` for every run of a
     /// region within the tables, in raster order, with the trusted cells
     /// of the run.
@@ -243,6 +265,33 @@ impl Walk<'_> {
             });
         }
     }
+}
+
+/// The trusted cells of `s..=e` (bits of `trusted`) whose raw bits are
+/// below `lim`, counted. The same count as a walk over the cells
+/// [`SetBits`] gives, without finding each set bit: the cells of each word
+/// are compared in a row and masked by their bit.
+pub(super) fn count_below(
+    trusted: &[u32],
+    drow: &[DisparityCell],
+    (s, e): (usize, usize),
+    lim: u32,
+) -> u32 {
+    let mut n = 0u32;
+    let mut x = s;
+    while x <= e {
+        let word = x / 32;
+        let end = e.min(word * 32 + 31);
+        let mut bits = trusted.get(word).copied().unwrap_or(0) >> (x % 32);
+        if bits != 0 {
+            for c in drow.get(x..=end).unwrap_or(&[]) {
+                n += bits & u32::from(u32::from(c.raw().to_bits()) < lim);
+                bits >>= 1;
+            }
+        }
+        x = end + 1;
+    }
+    n
 }
 
 /// The set bits of a bit-map row within `s..=e`, as pixel indices.
@@ -291,6 +340,43 @@ impl Iterator for SetBits<'_> {
             self.bits = self.row.get(self.word).copied().unwrap_or(0);
             if self.word == self.last {
                 self.bits &= self.last_mask;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::disparity::Disparity;
+
+    /// `count_below` counts what a walk over `SetBits` counts, on every
+    /// span of rows with words of all sorts and OFF cells.
+    #[test]
+    fn count_below_counts_the_trusted_cells_under_the_limit() {
+        let w = 100;
+        let mut seed = 0x1234_5678u32;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        for _ in 0..40 {
+            let drow: [DisparityCell; 100] = core::array::from_fn(|_| match next() % 5 {
+                0 => DisparityCell::OFF,
+                _ => DisparityCell::on(Disparity::from_bits((next() % 8192) as u16))
+                    .unwrap_or(DisparityCell::OFF),
+            });
+            let trusted = [next(), next() & next(), u32::MAX, next() | next()];
+            let lim = next() % 8192;
+            for s in (0..w).step_by(7) {
+                for e in (s..w).step_by(5) {
+                    let walk = SetBits::new(&trusted, s, e)
+                        .filter(|&x| u32::from(drow[x].raw().to_bits()) < lim)
+                        .count() as u32;
+                    assert_eq!(count_below(&trusted, &drow, (s, e), lim), walk, "{s}..={e}");
+                }
             }
         }
     }
