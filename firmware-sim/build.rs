@@ -1,7 +1,24 @@
 //! Link setup for bare-metal (thumb*) builds; for every build, the two
-//! seeded benchmark networks of `src/bench/mlp_run.rs` (see `bench_blob`).
+//! seeded benchmark networks of `src/bench/mlp_run.rs` (see `bench_blob`)
+//! and the frames' RGB565 CIELUV table (see `luv565_table`).
 
 use std::{env, fs, path::PathBuf};
+
+// The frames' RGB565 expansion, the same source as the crate's.
+#[allow(dead_code)]
+#[path = "src/rgb565.rs"]
+mod rgb565;
+
+/// The CIELUV table of `src/stereo_camera.rs` (`LUV565`): for every
+/// RGB565 value `v`, core's `LUV_TABLES.convert(expand_rgb565(v))` as
+/// three little-endian `i16` (L*, u*, v* in Q6), 6 bytes a value.
+fn luv565_table() -> Vec<u8> {
+    use protogist::conspicuity::LUV_TABLES;
+    (0..=u16::MAX)
+        .flat_map(|v| LUV_TABLES.convert(rgb565::expand_rgb565(v)).to_bits())
+        .flat_map(i16::to_le_bytes)
+        .collect()
+}
 
 /// Classes of the benchmark networks.
 const BENCH_CLASSES: u16 = 10;
@@ -69,11 +86,14 @@ fn main() {
         println!("cargo:rerun-if-changed={map}");
     }
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=src/rgb565.rs");
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     for h in [256u16, 2000] {
         fs::write(out.join(format!("mlp_bench_{h}.bin")), bench_blob(h))
             .expect("write a benchmark network to OUT_DIR");
     }
+    fs::write(out.join("luv565.bin"), luv565_table())
+        .expect("write the RGB565 CIELUV table to OUT_DIR");
     let target = env::var("TARGET").unwrap_or_default();
     if !target.starts_with("thumb") {
         return;
