@@ -81,8 +81,24 @@ fn memory_map() -> &'static str {
     }
 }
 
+/// The bench firmware's map: mps2-an386's 4 MB of code SSRAM
+/// (`memory-bench.x`); with the `f405` features, the product's (the bench
+/// is not built for the F405).
+fn bench_memory_map() -> &'static str {
+    if env::var_os("CARGO_FEATURE_F405").is_some() {
+        memory_map()
+    } else {
+        "memory-bench.x"
+    }
+}
+
 fn main() {
-    for map in ["memory.x", "memory-f405.x", "memory-f405-qemu.x"] {
+    for map in [
+        "memory.x",
+        "memory-bench.x",
+        "memory-f405.x",
+        "memory-f405-qemu.x",
+    ] {
         println!("cargo:rerun-if-changed={map}");
     }
     println!("cargo:rerun-if-changed=build.rs");
@@ -98,9 +114,18 @@ fn main() {
     if !target.starts_with("thumb") {
         return;
     }
-    // cortex-m-rt's link.x includes `memory.x` by that name.
-    fs::copy(memory_map(), out.join("memory.x")).expect("copy the memory map to OUT_DIR");
-    println!("cargo:rustc-link-search={}", out.display());
+    // cortex-m-rt's link.x includes `memory.x` by that name: each binary
+    // gets its own directory holding its map as `memory.x`, searched first.
+    for (bin, map) in [
+        ("firmware-sim", memory_map()),
+        ("panic-probe", memory_map()),
+        ("bench", bench_memory_map()),
+    ] {
+        let dir = out.join(format!("map-{bin}"));
+        fs::create_dir_all(&dir).expect("create a memory map directory in OUT_DIR");
+        fs::copy(map, dir.join("memory.x")).expect("copy the memory map to OUT_DIR");
+        println!("cargo:rustc-link-arg-bin={bin}=-L{}", dir.display());
+    }
     // cortex-m-rt's link.x includes memory.x; gcc must not add its own crt0.
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
     println!("cargo:rustc-link-arg-bins=-nostartfiles");
