@@ -1,7 +1,24 @@
 //! Link setup for bare-metal (thumb*) builds; for every build, the two
-//! seeded benchmark networks of `src/bench/mlp_run.rs` (see `bench_blob`).
+//! seeded benchmark networks of `src/bench/mlp_run.rs` (see `bench_blob`)
+//! and the frames' RGB565 CIELUV table (see `luv565_table`).
 
 use std::{env, fs, path::PathBuf};
+
+// The frames' RGB565 expansion, the same source as the crate's.
+#[allow(dead_code)]
+#[path = "src/rgb565.rs"]
+mod rgb565;
+
+/// The CIELUV table of `src/stereo_camera.rs` (`LUV565`): for every
+/// RGB565 value `v`, core's `LUV_TABLES.convert(expand_rgb565(v))` as
+/// three little-endian `i16` (L*, u*, v* in Q6), 6 bytes a value.
+fn luv565_table() -> Vec<u8> {
+    use protogist::conspicuity::LUV_TABLES;
+    (0..=u16::MAX)
+        .flat_map(|v| LUV_TABLES.convert(rgb565::expand_rgb565(v)).to_bits())
+        .flat_map(i16::to_le_bytes)
+        .collect()
+}
 
 /// Classes of the benchmark networks.
 const BENCH_CLASSES: u16 = 10;
@@ -64,23 +81,51 @@ fn memory_map() -> &'static str {
     }
 }
 
+/// The bench firmware's map: mps2-an386's 4 MB of code SSRAM
+/// (`memory-bench.x`); with the `f405` features, the product's (the bench
+/// is not built for the F405).
+fn bench_memory_map() -> &'static str {
+    if env::var_os("CARGO_FEATURE_F405").is_some() {
+        memory_map()
+    } else {
+        "memory-bench.x"
+    }
+}
+
 fn main() {
-    for map in ["memory.x", "memory-f405.x", "memory-f405-qemu.x"] {
+    for map in [
+        "memory.x",
+        "memory-bench.x",
+        "memory-f405.x",
+        "memory-f405-qemu.x",
+    ] {
         println!("cargo:rerun-if-changed={map}");
     }
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=src/rgb565.rs");
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     for h in [256u16, 2000] {
         fs::write(out.join(format!("mlp_bench_{h}.bin")), bench_blob(h))
             .expect("write a benchmark network to OUT_DIR");
     }
+    fs::write(out.join("luv565.bin"), luv565_table())
+        .expect("write the RGB565 CIELUV table to OUT_DIR");
     let target = env::var("TARGET").unwrap_or_default();
     if !target.starts_with("thumb") {
         return;
     }
-    // cortex-m-rt's link.x includes `memory.x` by that name.
-    fs::copy(memory_map(), out.join("memory.x")).expect("copy the memory map to OUT_DIR");
-    println!("cargo:rustc-link-search={}", out.display());
+    // cortex-m-rt's link.x includes `memory.x` by that name: each binary
+    // gets its own directory holding its map as `memory.x`, searched first.
+    for (bin, map) in [
+        ("firmware-sim", memory_map()),
+        ("panic-probe", memory_map()),
+        ("bench", bench_memory_map()),
+    ] {
+        let dir = out.join(format!("map-{bin}"));
+        fs::create_dir_all(&dir).expect("create a memory map directory in OUT_DIR");
+        fs::copy(map, dir.join("memory.x")).expect("copy the memory map to OUT_DIR");
+        println!("cargo:rustc-link-arg-bin={bin}=-L{}", dir.display());
+    }
     // cortex-m-rt's link.x includes memory.x; gcc must not add its own crt0.
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
     println!("cargo:rustc-link-arg-bins=-nostartfiles");

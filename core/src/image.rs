@@ -307,6 +307,20 @@ pub trait RgbRows {
     fn size(&self) -> (usize, usize);
     /// Row `y` (`y < height`) into `out` (`width` long).
     fn rgb_row(&self, y: usize, out: &mut [Rgb8]);
+
+    /// Row `y` (`y < height`) as CIELUV into `out` (`width` long), for the
+    /// conspicuity stage; `rgb` (`width` long) is scratch. The default
+    /// reads [`rgb_row`](Self::rgb_row) and converts each pixel with
+    /// [`LUV_TABLES`](crate::conspicuity::LUV_TABLES). A frame whose
+    /// pixels take few values may look them up in a table instead (the
+    /// firmware's RGB565 frames do), and must give the same bits.
+    #[inline]
+    fn luv_row(&self, y: usize, rgb: &mut [Rgb8], out: &mut [crate::conspicuity::Luv]) {
+        self.rgb_row(y, rgb);
+        for (o, &px) in out.iter_mut().zip(rgb.iter()) {
+            *o = crate::conspicuity::LUV_TABLES.convert(px);
+        }
+    }
 }
 
 impl RgbRows for ImageView<'_, Rgb8> {

@@ -14,6 +14,7 @@ pub mod camera;
 pub mod display;
 pub mod probe;
 pub mod product;
+mod rgb565;
 pub mod stereo_camera;
 pub mod ticks;
 

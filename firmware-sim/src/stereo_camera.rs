@@ -18,6 +18,7 @@
 //!   ([`expand_rgb565`]).
 
 use crate::camera::{CameraError, CameraErrorKind};
+use crate::pg::conspicuity::Luv;
 use crate::pg::image::{ImageError, ImageView, Rgb8};
 use crate::pg::pipeline::RgbRows;
 use crate::pg::synth::SceneSpec;
@@ -27,25 +28,36 @@ pub const fn pair_len(width: usize, height: usize) -> usize {
     2 * width * height
 }
 
-/// Packs an RGB8 colour as a sensor would deliver it: the top 5, 6 and 5
-/// bits of red, green and blue.
-pub const fn pack_rgb565(p: Rgb8) -> u16 {
-    ((p.r as u16 >> 3) << 11) | ((p.g as u16 >> 2) << 5) | (p.b as u16 >> 3)
-}
+pub use crate::rgb565::{expand_rgb565, pack_rgb565};
 
-/// Expands an RGB565 pixel to RGB8 by bit replication: each channel's top
-/// bits fill its low bits (`r8 = r5 << 3 | r5 >> 2`, `g8 = g6 << 2 | g6 >>
-/// 4`), so 0 stays 0, full scale becomes 255, and the steps are as even as
-/// 8 bits allow. [`pack_rgb565`] of the result gives `v` back.
-pub const fn expand_rgb565(v: u16) -> Rgb8 {
-    let r = ((v >> 11) & 0x1f) as u8;
-    let g = ((v >> 5) & 0x3f) as u8;
-    let b = (v & 0x1f) as u8;
-    Rgb8 {
-        r: (r << 3) | (r >> 2),
-        g: (g << 2) | (g >> 4),
-        b: (b << 3) | (b >> 2),
+/// CIELUV of every RGB565 value, `LUV_TABLES.convert(expand_rgb565(v))`
+/// at index `v`, made by the build script (`build.rs`) with core's own
+/// conversion: 384 KB of flash for about 130 instructions a pixel.
+static LUV565: [Luv; 1 << 16] = {
+    const BYTES: &[u8; 6 << 16] = include_bytes!(concat!(env!("OUT_DIR"), "/luv565.bin"));
+    let mut t = [Luv::from_bits(0, 0, 0); 1 << 16];
+    let mut i = 0;
+    while i < t.len() {
+        let b = 6 * i;
+        t[i] = Luv::from_bits(
+            i16::from_le_bytes([BYTES[b], BYTES[b + 1]]),
+            i16::from_le_bytes([BYTES[b + 2], BYTES[b + 3]]),
+            i16::from_le_bytes([BYTES[b + 4], BYTES[b + 5]]),
+        );
+        i += 1;
     }
+    t
+};
+
+/// CIELUV of an RGB565 pixel: core's
+/// [`LUV_TABLES`](crate::pg::conspicuity::LUV_TABLES)`.convert` of
+/// [`expand_rgb565`]`(v)`, bit for bit, from a table.
+#[inline]
+pub fn luv_of_rgb565(v: u16) -> Luv {
+    LUV565
+        .get(usize::from(v))
+        .copied()
+        .unwrap_or(Luv::from_bits(0, 0, 0))
 }
 
 /// One eye of a pair as RGB rows for the pipeline.
@@ -73,6 +85,15 @@ impl RgbRows for Rgb565View<'_> {
         if let Some(row) = self.0.row(y) {
             for (o, &p) in out.iter_mut().zip(row) {
                 *o = expand_rgb565(p);
+            }
+        }
+    }
+
+    /// By table ([`luv_of_rgb565`]): the bits of the default conversion.
+    fn luv_row(&self, y: usize, _rgb: &mut [Rgb8], out: &mut [Luv]) {
+        if let Some(row) = self.0.row(y) {
+            for (o, &p) in out.iter_mut().zip(row) {
+                *o = luv_of_rgb565(p);
             }
         }
     }

@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use embedded_hal::digital::{ErrorType, OutputPin};
 
-use firmware_sim::pg::conspicuity::ColourKernel;
+use firmware_sim::pg::conspicuity::{ColourKernel, Luv, LUV_TABLES};
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::{ImageViewMut, Rgb8};
 use firmware_sim::pg::pipeline::{Pipeline, PipelineError, Region, RgbRows};
@@ -24,8 +24,9 @@ use firmware_sim::product::{
     TABLES, WIDTH, WORKSPACE_WORDS,
 };
 use firmware_sim::stereo_camera::{
-    expand_rgb565, pack_rgb565, pair_len, PairLayout, Rgb565Camera, SideBySide, SideBySideError,
-    SimSideBySideSensor, SimStereoCamera, SimStereoError, StereoCamera,
+    expand_rgb565, luv_of_rgb565, pack_rgb565, pair_len, PairLayout, Rgb565Camera, Rgb565View,
+    SideBySide, SideBySideError, SimSideBySideSensor, SimStereoCamera, SimStereoError,
+    StereoCamera,
 };
 use firmware_sim::{CameraError, CameraErrorKind, NoTicks};
 
@@ -239,6 +240,42 @@ fn the_cameras_deliver_the_demo_pair_in_rgb565() {
     let (direct, _) = report(SimStereoCamera::new());
     let (adapted, _) = report(SideBySide::new(SimSideBySideSensor));
     assert_eq!(compared(&direct), compared(&adapted));
+}
+
+/// The frame's table of CIELUV gives core's conversion for all 65,536
+/// RGB565 values, and a row by table is the default (convert) row.
+#[test]
+fn rgb565_luv_table_is_the_conversion() {
+    for v in 0..=u16::MAX {
+        let want = LUV_TABLES.convert(expand_rgb565(v));
+        assert_eq!(luv_of_rgb565(v), want, "RGB565 {v:#06x}");
+    }
+    /// The same frame through `RgbRows`'s default `luv_row` only.
+    struct Converted<'a>(Rgb565View<'a>);
+    impl RgbRows for Converted<'_> {
+        fn size(&self) -> (usize, usize) {
+            self.0.size()
+        }
+        fn rgb_row(&self, y: usize, out: &mut [Rgb8]) {
+            self.0.rgb_row(y, out);
+        }
+    }
+    let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
+    let layout = SimStereoCamera::new()
+        .capture_pair(&mut frame, WIDTH, HEIGHT)
+        .unwrap();
+    let (left, _) = layout.views(&frame).unwrap();
+    let mut rgb = vec![Rgb8::default(); WIDTH];
+    let (mut by_table, mut converted) = (vec![Luv::default(); WIDTH], vec![Luv::default(); WIDTH]);
+    let mut distinct = std::collections::HashSet::new();
+    for y in 0..HEIGHT {
+        left.luv_row(y, &mut rgb, &mut by_table);
+        Converted(left).luv_row(y, &mut rgb, &mut converted);
+        assert_eq!(by_table, converted, "row {y}");
+        distinct.extend(by_table.iter().map(|p| p.to_bits()));
+    }
+    // The scene has colours, not one flat value.
+    assert!(distinct.len() > 4, "{} colours", distinct.len());
 }
 
 #[test]

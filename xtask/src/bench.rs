@@ -165,8 +165,8 @@ fn firmware_size(stdout: &str) -> Result<Section> {
         .find(|l| l.starts_with("stack peak"))
         .unwrap_or("stack peak: not reported");
     let body = format!(
-        "`arm-none-eabi-size -A` of the bench firmware's ELF against `firmware-sim/memory.x` \
-         (OpenMV H7 class: 2 MB flash, 512 KB RAM). Frame and map buffers are statics (.bss); \
+        "`arm-none-eabi-size -A` of the bench firmware's ELF against `firmware-sim/memory-bench.x` \
+         (mps2-an386's 4 MB of code SSRAM; the OpenMV H7 class's 512 KB RAM). Frame and map buffers are statics (.bss); \
          the stack high-water mark comes from cortex-m-rt's `paint-stack`.\n\n```\n{}  {stack}\n```\n",
         size_report()?
     );

@@ -73,7 +73,7 @@ pub fn run_ci() -> Result<CiSummary> {
             let host = host_output()?;
             let lines = compare(&host, &qemu.stdout)?;
             println!(
-                "-- bench firmware ELF against memory.x:\n{}",
+                "-- bench firmware ELF against memory-bench.x:\n{}",
                 size_report()?
             );
             Ok((qemu, lines))

@@ -42,7 +42,8 @@ fn thumb_dir(target_dir: &str) -> PathBuf {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Machine {
     /// mps2-an386 (Cortex-M4, 4 MB code and data SSRAM), linked with
-    /// `memory.x`: every binary, the product at 160x120.
+    /// `memory.x`: the product at 160x120 and the panic probe; the bench
+    /// firmware with `memory-bench.x` (the whole 4 MB of code SSRAM).
     Mps2An386,
     /// netduinoplus2 (the STM32F405: 1 MB flash, 192 KB SRAM), linked with
     /// `memory-f405-qemu.x`: the product at 128x96 (the `f405` feature).

@@ -9,7 +9,7 @@ use crate::complete::{
     complete_runs, pipeline_run_capacity, run_rows_len, RegionTables, RunBuffers, Tone,
     DEFAULT_REGION_CAPACITY, LABEL_ROWS,
 };
-use crate::conspicuity::{self, EdgeCell, Luv, LUV_TABLES};
+use crate::conspicuity::{self, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, Ranked, Scratch};
@@ -166,12 +166,7 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuit
             params.edges.threshold_percent,
             rows,
             &mut c_v,
-            |y, out| {
-                left.rgb_row(y, rgb);
-                for (o, &px) in out.iter_mut().zip(rgb.iter()) {
-                    *o = LUV_TABLES.convert(px);
-                }
-            },
+            |y, out| left.luv_row(y, rgb, out),
             |y, row| {
                 obs.smoothed_row(y, row);
                 if let Some(t) = tone.get_mut(y * w..(y + 1) * w) {
