@@ -321,6 +321,20 @@ pub trait RgbRows {
             *o = crate::conspicuity::LUV_TABLES.convert(px);
         }
     }
+
+    /// Row `y` (`y < height`) as the phase step's grey into `out` (`width`
+    /// long): [`grey8`](crate::stereo::phase::grey8) of each pixel of
+    /// [`rgb_row`](Self::rgb_row) (the default), `rgb` (`width` long)
+    /// scratch. A frame may compute it from its own pixels (the
+    /// firmware's RGB565 frames sum one table entry per channel) and must
+    /// give the same values.
+    #[inline]
+    fn grey8_row(&self, y: usize, rgb: &mut [Rgb8], out: &mut [i32]) {
+        self.rgb_row(y, rgb);
+        for (o, &px) in out.iter_mut().zip(rgb.iter()) {
+            *o = crate::stereo::phase::grey8(px);
+        }
+    }
 }
 
 impl RgbRows for ImageView<'_, Rgb8> {

@@ -60,6 +60,20 @@ pub fn luv_of_rgb565(v: u16) -> Luv {
         .unwrap_or(Luv::from_bits(0, 0, 0))
 }
 
+// `GREY565_R`, `GREY565_G`, `GREY565_B`: see `grey8_of_rgb565`.
+include!(concat!(env!("OUT_DIR"), "/grey565.rs"));
+
+/// The phase step's grey of an RGB565 pixel: core's
+/// [`grey8`](crate::pg::stereo::phase::grey8) of [`expand_rgb565`]`(v)`,
+/// as the sum of one table entry per channel (made by the build script
+/// with `grey8` itself; `grey8` is a sum of one product per channel).
+#[inline]
+pub fn grey8_of_rgb565(v: u16) -> i32 {
+    GREY565_R[usize::from(v >> 11) & 31]
+        + GREY565_G[usize::from(v >> 5) & 63]
+        + GREY565_B[usize::from(v) & 31]
+}
+
 /// One eye of a pair as RGB rows for the pipeline.
 #[derive(Clone, Copy, Debug)]
 pub struct Rgb565View<'a>(ImageView<'a, u16>);
@@ -85,6 +99,15 @@ impl RgbRows for Rgb565View<'_> {
         if let Some(row) = self.0.row(y) {
             for (o, &p) in out.iter_mut().zip(row) {
                 *o = expand_rgb565(p);
+            }
+        }
+    }
+
+    /// By tables ([`grey8_of_rgb565`]): the default's values.
+    fn grey8_row(&self, y: usize, _rgb: &mut [Rgb8], out: &mut [i32]) {
+        if let Some(row) = self.0.row(y) {
+            for (o, &p) in out.iter_mut().zip(row) {
+                *o = grey8_of_rgb565(p);
             }
         }
     }

@@ -17,15 +17,15 @@ use firmware_sim::pg::conspicuity::{ColourKernel, Luv, LUV_TABLES};
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::{ImageViewMut, Rgb8};
 use firmware_sim::pg::pipeline::{Pipeline, PipelineError, Region, RgbRows};
-use firmware_sim::pg::stereo::phase::{phase_row3, PhaseKernel};
+use firmware_sim::pg::stereo::phase::{grey8, phase_row3, PhaseKernel};
 use firmware_sim::pg::synth::{render_left, render_mask, render_right, SceneSpec};
 use firmware_sim::product::{
     is_compared, Product, ProductError, FRAME_LEN, HEIGHT, KEPT_WORDS, MODEL, PARAMS, SHARED_WORDS,
     TABLES, WIDTH, WORKSPACE_WORDS,
 };
 use firmware_sim::stereo_camera::{
-    expand_rgb565, luv_of_rgb565, pack_rgb565, pair_len, PairLayout, Rgb565Camera, Rgb565View,
-    SideBySide, SideBySideError, SimSideBySideSensor, SimStereoCamera, SimStereoError,
+    expand_rgb565, grey8_of_rgb565, luv_of_rgb565, pack_rgb565, pair_len, PairLayout, Rgb565Camera,
+    Rgb565View, SideBySide, SideBySideError, SimSideBySideSensor, SimStereoCamera, SimStereoError,
     StereoCamera,
 };
 use firmware_sim::{CameraError, CameraErrorKind, NoTicks};
@@ -242,6 +242,20 @@ fn the_cameras_deliver_the_demo_pair_in_rgb565() {
     assert_eq!(compared(&direct), compared(&adapted));
 }
 
+/// An RGB565 eye through `RgbRows`'s default rows (`luv_row`,
+/// `grey8_row`: from `rgb_row`), not the frame's tables.
+struct Converted<'a>(Rgb565View<'a>);
+
+impl RgbRows for Converted<'_> {
+    fn size(&self) -> (usize, usize) {
+        self.0.size()
+    }
+
+    fn rgb_row(&self, y: usize, out: &mut [Rgb8]) {
+        self.0.rgb_row(y, out);
+    }
+}
+
 /// The frame's table of CIELUV gives core's conversion for all 65,536
 /// RGB565 values, and a row by table is the default (convert) row.
 #[test]
@@ -249,16 +263,6 @@ fn rgb565_luv_table_is_the_conversion() {
     for v in 0..=u16::MAX {
         let want = LUV_TABLES.convert(expand_rgb565(v));
         assert_eq!(luv_of_rgb565(v), want, "RGB565 {v:#06x}");
-    }
-    /// The same frame through `RgbRows`'s default `luv_row` only.
-    struct Converted<'a>(Rgb565View<'a>);
-    impl RgbRows for Converted<'_> {
-        fn size(&self) -> (usize, usize) {
-            self.0.size()
-        }
-        fn rgb_row(&self, y: usize, out: &mut [Rgb8]) {
-            self.0.rgb_row(y, out);
-        }
     }
     let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
     let layout = SimStereoCamera::new()
@@ -276,6 +280,32 @@ fn rgb565_luv_table_is_the_conversion() {
     }
     // The scene has colours, not one flat value.
     assert!(distinct.len() > 4, "{} colours", distinct.len());
+}
+
+/// The frame's grey tables give core's `grey8` for all 65,536 RGB565
+/// values, and a grey row by table is the default row.
+#[test]
+fn rgb565_grey_tables_are_grey8() {
+    for v in 0..=u16::MAX {
+        assert_eq!(
+            grey8_of_rgb565(v),
+            grey8(expand_rgb565(v)),
+            "RGB565 {v:#06x}"
+        );
+    }
+    assert_eq!(grey8_of_rgb565(0xffff), 255 * 256);
+    let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
+    let layout = SimStereoCamera::new()
+        .capture_pair(&mut frame, WIDTH, HEIGHT)
+        .unwrap();
+    let (_, right) = layout.views(&frame).unwrap();
+    let mut rgb = vec![Rgb8::default(); WIDTH];
+    let (mut by_table, mut converted) = (vec![0i32; WIDTH], vec![0i32; WIDTH]);
+    for y in 0..HEIGHT {
+        right.grey8_row(y, &mut rgb, &mut by_table);
+        Converted(right).grey8_row(y, &mut rgb, &mut converted);
+        assert_eq!(by_table, converted, "row {y}");
+    }
 }
 
 #[test]

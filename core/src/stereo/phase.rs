@@ -394,8 +394,7 @@ impl<'p, 'b, S: RgbRows, K: PhaseKernel> Refiner<'p, 'b, S, K> {
             .zip([&mut *zl, &mut *zr])
             .zip([pool, pool + md])
         {
-            eye.rgb_row(y, self.rgb);
-            grey_row(self.rgb, self.v, r);
+            grey_row(*eye, y, self.rgb, self.v, r);
             let Some(zrow) = z.get_mut(pad..pad + w) else {
                 return;
             };

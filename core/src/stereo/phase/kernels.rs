@@ -5,7 +5,7 @@
 use super::{Half, MAX_TURN, TAP_FRAC, Z_FRAC};
 use crate::disparity::DisparityCell;
 use crate::fixed::U8F8;
-use crate::image::Rgb8;
+use crate::image::{Rgb8, RgbRows};
 
 /// The phase step of a row with 3-pixel pooling (the default `pool` 1),
 /// replaceable by a target's kernel, as [`crate::mlp::MacKernel`]: the
@@ -160,15 +160,13 @@ pub fn grey8(p: Rgb8) -> i32 {
     77 * i32::from(p.r) + 150 * i32::from(p.g) + 29 * i32::from(p.b)
 }
 
-/// The grey of one RGB row into `v[r..r + w]`, then the padding
-/// replicated.
+/// The grey of row `y` of `eye` ([`RgbRows::grey8_row`], `rgb` its
+/// scratch) into `v[r..r + w]`, then the padding replicated.
 #[inline(always)]
-pub(super) fn grey_row(rgb: &[Rgb8], v: &mut [i32], r: usize) {
+pub(super) fn grey_row<S: RgbRows>(eye: &S, y: usize, rgb: &mut [Rgb8], v: &mut [i32], r: usize) {
     let w = rgb.len();
     if let Some(inner) = v.get_mut(r..r + w) {
-        for (o, &p) in inner.iter_mut().zip(rgb) {
-            *o = grey8(p);
-        }
+        eye.grey8_row(y, rgb, inner);
     }
     let first = v.get(r).copied().unwrap_or(0);
     let last = v.get(r + w.max(1) - 1).copied().unwrap_or(0);
