@@ -63,8 +63,8 @@ use core::marker::PhantomData;
 
 mod kernels;
 
-pub use kernels::{atan2_turns, grey8, phase_row3, PhaseKernel, SafePhase};
-use kernels::{grey_row, phase_row_at, x_pass, x_pass5};
+pub use kernels::{atan2_turns, grey8, phase_row3, x_pass5, PhaseKernel, SafePhase};
+use kernels::{grey_row, phase_row_at, x_pass};
 
 /// Largest kernel radius.
 pub const MAX_RADIUS: usize = 5;
@@ -400,7 +400,7 @@ impl<'p, 'b, S: RgbRows, K: PhaseKernel> Refiner<'p, 'b, S, K> {
             };
             let (ch, sh) = (&self.phase.c_half, &self.phase.s_half);
             if N == 5 {
-                x_pass5(self.v, ch, sh, zrow);
+                K::x_pass5(self.v, ch, sh, zrow);
             } else {
                 x_pass::<N>(self.v, ch, sh, zrow);
             }

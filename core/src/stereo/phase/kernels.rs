@@ -59,6 +59,20 @@ pub trait PhaseKernel {
         crate::stereo::sgm::sgm_step(c, p, pad, pen, acc)
     }
 
+    /// The refinement's 5-tap x pass of one row (radius 2, the default):
+    /// `out[x] = (re, im)` of `v[x..x + 5]` with the taps `ch[..3]`,
+    /// `sh[1..3]` (the zero-DC real and odd imaginary halves of
+    /// [`Phase`](super::Phase)), each rounded to `I12F4`.
+    ///
+    /// Contract: `v` holds greys of [`grey8`] (0..=65280), and the real
+    /// taps sum to zero, `c0 = −2 (c1 + c2)` (as [`Phase`](super::Phase)
+    /// makes them); any kernel that honours it must give the same
+    /// integers as the default.
+    #[inline(always)]
+    fn x_pass5(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
+        x_pass5(v, ch, sh, out);
+    }
+
     /// [`PhaseKernel::sgm_step5`] for 9 candidates (the coarsest level's
     /// full search at 32 disparities), with the same contract.
     #[inline(always)]
@@ -202,12 +216,12 @@ pub(super) fn x_pass<const N: usize>(v: &[i32], ch: &Half, sh: &Half, out: &mut 
     }
 }
 
-/// [`x_pass`] for 5 taps (the default radius 2), the same integers: the
-/// real parts, then the imaginary ones, each in one [`sweep5`], so that
-/// each pixel loads one grey value per sweep and the taps stay in
-/// registers.
+/// The portable [`PhaseKernel::x_pass5`]: the general x pass for 5 taps
+/// (the default radius 2), the same integers: the real parts, then the
+/// imaginary ones, each in one sweep, so that each pixel loads one grey
+/// value per sweep and the taps stay in registers.
 #[inline(always)]
-pub(super) fn x_pass5(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
+pub fn x_pass5(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
     let shift = TAP_FRAC + 8 - Z_FRAC;
     let half = 1 << (shift - 1);
     let [c0, c1, c2, ..] = *ch;
