@@ -1,6 +1,7 @@
 //! Link setup for bare-metal (thumb*) builds; for every build, the two
 //! seeded benchmark networks of `src/bench/mlp_run.rs` (see `bench_blob`)
-//! and the frames' RGB565 CIELUV table (see `luv565_table`).
+//! and the frames' RGB565 CIELUV and grey tables (see `luv565_table`,
+//! `grey565_tables`).
 
 use std::{env, fs, path::PathBuf};
 
@@ -92,6 +93,31 @@ fn bench_memory_map() -> &'static str {
     }
 }
 
+/// The grey tables of `src/stereo_camera.rs` (`GREY565_R`, `_G`, `_B`):
+/// core's `grey8` of each channel value of an RGB565 pixel, expanded as
+/// the frames expand it, alone. `grey8` is a sum of one product per
+/// channel, so a pixel's grey is the sum of its three entries.
+fn grey565_tables() -> String {
+    use protogist::image::Rgb8;
+    use protogist::stereo::phase::grey8;
+    let channel = |name: &str, bits: u32, shift: u32, pick: fn(Rgb8) -> Rgb8| {
+        let values: Vec<String> = (0..1u16 << bits)
+            .map(|c| grey8(pick(rgb565::expand_rgb565(c << shift))).to_string())
+            .collect();
+        format!(
+            "static GREY565_{name}: [i32; {}] = [{}];\n",
+            1u32 << bits,
+            values.join(", ")
+        )
+    };
+    [
+        channel("R", 5, 11, |p| Rgb8::new(p.r, 0, 0)),
+        channel("G", 6, 5, |p| Rgb8::new(0, p.g, 0)),
+        channel("B", 5, 0, |p| Rgb8::new(0, 0, p.b)),
+    ]
+    .concat()
+}
+
 fn main() {
     for map in [
         "memory.x",
@@ -110,6 +136,8 @@ fn main() {
     }
     fs::write(out.join("luv565.bin"), luv565_table())
         .expect("write the RGB565 CIELUV table to OUT_DIR");
+    fs::write(out.join("grey565.rs"), grey565_tables())
+        .expect("write the RGB565 grey tables to OUT_DIR");
     let target = env::var("TARGET").unwrap_or_default();
     if !target.starts_with("thumb") {
         return;

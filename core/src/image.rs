@@ -321,6 +321,56 @@ pub trait RgbRows {
             *o = crate::conspicuity::LUV_TABLES.convert(px);
         }
     }
+
+    /// Row `j` of the half-size image (`j < height / 2`) into `out`
+    /// (`width / 2` long): the rounded means of the 2x2 blocks of rows
+    /// `2j` and `2j + 1`, per channel (`(a + b + c + d + 2) / 4`), the
+    /// stereo pyramid's first level. `scratch` holds `2 * out.len()` pixels
+    /// twice. The default reads both rows with [`rgb_row`](Self::rgb_row);
+    /// a frame may compute the means from its own pixels (the firmware's
+    /// RGB565 frames do) and must give the same values.
+    #[inline]
+    fn half_row(&self, j: usize, out: &mut [Rgb8], scratch: &mut [Rgb8]) {
+        let fw = 2 * out.len();
+        let (a, rest) = scratch.split_at_mut(fw.min(scratch.len()));
+        let (b, _) = rest.split_at_mut(fw.min(rest.len()));
+        self.rgb_row(2 * j, a);
+        self.rgb_row(2 * j + 1, b);
+        mean_2x2_row(a, b, out);
+    }
+
+    /// Row `y` (`y < height`) as the phase step's grey into `out` (`width`
+    /// long): [`grey8`](crate::stereo::phase::grey8) of each pixel of
+    /// [`rgb_row`](Self::rgb_row) (the default), `rgb` (`width` long)
+    /// scratch. A frame may compute it from its own pixels (the
+    /// firmware's RGB565 frames sum one table entry per channel) and must
+    /// give the same values.
+    #[inline]
+    fn grey8_row(&self, y: usize, rgb: &mut [Rgb8], out: &mut [i32]) {
+        self.rgb_row(y, rgb);
+        for (o, &px) in out.iter_mut().zip(rgb.iter()) {
+            *o = crate::stereo::phase::grey8(px);
+        }
+    }
+}
+
+/// The rounded 2x2 means of rows `a` and `b` (`2 * out.len()` long) into
+/// `out`, per channel: `(a0 + a1 + b0 + b1 + 2) / 4`.
+#[inline]
+pub fn mean_2x2_row(a: &[Rgb8], b: &[Rgb8], out: &mut [Rgb8]) {
+    let mean = |p: [u8; 4]| {
+        let s: u16 = p.iter().map(|&v| u16::from(v)).sum();
+        ((s + 2) / 4) as u8
+    };
+    for ((o, a), b) in out.iter_mut().zip(a.chunks_exact(2)).zip(b.chunks_exact(2)) {
+        if let ([a0, a1], [b0, b1]) = (a, b) {
+            *o = Rgb8::new(
+                mean([a0.r, a1.r, b0.r, b1.r]),
+                mean([a0.g, a1.g, b0.g, b1.g]),
+                mean([a0.b, a1.b, b0.b, b1.b]),
+            );
+        }
+    }
 }
 
 impl RgbRows for ImageView<'_, Rgb8> {

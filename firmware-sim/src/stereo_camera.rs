@@ -60,6 +60,60 @@ pub fn luv_of_rgb565(v: u16) -> Luv {
         .unwrap_or(Luv::from_bits(0, 0, 0))
 }
 
+// `GREY565_R`, `GREY565_G`, `GREY565_B`: see `grey8_of_rgb565`.
+include!(concat!(env!("OUT_DIR"), "/grey565.rs"));
+
+/// The phase step's grey of an RGB565 pixel: core's
+/// [`grey8`](crate::pg::stereo::phase::grey8) of [`expand_rgb565`]`(v)`,
+/// as the sum of one table entry per channel (made by the build script
+/// with `grey8` itself; `grey8` is a sum of one product per channel).
+#[inline]
+pub fn grey8_of_rgb565(v: u16) -> i32 {
+    GREY565_R[usize::from(v >> 11) & 31]
+        + GREY565_G[usize::from(v >> 5) & 63]
+        + GREY565_B[usize::from(v) & 31]
+}
+
+/// [`expand_rgb565`]'s 8-bit value of each 5-bit (red, blue) and 6-bit
+/// (green) channel value.
+const EXPAND5: [u16; 32] = {
+    let mut t = [0; 32];
+    let mut i = 0;
+    while i < 32 {
+        t[i] = expand_rgb565((i as u16) << 11).r as u16;
+        i += 1;
+    }
+    t
+};
+const EXPAND6: [u16; 64] = {
+    let mut t = [0; 64];
+    let mut i = 0;
+    while i < 64 {
+        t[i] = expand_rgb565((i as u16) << 5).g as u16;
+        i += 1;
+    }
+    t
+};
+
+/// The rounded mean of 4 RGB565 pixels, expanded ([`expand_rgb565`]),
+/// per channel: core's [`mean_2x2_row`](crate::pg::image::mean_2x2_row) of
+/// their expansions.
+#[inline]
+pub fn mean_rgb565(p: [u16; 4]) -> Rgb8 {
+    let sum = |t: &[u16], shift: u32, mask: usize| -> u8 {
+        let s: u16 = p
+            .iter()
+            .map(|&v| t.get(usize::from(v >> shift) & mask).copied().unwrap_or(0))
+            .sum();
+        ((s + 2) >> 2) as u8
+    };
+    Rgb8::new(
+        sum(&EXPAND5, 11, 31),
+        sum(&EXPAND6, 5, 63),
+        sum(&EXPAND5, 0, 31),
+    )
+}
+
 /// One eye of a pair as RGB rows for the pipeline.
 #[derive(Clone, Copy, Debug)]
 pub struct Rgb565View<'a>(ImageView<'a, u16>);
@@ -85,6 +139,27 @@ impl RgbRows for Rgb565View<'_> {
         if let Some(row) = self.0.row(y) {
             for (o, &p) in out.iter_mut().zip(row) {
                 *o = expand_rgb565(p);
+            }
+        }
+    }
+
+    /// From the RGB565 pixels ([`mean_rgb565`]): the default's values.
+    fn half_row(&self, j: usize, out: &mut [Rgb8], _scratch: &mut [Rgb8]) {
+        let (Some(a), Some(b)) = (self.0.row(2 * j), self.0.row(2 * j + 1)) else {
+            return;
+        };
+        for ((o, a), b) in out.iter_mut().zip(a.chunks_exact(2)).zip(b.chunks_exact(2)) {
+            if let (&[a0, a1], &[b0, b1]) = (a, b) {
+                *o = mean_rgb565([a0, a1, b0, b1]);
+            }
+        }
+    }
+
+    /// By tables ([`grey8_of_rgb565`]): the default's values.
+    fn grey8_row(&self, y: usize, _rgb: &mut [Rgb8], out: &mut [i32]) {
+        if let Some(row) = self.0.row(y) {
+            for (o, &p) in out.iter_mut().zip(row) {
+                *o = grey8_of_rgb565(p);
             }
         }
     }

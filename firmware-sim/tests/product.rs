@@ -15,18 +15,18 @@ use embedded_hal::digital::{ErrorType, OutputPin};
 
 use firmware_sim::pg::conspicuity::{ColourKernel, Luv, LUV_TABLES};
 use firmware_sim::pg::disparity::DisparityCell;
-use firmware_sim::pg::image::{ImageViewMut, Rgb8};
+use firmware_sim::pg::image::{mean_2x2_row, ImageViewMut, Rgb8};
 use firmware_sim::pg::pipeline::{Pipeline, PipelineError, Region, RgbRows};
-use firmware_sim::pg::stereo::phase::{phase_row3, PhaseKernel};
+use firmware_sim::pg::stereo::phase::{grey8, phase_row3, PhaseKernel};
 use firmware_sim::pg::synth::{render_left, render_mask, render_right, SceneSpec};
 use firmware_sim::product::{
     is_compared, Product, ProductError, FRAME_LEN, HEIGHT, KEPT_WORDS, MODEL, PARAMS, SHARED_WORDS,
     TABLES, WIDTH, WORKSPACE_WORDS,
 };
 use firmware_sim::stereo_camera::{
-    expand_rgb565, luv_of_rgb565, pack_rgb565, pair_len, PairLayout, Rgb565Camera, Rgb565View,
-    SideBySide, SideBySideError, SimSideBySideSensor, SimStereoCamera, SimStereoError,
-    StereoCamera,
+    expand_rgb565, grey8_of_rgb565, luv_of_rgb565, mean_rgb565, pack_rgb565, pair_len, PairLayout,
+    Rgb565Camera, Rgb565View, SideBySide, SideBySideError, SimSideBySideSensor, SimStereoCamera,
+    SimStereoError, StereoCamera,
 };
 use firmware_sim::{CameraError, CameraErrorKind, NoTicks};
 
@@ -242,6 +242,20 @@ fn the_cameras_deliver_the_demo_pair_in_rgb565() {
     assert_eq!(compared(&direct), compared(&adapted));
 }
 
+/// An RGB565 eye through `RgbRows`'s default rows (`luv_row`,
+/// `grey8_row`, `half_row`: from `rgb_row`), not the frame's tables.
+struct Converted<'a>(Rgb565View<'a>);
+
+impl RgbRows for Converted<'_> {
+    fn size(&self) -> (usize, usize) {
+        self.0.size()
+    }
+
+    fn rgb_row(&self, y: usize, out: &mut [Rgb8]) {
+        self.0.rgb_row(y, out);
+    }
+}
+
 /// The frame's table of CIELUV gives core's conversion for all 65,536
 /// RGB565 values, and a row by table is the default (convert) row.
 #[test]
@@ -249,16 +263,6 @@ fn rgb565_luv_table_is_the_conversion() {
     for v in 0..=u16::MAX {
         let want = LUV_TABLES.convert(expand_rgb565(v));
         assert_eq!(luv_of_rgb565(v), want, "RGB565 {v:#06x}");
-    }
-    /// The same frame through `RgbRows`'s default `luv_row` only.
-    struct Converted<'a>(Rgb565View<'a>);
-    impl RgbRows for Converted<'_> {
-        fn size(&self) -> (usize, usize) {
-            self.0.size()
-        }
-        fn rgb_row(&self, y: usize, out: &mut [Rgb8]) {
-            self.0.rgb_row(y, out);
-        }
     }
     let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
     let layout = SimStereoCamera::new()
@@ -276,6 +280,65 @@ fn rgb565_luv_table_is_the_conversion() {
     }
     // The scene has colours, not one flat value.
     assert!(distinct.len() > 4, "{} colours", distinct.len());
+}
+
+/// The half-size rows from the RGB565 pixels are the default's (rounded
+/// means of the expanded pixels), on the demo pair and on every value of
+/// each channel.
+#[test]
+fn rgb565_half_rows_are_the_means() {
+    // Each 5- and 6-bit value of a channel with its neighbours, so every
+    // entry of the tables and rounding case is met.
+    for v in 0..=u16::MAX {
+        let p = [v, v.wrapping_add(0x0841), v ^ 0xffff, v.rotate_left(5)];
+        let rgb = p.map(expand_rgb565);
+        let mut want = [Rgb8::default()];
+        mean_2x2_row(&rgb[..2], &rgb[2..], &mut want);
+        assert_eq!(mean_rgb565(p), want[0], "{p:04x?}");
+    }
+    let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
+    let layout = SimStereoCamera::new()
+        .capture_pair(&mut frame, WIDTH, HEIGHT)
+        .unwrap();
+    let (left, right) = layout.views(&frame).unwrap();
+    let mut scratch = vec![Rgb8::default(); 2 * WIDTH];
+    let (mut mine, mut default) = (
+        vec![Rgb8::default(); WIDTH / 2],
+        vec![Rgb8::default(); WIDTH / 2],
+    );
+    for eye in [left, right] {
+        for j in 0..HEIGHT / 2 {
+            eye.half_row(j, &mut mine, &mut scratch);
+            Converted(eye).half_row(j, &mut default, &mut scratch);
+            assert_eq!(mine, default, "row {j}");
+        }
+    }
+}
+
+/// The frame's grey tables give core's `grey8` for all 65,536 RGB565
+/// values, and a grey row by table is the default row.
+#[test]
+fn rgb565_grey_tables_are_grey8() {
+    for v in 0..=u16::MAX {
+        assert_eq!(
+            grey8_of_rgb565(v),
+            grey8(expand_rgb565(v)),
+            "RGB565 {v:#06x}"
+        );
+    }
+    assert_eq!(grey8_of_rgb565(0xffff), 255 * 256);
+    let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
+    let layout = SimStereoCamera::new()
+        .capture_pair(&mut frame, WIDTH, HEIGHT)
+        .unwrap();
+    let (_, right) = layout.views(&frame).unwrap();
+    let mut rgb = vec![Rgb8::default(); WIDTH];
+    let (mut by_table, mut converted) = (vec![0i32; WIDTH], vec![0i32; WIDTH]);
+    for y in 0..HEIGHT {
+        right.grey8_row(y, &mut rgb, &mut by_table);
+        Converted(right).grey8_row(y, &mut rgb, &mut converted);
+        assert_eq!(by_table, converted, "row {y}");
+    }
 }
 
 #[test]

@@ -63,8 +63,8 @@ use core::marker::PhantomData;
 
 mod kernels;
 
-pub use kernels::{atan2_turns, grey8, phase_row3, PhaseKernel, SafePhase};
-use kernels::{grey_row, phase_row_at, x_pass, x_pass5};
+pub use kernels::{atan2_turns, grey8, phase_row3, x_pass5, PhaseKernel, SafePhase};
+use kernels::{grey_row, phase_row_at, x_pass};
 
 /// Largest kernel radius.
 pub const MAX_RADIUS: usize = 5;
@@ -394,14 +394,13 @@ impl<'p, 'b, S: RgbRows, K: PhaseKernel> Refiner<'p, 'b, S, K> {
             .zip([&mut *zl, &mut *zr])
             .zip([pool, pool + md])
         {
-            eye.rgb_row(y, self.rgb);
-            grey_row(self.rgb, self.v, r);
+            grey_row(*eye, y, self.rgb, self.v, r);
             let Some(zrow) = z.get_mut(pad..pad + w) else {
                 return;
             };
             let (ch, sh) = (&self.phase.c_half, &self.phase.s_half);
             if N == 5 {
-                x_pass5(self.v, ch, sh, zrow);
+                K::x_pass5(self.v, ch, sh, zrow);
             } else {
                 x_pass::<N>(self.v, ch, sh, zrow);
             }

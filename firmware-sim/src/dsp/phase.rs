@@ -3,7 +3,7 @@
 
 use super::sgm::{min16, sgm_lanes, sgm_settle, uadd16, uqadd16, usub16};
 use firmware_sim::pg::disparity::DisparityCell;
-use firmware_sim::pg::stereo::phase::{phase_row3, PhaseKernel};
+use firmware_sim::pg::stereo::phase::{phase_row3, x_pass5, Half, PhaseKernel, TAP_FRAC, Z_FRAC};
 
 // The phase step of the full-resolution refinement (pool 1), bit for bit
 // the portable `phase_row3`; r0 = &mut PhaseArgs (offsets 0..28). Per ON
@@ -160,6 +160,13 @@ pub struct PhaseAsm;
 
 impl PhaseKernel for PhaseAsm {
     #[inline]
+    fn x_pass5(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
+        if !x_pass5_smlad(v, ch, sh, out) {
+            x_pass5(v, ch, sh, out);
+        }
+    }
+
+    #[inline]
     fn phase_row3(
         max_disp: u8,
         lambda_q8: i32,
@@ -259,4 +266,131 @@ impl PhaseKernel for PhaseAsm {
             (if d % 2 == 0 { v } else { v >> 16 }) as u16
         })
     }
+}
+
+// The refinement's 5-tap x pass, 4 pixels a turn (`x_pass5_smlad` says
+// why it is exact): r0 = grey row `v`, r1 = `out`, r2 = the end of its
+// groups of 4, r3 = the packed taps `[k21, k12, k0, ks12, kn21]`. The
+// pairs of neighbours (x, x + 1) of the window rotate through r8..r11:
+// a pixel reads `ab` and `cd` and writes `de` over the pair it no longer
+// needs; r12 and lr are its real and imaginary sums. Per pixel: the
+// grey, less 32 768, into the top half (`LSL`, `EOR`), `de` (`PKHTB`),
+// re = c0·c + (c2, c1)·ab + (c1, c2)·de, im = (−s2, −s1)·ab + (s1,
+// s2)·de, each rounded, and one word stored.
+macro_rules! x_pass5_asm {
+    ($(($ab:literal, $cd:literal, $de:literal)),*) => {
+        core::arch::global_asm!(
+            ".syntax unified",
+            ".section .text.pg_x_pass5,\"ax\",%progbits",
+            ".global pg_x_pass5",
+            ".type pg_x_pass5,%function",
+            ".thumb_func",
+            "pg_x_pass5:",
+            "push {{r4-r11, lr}}",
+            "ldr r4, [r3, #4]",
+            "ldr r5, [r3, #8]",
+            "ldr r6, [r3, #12]",
+            "ldr r7, [r3, #16]",
+            "ldr r3, [r3, #0]",
+            "ldr r8, [r0], #4",
+            "ldr r9, [r0], #4",
+            "ldr r10, [r0], #4",
+            "ldr r11, [r0], #4",
+            "sub r8, r8, #32768",
+            "sub r9, r9, #32768",
+            "sub r10, r10, #32768",
+            "sub r11, r11, #32768",
+            "pkhbt r8, r8, r9, lsl #16",
+            "pkhbt r9, r9, r10, lsl #16",
+            "pkhbt r10, r10, r11, lsl #16",
+            "cmp r1, r2",
+            "bhs 9f",
+            "1:",
+            $(
+                concat!("ldr ", $de, ", [r0], #4"),
+                concat!("lsl ", $de, ", ", $de, ", #16"),
+                concat!("eor ", $de, ", ", $de, ", #0x80000000"),
+                concat!("pkhtb ", $de, ", ", $de, ", ", $cd, ", asr #16"),
+                concat!("smulbb r12, ", $cd, ", r5"),
+                concat!("smlad r12, ", $ab, ", r3, r12"),
+                concat!("smlad r12, ", $de, ", r4, r12"),
+                "add r12, r12, #131072",
+                "asr r12, r12, #18",
+                concat!("smuad lr, ", $ab, ", r7"),
+                concat!("smlad lr, ", $de, ", r6, lr"),
+                "add lr, lr, #131072",
+                "asr lr, lr, #18",
+                "pkhbt r12, r12, lr, lsl #16",
+                "str r12, [r1], #4",
+            )*
+            "cmp r1, r2",
+            "blo 1b",
+            "9:",
+            "pop {{r4-r11, pc}}",
+            ".size pg_x_pass5, . - pg_x_pass5",
+        );
+    };
+}
+
+// The kernel's rounding: `>> 18` after `+ 2^17`, core's shift.
+const _: () = assert!(TAP_FRAC + 8 - Z_FRAC == 18);
+
+x_pass5_asm!(
+    ("r8", "r10", "r11"),
+    ("r9", "r11", "r8"),
+    ("r10", "r8", "r9"),
+    ("r11", "r9", "r10")
+);
+
+extern "C" {
+    /// The x pass of `(end − out) / 4` pixels, a multiple of 4, reading
+    /// `v` up to 4 past them; see `x_pass5_asm`.
+    fn pg_x_pass5(v: *const i32, out: *mut [i16; 2], end: *mut [i16; 2], taps: *const [u32; 5]);
+}
+
+/// `lo | hi << 16` of two `i16` values held in `i32`s.
+#[inline(always)]
+fn pack(lo: i32, hi: i32) -> u32 {
+    (lo as u32 & 0xffff) | ((hi as u32) << 16)
+}
+
+/// The x pass with `SMLAD` (`pg_x_pass5`), or `false` for taps it cannot
+/// take. Each grey less 32 768 is an `i16` (greys are 0..=65 280, the
+/// contract), and a pair of neighbours one word, so a pixel's real part
+/// is `c2·a + c1·b` and `c1·d + c2·e` (two `SMLAD`) plus `c0·c`, its
+/// imaginary part two `SMLAD` with `(−s2, −s1)` and `(s1, s2)`. The
+/// offset cancels: the real taps sum to 0 (`c0 + 2 c1 + 2 c2 = 0`, checked)
+/// and the imaginary ones are odd. The sums are the portable ones,
+/// exactly: each is below 2^31 in magnitude (the taps' absolute sum is at
+/// most 2^15, `Phase::new`, times at most 2^15). The last `n mod 4`
+/// pixels take the portable pass.
+fn x_pass5_smlad(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) -> bool {
+    let [c0, c1, c2, ..] = *ch;
+    let [_, s1, s2, ..] = *sh;
+    let fit = [c0, c1, c2, s1, s2, -s1, -s2]
+        .iter()
+        .all(|&t| i16::try_from(t).is_ok());
+    if !fit || c0 + 2 * c1 + 2 * c2 != 0 {
+        return false;
+    }
+    let taps = [
+        pack(c2, c1),
+        pack(c1, c2),
+        pack(c0, 0),
+        pack(s1, s2),
+        pack(-s2, -s1),
+    ];
+    let n = out.len().min(v.len().saturating_sub(4));
+    let done = n - n % 4;
+    if done > 0 {
+        let start = out.as_mut_ptr();
+        // SAFETY: the kernel writes `out[..done]` (`done <= out.len()`)
+        // and reads `v[..done + 4]` (`done + 4 <= v.len()`), registers
+        // otherwise (r4..r11 and lr saved).
+        unsafe { pg_x_pass5(v.as_ptr(), start, start.add(done), &taps) };
+    }
+    if let (Some(v), Some(out)) = (v.get(done..), out.get_mut(done..n)) {
+        x_pass5(v, ch, sh, out);
+    }
+    true
 }

@@ -2,7 +2,7 @@
 //! and the sinks the finest level's cells go to.
 
 use crate::disparity::DisparityCell;
-use crate::image::{Rgb8, RgbRows};
+use crate::image::{mean_2x2_row, Rgb8, RgbRows};
 use crate::stereo::phase::{PhaseKernel, Refiner};
 
 /// Where the finest level's cells go, in row-major order.
@@ -64,22 +64,14 @@ pub(super) fn level_row<S: RgbRows>(
         src.rgb_row(j, out);
         return;
     }
+    if k == 1 {
+        src.half_row(j, out, scratch);
+        return;
+    }
     let fw = 2 * out.len();
     let (a, rest) = scratch.split_at_mut(fw.min(scratch.len()));
     let (b, rest) = rest.split_at_mut(fw.min(rest.len()));
     level_row(src, k - 1, 2 * j, a, rest);
     level_row(src, k - 1, 2 * j + 1, b, rest);
-    let mean = |p: [u8; 4]| {
-        let s: u16 = p.iter().map(|&v| u16::from(v)).sum();
-        ((s + 2) / 4) as u8
-    };
-    for ((o, a), b) in out.iter_mut().zip(a.chunks_exact(2)).zip(b.chunks_exact(2)) {
-        if let ([a0, a1], [b0, b1]) = (a, b) {
-            *o = Rgb8::new(
-                mean([a0.r, a1.r, b0.r, b1.r]),
-                mean([a0.g, a1.g, b0.g, b1.g]),
-                mean([a0.b, a1.b, b0.b, b1.b]),
-            );
-        }
-    }
+    mean_2x2_row(a, b, out);
 }

@@ -5,7 +5,7 @@
 use super::{Half, MAX_TURN, TAP_FRAC, Z_FRAC};
 use crate::disparity::DisparityCell;
 use crate::fixed::U8F8;
-use crate::image::Rgb8;
+use crate::image::{Rgb8, RgbRows};
 
 /// The phase step of a row with 3-pixel pooling (the default `pool` 1),
 /// replaceable by a target's kernel, as [`crate::mlp::MacKernel`]: the
@@ -57,6 +57,20 @@ pub trait PhaseKernel {
         acc: &mut [u32; 5],
     ) -> [u16; 5] {
         crate::stereo::sgm::sgm_step(c, p, pad, pen, acc)
+    }
+
+    /// The refinement's 5-tap x pass of one row (radius 2, the default):
+    /// `out[x] = (re, im)` of `v[x..x + 5]` with the taps `ch[..3]`,
+    /// `sh[1..3]` (the zero-DC real and odd imaginary halves of
+    /// [`Phase`](super::Phase)), each rounded to `I12F4`.
+    ///
+    /// Contract: `v` holds greys of [`grey8`] (0..=65280), and the real
+    /// taps sum to zero, `c0 = −2 (c1 + c2)` (as [`Phase`](super::Phase)
+    /// makes them); any kernel that honours it must give the same
+    /// integers as the default.
+    #[inline(always)]
+    fn x_pass5(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
+        x_pass5(v, ch, sh, out);
     }
 
     /// [`PhaseKernel::sgm_step5`] for 9 candidates (the coarsest level's
@@ -160,15 +174,13 @@ pub fn grey8(p: Rgb8) -> i32 {
     77 * i32::from(p.r) + 150 * i32::from(p.g) + 29 * i32::from(p.b)
 }
 
-/// The grey of one RGB row into `v[r..r + w]`, then the padding
-/// replicated.
+/// The grey of row `y` of `eye` ([`RgbRows::grey8_row`], `rgb` its
+/// scratch) into `v[r..r + w]`, then the padding replicated.
 #[inline(always)]
-pub(super) fn grey_row(rgb: &[Rgb8], v: &mut [i32], r: usize) {
+pub(super) fn grey_row<S: RgbRows>(eye: &S, y: usize, rgb: &mut [Rgb8], v: &mut [i32], r: usize) {
     let w = rgb.len();
     if let Some(inner) = v.get_mut(r..r + w) {
-        for (o, &p) in inner.iter_mut().zip(rgb) {
-            *o = grey8(p);
-        }
+        eye.grey8_row(y, rgb, inner);
     }
     let first = v.get(r).copied().unwrap_or(0);
     let last = v.get(r + w.max(1) - 1).copied().unwrap_or(0);
@@ -204,12 +216,12 @@ pub(super) fn x_pass<const N: usize>(v: &[i32], ch: &Half, sh: &Half, out: &mut 
     }
 }
 
-/// [`x_pass`] for 5 taps (the default radius 2), the same integers: the
-/// real parts, then the imaginary ones, each in one [`sweep5`], so that
-/// each pixel loads one grey value per sweep and the taps stay in
-/// registers.
+/// The portable [`PhaseKernel::x_pass5`]: the general x pass for 5 taps
+/// (the default radius 2), the same integers: the real parts, then the
+/// imaginary ones, each in one sweep, so that each pixel loads one grey
+/// value per sweep and the taps stay in registers.
 #[inline(always)]
-pub(super) fn x_pass5(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
+pub fn x_pass5(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
     let shift = TAP_FRAC + 8 - Z_FRAC;
     let half = 1 << (shift - 1);
     let [c0, c1, c2, ..] = *ch;
