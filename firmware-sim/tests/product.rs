@@ -13,11 +13,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use embedded_hal::digital::{ErrorType, OutputPin};
 
-use firmware_sim::pg::conspicuity::{ColourKernel, Luv, LUV_TABLES};
+use firmware_sim::pg::conspicuity::{snn_row, ColourKernel, Luv, LUV_TABLES};
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::{mean_2x2_row, ImageViewMut, Rgb8};
 use firmware_sim::pg::pipeline::{Pipeline, PipelineError, Region, RgbRows};
-use firmware_sim::pg::stereo::phase::{grey8, phase_row3, PhaseKernel};
+use firmware_sim::pg::stereo::phase::{grey8, PhaseKernel};
+use firmware_sim::pg::stereo::sgm::sgm_step;
 use firmware_sim::pg::synth::{render_left, render_mask, render_right, SceneSpec};
 use firmware_sim::product::{
     is_compared, Product, ProductError, FRAME_LEN, HEIGHT, KEPT_WORDS, MODEL, PARAMS, SHARED_WORDS,
@@ -113,35 +114,40 @@ fn the_demo_objects_are_the_golden_list() {
     );
 }
 
-/// The portable phase step, counting its rows and the cells it refines.
-struct CountingPhase;
+/// The portable kernels, counting the SGM steps of 5 candidates (the
+/// finer levels' windows) and the smoothing rows they run.
+struct CountingKernel;
 
-static PHASE_ROWS: AtomicUsize = AtomicUsize::new(0);
-static PHASE_REFINED: AtomicUsize = AtomicUsize::new(0);
+static SGM_STEPS: AtomicUsize = AtomicUsize::new(0);
+static SMOOTHED_ROWS: AtomicUsize = AtomicUsize::new(0);
 
-impl PhaseKernel for CountingPhase {
-    fn phase_row3(
-        max_disp: u8,
-        lambda_q8: i32,
-        zl: &[[i16; 2]],
-        zr: &[[i16; 2]],
-        cells: &mut [DisparityCell],
-    ) -> usize {
-        let n = phase_row3(max_disp, lambda_q8, zl, zr, cells);
-        PHASE_ROWS.fetch_add(1, Ordering::Relaxed);
-        PHASE_REFINED.fetch_add(n, Ordering::Relaxed);
-        n
+impl PhaseKernel for CountingKernel {
+    fn sgm_step5(
+        c: &[u16; 5],
+        p: &[u16; 5],
+        pad: u32,
+        pen: (u32, u32),
+        acc: &mut [u32; 5],
+    ) -> [u16; 5] {
+        SGM_STEPS.fetch_add(1, Ordering::Relaxed);
+        sgm_step(c, p, pad, pen, acc)
     }
 }
 
-impl ColourKernel for CountingPhase {}
+impl ColourKernel for CountingKernel {
+    fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) {
+        SMOOTHED_ROWS.fetch_add(1, Ordering::Relaxed);
+        snn_row(prev, cur, next, out);
+    }
+}
 
 #[test]
 fn the_pipeline_runs_the_kernel_it_is_given() {
-    // As the board runs its assembly phase step: every row of the
-    // refinement goes through the kernel, and the objects are the golden
-    // list's (the portable pipeline's).
-    let p = Pipeline::<CountingPhase>::with_kernel(&PARAMS, &TABLES, MODEL).unwrap();
+    // As the board runs its assembly kernels: the SGM steps of the
+    // half-size level's windows (at least one per pixel of it) and every
+    // row of the smoothing go through the kernel, and the objects are the
+    // golden list's (the portable pipeline's).
+    let p = Pipeline::<CountingKernel>::with_kernel(&PARAMS, &TABLES, MODEL).unwrap();
     let mut product = Product::new(SimStereoCamera::new(), MockLed::default(), p);
     let (mut frame, (mut kept, mut shared)) = (vec![0u16; FRAME_LEN], workspace());
     let mut out = String::new();
@@ -154,8 +160,9 @@ fn the_pipeline_runs_the_kernel_it_is_given() {
             &mut out,
         )
         .unwrap();
-    assert_eq!(PHASE_ROWS.load(Ordering::Relaxed), HEIGHT);
-    assert!(PHASE_REFINED.load(Ordering::Relaxed) > WIDTH);
+    let steps = SGM_STEPS.load(Ordering::Relaxed);
+    assert!(steps >= (WIDTH / 2) * (HEIGHT / 2), "{steps}");
+    assert_eq!(SMOOTHED_ROWS.load(Ordering::Relaxed), HEIGHT);
     let (portable, _) = report(SimStereoCamera::new());
     assert_eq!(compared(&out), compared(&portable));
 }

@@ -1,5 +1,5 @@
 //! The pipeline's stereo point (`pipeline::STEREO_DEFAULT`,
-//! `C2fParams::FAST_LOW_PENALTY`) against `C2fParams::FAST`: a small object
+//! `C2fParams::HALF_LOW_PENALTY`) against `C2fParams::FAST`: a small object
 //! well in front of its background keeps its disparity with the low SGM
 //! penalty, where `fast`'s large-step penalty gives much of it the
 //! background's (docs/PIPELINE.md, "The stereo point").
@@ -90,8 +90,20 @@ fn object_right(spec: &SceneSpec, map: &[DisparityCell]) -> f64 {
 }
 
 #[test]
-fn the_pipeline_point_is_fast_with_one_low_penalty() {
-    assert_eq!(STEREO_DEFAULT, C2fParams::FAST_LOW_PENALTY);
+fn the_pipeline_point_is_half_with_one_low_penalty() {
+    assert_eq!(STEREO_DEFAULT, C2fParams::HALF_LOW_PENALTY);
+    assert_eq!(
+        C2fParams {
+            phase: None,
+            ..C2fParams::FAST_LOW_PENALTY
+        },
+        STEREO_DEFAULT
+    );
+    assert_eq!(
+        C2fParams::from_name("half-low-penalty"),
+        Some(STEREO_DEFAULT)
+    );
+    assert_eq!(STEREO_DEFAULT.name(), Some("half-low-penalty"));
     let p = C2fParams::FAST_LOW_PENALTY;
     assert_eq!((p.p1, p.p2), (0.25, 0.25));
     assert_eq!(

@@ -103,10 +103,10 @@ pub struct PipelineParams {
 }
 
 /// The stereo point the pipeline runs by default,
-/// [`C2fParams::FAST_LOW_PENALTY`]: the half-size search refined to the
-/// frame's resolution by phase, with a low SGM penalty that keeps small
+/// [`C2fParams::HALF_LOW_PENALTY`]: the half-size search, each cell
+/// spread over its 2x2 block, with a low SGM penalty that keeps small
 /// objects' disparity steps (docs/PIPELINE.md, "The stereo point").
-pub const STEREO_DEFAULT: C2fParams = C2fParams::FAST_LOW_PENALTY;
+pub const STEREO_DEFAULT: C2fParams = C2fParams::HALF_LOW_PENALTY;
 
 impl PipelineParams {
     /// The paper's settings: [`STEREO_DEFAULT`] with 32 disparities, the

@@ -5,8 +5,8 @@
 //! 0`) and 5 SGM paths, or 3 ([`C2fParams::paths`]) (docs/STEREO.md). The
 //! left-right check ([`LeftRight`]) reads the right eye, derives its map
 //! from the left path sums, or is off; the named operating points are
-//! [`C2fParams::FULL`], [`C2fParams::FAST`], [`C2fParams::HALF`] and
-//! [`C2fParams::FAST_LOW_PENALTY`].
+//! [`C2fParams::FULL`], [`C2fParams::FAST`], [`C2fParams::HALF`],
+//! [`C2fParams::FAST_LOW_PENALTY`] and [`C2fParams::HALF_LOW_PENALTY`].
 //!
 //! The code, by concern: `params` (the parameters and the named points),
 //! `buffers` (the `const fn` sizes and [`C2fBuffers`]), `rows` (the levels'
