@@ -17,7 +17,7 @@ use crate::camera::CameraError;
 use crate::pg::checksum::Fnv1a;
 use crate::pg::conspicuity::ColourKernel;
 use crate::pg::image::ImageError;
-use crate::pg::mlp::Identity;
+use crate::pg::mlp::{Identity, MacKernel};
 use crate::pg::pipeline::{
     self, layout, workspace_bytes, Frame, Observer, Pipeline, PipelineError, PipelineParams, Stage,
 };
@@ -300,7 +300,9 @@ pub struct Product<'a, C, P, K = SafePhase> {
     pipeline: Pipeline<'a, K>,
 }
 
-impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel + ColourKernel> Product<'a, C, P, K> {
+impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel + ColourKernel + MacKernel>
+    Product<'a, C, P, K>
+{
     /// The product around a set-up pipeline.
     pub fn new(camera: C, led: P, pipeline: Pipeline<'a, K>) -> Self {
         Self {

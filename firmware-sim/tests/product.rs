@@ -14,8 +14,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use embedded_hal::digital::{ErrorType, OutputPin};
 
 use firmware_sim::pg::conspicuity::{snn_row, ColourKernel, Luv, LUV_TABLES};
-use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::image::{mean_2x2_row, ImageViewMut, Rgb8};
+use firmware_sim::pg::mlp::MacKernel;
 use firmware_sim::pg::pipeline::{Pipeline, PipelineError, Region, RgbRows};
 use firmware_sim::pg::stereo::phase::{grey8, PhaseKernel};
 use firmware_sim::pg::stereo::sgm::sgm_step;
@@ -133,6 +133,8 @@ impl PhaseKernel for CountingKernel {
         sgm_step(c, p, pad, pen, acc)
     }
 }
+
+impl MacKernel for CountingKernel {}
 
 impl ColourKernel for CountingKernel {
     fn snn_row(prev: &[Luv], cur: &[Luv], next: &[Luv], out: &mut [Luv]) {

@@ -78,6 +78,9 @@ pub struct SafeKernel;
 
 impl MacKernel for SafeKernel {}
 
+/// The portable kernel, as the pipeline's default kernel type.
+impl MacKernel for crate::stereo::phase::SafePhase {}
+
 /// The default [`MacKernel::dot_rows`]: four rows at a time sharing each
 /// input load, then single rows.
 #[inline(always)]

@@ -57,6 +57,7 @@ use crate::conspicuity::{ColourKernel, EdgeCell, EdgeParams, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::ImageView;
 use crate::mlp::blob::Model;
+use crate::mlp::MacKernel;
 use crate::segment::{Detection, Ratio, SegmentBuffers, SegmentParams};
 use crate::shape::SHAPE_LEN;
 use crate::stereo::c2f::{C2f, C2fParams, MAX_COARSE};
@@ -264,8 +265,9 @@ impl Observer for () {}
 
 /// The set-up pipeline: checked parameters, stereo kernels, colour
 /// tables, the parsed decoder tables and model. `K` is the stereo phase
-/// refinement's row step ([`PhaseKernel`]) and the colour stage's hot
-/// loops ([`ColourKernel`]): the portable [`SafePhase`] from
+/// refinement's row step ([`PhaseKernel`]), the colour stage's hot
+/// loops ([`ColourKernel`]) and the classifier's dot products
+/// ([`MacKernel`]): the portable [`SafePhase`] from
 /// [`Pipeline::new`], a target's own (e.g. the firmware's assembly one)
 /// from [`Pipeline::with_kernel`]; the same bits either way.
 #[derive(Clone, Debug)]
@@ -387,7 +389,7 @@ impl<'a, K: PhaseKernel> Pipeline<'a, K> {
     }
 }
 
-impl<K: PhaseKernel + ColourKernel> Pipeline<'_, K> {
+impl<K: PhaseKernel + ColourKernel + MacKernel> Pipeline<'_, K> {
     /// Runs a frame pair through every stage (see the module docs).
     ///
     /// # Errors

@@ -43,7 +43,12 @@ impl<O: Observer> SegmentObserver for SegmentSteps<'_, O> {
     }
 }
 
-pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuity::ColourKernel>(
+pub(super) fn run<
+    'w,
+    S: RgbRows,
+    O: Observer,
+    K: PhaseKernel + conspicuity::ColourKernel + mlp::MacKernel,
+>(
     p: &Pipeline<'_, K>,
     left: &S,
     right: &S,
@@ -67,7 +72,12 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuity::Col
     run_split(p, left, right, kept, shared, obs)
 }
 
-pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuity::ColourKernel>(
+pub(super) fn run_split<
+    'w,
+    S: RgbRows,
+    O: Observer,
+    K: PhaseKernel + conspicuity::ColourKernel + mlp::MacKernel,
+>(
     p: &Pipeline<'_, K>,
     left: &S,
     right: &S,
@@ -270,7 +280,7 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: PhaseKernel + conspicuit
         let v = vectors
             .get(search * SHAPE_LEN..(search + 1) * SHAPE_LEN)
             .unwrap_or(&[]);
-        let outputs = mlp::forward(m, v, &mut scratch)?;
+        let outputs = mlp::forward_with::<K>(m, v, &mut scratch)?;
         let mut top = [Ranked::default(); TOP_K];
         let filled = mlp::top_k(m, outputs, &mut top)?;
         let identity = match top.first() {

@@ -225,3 +225,11 @@ impl MacKernel for SmladKernel {
         unsafe { pg_rows_smlad(&mut args) };
     }
 }
+
+/// The product pipeline's kernel type runs the classifier with [`SmladKernel`].
+impl MacKernel for super::PhaseAsm {
+    #[inline]
+    fn dot_rows(w: &[u8], stride: usize, len: usize, x: &[u32], acc: &mut [i32]) {
+        SmladKernel::dot_rows(w, stride, len, x, acc);
+    }
+}

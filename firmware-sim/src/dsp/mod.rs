@@ -1,7 +1,8 @@
 //! The Cortex-M4 assembly kernels: the phase step of the stereo stage's
 //! refinement and its SGM path steps ([`PhaseAsm`], in `phase.rs`, with the
 //! 16-bit lane kernels in `sgm.rs`) and the `SMLAD` dot-product kernel of
-//! the classifier ([`SmladKernel`], in `mlp.rs`, which describes it).
+//! the classifier ([`SmladKernel`], in `mlp.rs`, which describes it), which
+//! [`PhaseAsm`] also runs for the product's classifier.
 
 #![allow(unsafe_code)]
 
@@ -9,7 +10,5 @@ mod mlp;
 mod phase;
 mod sgm;
 
-// Named by the bench binary only, not by the product firmware.
-#[allow(unused_imports)]
 pub use mlp::SmladKernel;
 pub use phase::PhaseAsm;
