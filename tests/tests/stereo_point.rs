@@ -134,3 +134,54 @@ fn a_small_near_object_keeps_its_disparity_at_the_pipeline_point() {
     // pipeline's point.
     assert!(low_sum / 4.0 >= 0.4, "{low_sum} against {fast_sum}");
 }
+
+#[test]
+fn run_into_a_map_gives_the_cells_run_gives() {
+    let (_, l, r) = scene(5, 20);
+    for p in [
+        C2fParams::HALF_LOW_PENALTY,
+        C2fParams::FAST_LOW_PENALTY,
+        C2fParams::FULL,
+    ] {
+        let pipeline = PipelineParams {
+            stereo: p,
+            ..PipelineParams::DEFAULT
+        }
+        .with_max_disp(31);
+        let bytes = protogist_host::product::tables_for(&pipeline).unwrap();
+        let tables: Vec<DemTable<'_>> = bytes.iter().map(|t| DemTable::parse(t).unwrap()).collect();
+        let e = C2f::new(&pipeline.stereo).unwrap();
+        let mut st = C2fStorage::new(W, H, &pipeline.stereo);
+        let (lv, rv) = (
+            ImageView::packed(&l, W, H).unwrap(),
+            ImageView::packed(&r, W, H).unwrap(),
+        );
+        let mut map = vec![DisparityCell::OFF; W * H];
+        e.run_into(
+            &tables,
+            &lv,
+            &rv,
+            &mut st.buffers(),
+            &mut ImageViewMut::packed(&mut map, W, H).unwrap(),
+            &mut (),
+        )
+        .unwrap();
+        assert_eq!(map, run(&pipeline.stereo, &l, &r), "{:?}", p.name());
+        // A map of another size is a typed error.
+        let mut short = vec![DisparityCell::OFF; W * (H - 1)];
+        let err = e
+            .run_into(
+                &tables,
+                &lv,
+                &rv,
+                &mut st.buffers(),
+                &mut ImageViewMut::packed(&mut short, W, H - 1).unwrap(),
+                &mut (),
+            )
+            .unwrap_err();
+        assert!(
+            matches!(err, protogist::stereo::StereoError::Image(_)),
+            "{err:?}"
+        );
+    }
+}

@@ -145,17 +145,12 @@ pub(super) fn run_split<
             phase,
         };
         disparity.fill(DisparityCell::OFF);
-        let mut sink = |x: usize, y: usize, c: DisparityCell| {
-            if let Some(d) = disparity.get_mut(y * w + x) {
-                *d = c;
-            }
-        };
-        p.c2f.run(
+        p.c2f.run_into(
             tables,
             left,
             right,
             &mut bufs,
-            &mut sink,
+            &mut ImageViewMut::packed(&mut *disparity, w, h)?,
             &mut StereoSteps(obs),
         )?;
     }

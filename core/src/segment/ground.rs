@@ -80,19 +80,18 @@ impl RowPlanes {
 /// One row's dominant disparity, bits, when at least a quarter of its
 /// cells lie within a plane of its most common whole-pixel plane.
 fn row_disparity(row: &[DisparityCell], planes: &mut RowPlanes) -> Option<u32> {
-    // `planes` is all zeros between rows: only the planes up to the
-    // highest the row touched are cleared after it.
+    planes.count.fill(0);
+    planes.sum.fill(0);
     // The mode as the histogram fills: the most common plane, the lowest
     // on a tie (a plane reaching the leader's count later wins only if it
     // is lower), so no pass over all the planes is needed. Each plane's
     // sum of bits fills in the same pass, so the mean around the mode
     // needs no second pass over the row. The counts saturate at 65,535 and
     // the sums are `u32`, as before: exact for rows of up to 65,535 cells.
-    let (mut top, mut mode, mut highest) = (0u16, 0u16, 0u16);
+    let (mut top, mut mode) = (0u16, 0u16);
     for d in row.iter().filter_map(|c| c.get()) {
         let b = d.to_bits();
         let p = plane(b);
-        highest = highest.max(p);
         if let (Some(k), Some(s)) = (
             planes.count.get_mut(usize::from(p)),
             planes.sum.get_mut(usize::from(p)),
@@ -114,9 +113,6 @@ fn row_disparity(row: &[DisparityCell], planes: &mut RowPlanes) -> Option<u32> {
         .map(|&k| u32::from(k))
         .sum();
     let sum: u32 = planes.sum.get(near).unwrap_or(&[]).iter().sum();
-    let touched = ..=usize::from(highest).min(PLANES - 1);
-    planes.count.get_mut(touched).unwrap_or(&mut []).fill(0);
-    planes.sum.get_mut(touched).unwrap_or(&mut []).fill(0);
     let need = u32::try_from(row.len().div_ceil(4))
         .unwrap_or(u32::MAX)
         .max(1);

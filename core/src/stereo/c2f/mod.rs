@@ -96,10 +96,11 @@ pub use params::{C2fParams, LeftRight, MAX_COARSE};
 use super::phase::{Phase, PhaseBuffers, PhaseKernel, Refiner, SafePhase};
 use super::{param, Dem, DemTable, Probe, StereoError, StereoReport};
 use crate::disparity::DisparityCell;
+use crate::image::{ImageError, ImageViewMut};
 use buffers::Work;
 use core::marker::PhantomData;
 use pass::{Output, Pass};
-use rows::{Cells, Plain, Refined};
+use rows::{Cells, Map, Plain, Refined};
 
 /// The number of SGM paths (the 5 of one top-to-bottom pass).
 pub const PATHS: u32 = 5;
@@ -301,6 +302,43 @@ impl<K: PhaseKernel> C2f<K> {
             sink,
         };
         self.run_levels(tables, left, right, &mut rest, &mut refined, probe)
+    }
+
+    /// [`C2f::run`] into a map of the frame's size (every cell written):
+    /// the same cells, but a level `k > 0` without the phase refinement
+    /// fills each frame row whole instead of cell by cell.
+    ///
+    /// # Errors
+    /// As [`C2f::run`], and [`StereoError::Image`] for a map of another
+    /// size than the frames.
+    pub fn run_into<S: RgbRows>(
+        &self,
+        tables: &[DemTable<'_>],
+        left: &S,
+        right: &S,
+        bufs: &mut C2fBuffers<'_>,
+        map: &mut ImageViewMut<'_, DisparityCell>,
+        probe: &mut impl Probe,
+    ) -> Result<StereoReport, StereoError> {
+        if map.size() != left.size() {
+            return Err(StereoError::Image(ImageError::SizeMismatch {
+                expected: left.size(),
+                got: map.size(),
+            }));
+        }
+        if self.phase.is_some() {
+            return self.run(
+                tables,
+                left,
+                right,
+                bufs,
+                &mut |x, y, c| {
+                    map.set(x, y, c);
+                },
+                probe,
+            );
+        }
+        self.run_levels(tables, left, right, bufs, &mut Map { map, next: 0 }, probe)
     }
 
     /// [`C2f::run`] without the phase refinement.

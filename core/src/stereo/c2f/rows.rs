@@ -2,7 +2,7 @@
 //! and the sinks the finest level's cells go to.
 
 use crate::disparity::DisparityCell;
-use crate::image::{mean_2x2_row, Rgb8, RgbRows};
+use crate::image::{mean_2x2_row, ImageViewMut, Rgb8, RgbRows};
 use crate::stereo::phase::{PhaseKernel, Refiner};
 
 /// Where the finest level's cells go, in row-major order.
@@ -26,6 +26,27 @@ impl<F: FnMut(usize, usize, DisparityCell)> Cells for Plain<'_, F> {
     #[inline(always)]
     fn cell(&mut self, x: usize, y: usize, c: DisparityCell) {
         (self.0)(x, y, c);
+    }
+}
+
+/// A sink that is a map of the frame's size: a level `k > 0` fills its
+/// rows whole.
+pub(super) struct Map<'m, 'a> {
+    pub(super) map: &'m mut ImageViewMut<'a, DisparityCell>,
+    /// The frame row [`Cells::row`] hands out next.
+    pub(super) next: usize,
+}
+
+impl Cells for Map<'_, '_> {
+    #[inline(always)]
+    fn cell(&mut self, x: usize, y: usize, c: DisparityCell) {
+        self.map.set(x, y, c);
+    }
+    fn row(&mut self) -> Option<&mut [DisparityCell]> {
+        self.map.row_mut(self.next)
+    }
+    fn row_done(&mut self, y: usize) {
+        self.next = y + 1;
     }
 }
 
