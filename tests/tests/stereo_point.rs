@@ -40,8 +40,14 @@ fn scene(seed: u64, d: u8) -> (SceneSpec, Vec<Rgb8>, Vec<Rgb8>) {
     (spec, l, r)
 }
 
-/// The map of `p` on the pair.
-fn run(p: &C2fParams, l: &[Rgb8], r: &[Rgb8]) -> Vec<DisparityCell> {
+/// `f` on the engine of `p`, with the decoder tables and buffers of a
+/// 160x120 run at 32 disparities, and the pair's views.
+fn with_engine<R>(
+    p: &C2fParams,
+    l: &[Rgb8],
+    r: &[Rgb8],
+    f: impl FnOnce(&C2f, &[DemTable<'_>], &mut C2fStorage, [ImageView<'_, Rgb8>; 2]) -> R,
+) -> R {
     let pipeline = PipelineParams {
         stereo: *p,
         ..PipelineParams::DEFAULT
@@ -51,17 +57,28 @@ fn run(p: &C2fParams, l: &[Rgb8], r: &[Rgb8]) -> Vec<DisparityCell> {
     let tables: Vec<DemTable<'_>> = bytes.iter().map(|t| DemTable::parse(t).unwrap()).collect();
     let e = C2f::new(&pipeline.stereo).unwrap();
     let mut st = C2fStorage::new(W, H, &pipeline.stereo);
-    let mut out = vec![DisparityCell::OFF; W * H];
-    e.run(
-        &tables,
-        &ImageView::packed(l, W, H).unwrap(),
-        &ImageView::packed(r, W, H).unwrap(),
-        &mut st.buffers(),
-        &mut |x, y, c| out[y * W + x] = c,
-        &mut (),
-    )
-    .unwrap();
-    out
+    let views = [
+        ImageView::packed(l, W, H).unwrap(),
+        ImageView::packed(r, W, H).unwrap(),
+    ];
+    f(&e, &tables, &mut st, views)
+}
+
+/// The map of `p` on the pair.
+fn run(p: &C2fParams, l: &[Rgb8], r: &[Rgb8]) -> Vec<DisparityCell> {
+    with_engine(p, l, r, |e, tables, st, [lv, rv]| {
+        let mut out = vec![DisparityCell::OFF; W * H];
+        e.run(
+            tables,
+            &lv,
+            &rv,
+            &mut st.buffers(),
+            &mut |x, y, c| out[y * W + x] = c,
+            &mut (),
+        )
+        .unwrap();
+        out
+    })
 }
 
 /// The fraction of the object's inner pixels (2 px from its outline)
@@ -143,45 +160,23 @@ fn run_into_a_map_gives_the_cells_run_gives() {
         C2fParams::FAST_LOW_PENALTY,
         C2fParams::FULL,
     ] {
-        let pipeline = PipelineParams {
-            stereo: p,
-            ..PipelineParams::DEFAULT
-        }
-        .with_max_disp(31);
-        let bytes = protogist_host::product::tables_for(&pipeline).unwrap();
-        let tables: Vec<DemTable<'_>> = bytes.iter().map(|t| DemTable::parse(t).unwrap()).collect();
-        let e = C2f::new(&pipeline.stereo).unwrap();
-        let mut st = C2fStorage::new(W, H, &pipeline.stereo);
-        let (lv, rv) = (
-            ImageView::packed(&l, W, H).unwrap(),
-            ImageView::packed(&r, W, H).unwrap(),
-        );
-        let mut map = vec![DisparityCell::OFF; W * H];
-        e.run_into(
-            &tables,
-            &lv,
-            &rv,
-            &mut st.buffers(),
-            &mut ImageViewMut::packed(&mut map, W, H).unwrap(),
-            &mut (),
-        )
-        .unwrap();
-        assert_eq!(map, run(&pipeline.stereo, &l, &r), "{:?}", p.name());
-        // A map of another size is a typed error.
-        let mut short = vec![DisparityCell::OFF; W * (H - 1)];
-        let err = e
-            .run_into(
-                &tables,
-                &lv,
-                &rv,
-                &mut st.buffers(),
-                &mut ImageViewMut::packed(&mut short, W, H - 1).unwrap(),
-                &mut (),
-            )
-            .unwrap_err();
-        assert!(
-            matches!(err, protogist::stereo::StereoError::Image(_)),
-            "{err:?}"
-        );
+        let cells = run(&p, &l, &r);
+        with_engine(&p, &l, &r, |e, tables, st, [lv, rv]| {
+            let mut map = vec![DisparityCell::OFF; W * H];
+            let mut view = ImageViewMut::packed(&mut map, W, H).unwrap();
+            e.run_into(tables, &lv, &rv, &mut st.buffers(), &mut view, &mut ())
+                .unwrap();
+            assert_eq!(map, cells, "{:?}", p.name());
+            // A map of another size is a typed error.
+            let mut short = vec![DisparityCell::OFF; W * (H - 1)];
+            let mut view = ImageViewMut::packed(&mut short, W, H - 1).unwrap();
+            let err = e
+                .run_into(tables, &lv, &rv, &mut st.buffers(), &mut view, &mut ())
+                .unwrap_err();
+            assert!(
+                matches!(err, protogist::stereo::StereoError::Image(_)),
+                "{err:?}"
+            );
+        });
     }
 }

@@ -251,19 +251,9 @@ impl Walk<'_> {
         disp: &ImageView<'d, DisparityCell>,
         mut f: impl FnMut(usize, &'d [DisparityCell], SetBits<'_>),
     ) {
-        let mut i = 0usize;
-        let s = self.stride.max(1);
-        let rows = self.open.chunks_exact(s).zip(self.trusted.chunks_exact(s));
-        for (y, (orow, trow)) in rows.take(self.height).enumerate() {
-            let drow = disp.row(y).unwrap_or(&[]);
-            for_each_run(orow, |s, e| {
-                let l = usize::from(get16(self.table, i));
-                i += 1;
-                if l != 0 && l < self.cap {
-                    f(l, drow, SetBits::new(trow, s as usize, e as usize));
-                }
-            });
-        }
+        self.for_each_run(disp, |l, drow, trow, (s, e)| {
+            f(l, drow, SetBits::new(trow, s, e));
+        });
     }
 }
 
