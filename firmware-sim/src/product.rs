@@ -15,11 +15,11 @@ use embedded_hal::digital::{self, OutputPin};
 
 use crate::camera::CameraError;
 use crate::pg::checksum::Fnv1a;
-use crate::pg::conspicuity::ColourKernel;
 use crate::pg::image::ImageError;
-use crate::pg::mlp::{Identity, MacKernel};
+use crate::pg::mlp::Identity;
 use crate::pg::pipeline::{
-    self, layout, workspace_bytes, Frame, Observer, Pipeline, PipelineError, PipelineParams, Stage,
+    self, layout, workspace_bytes, Frame, Kernels, Observer, Pipeline, PipelineError,
+    PipelineParams, Stage,
 };
 use crate::pg::segment::{Step as SegmentStep, STAT_FRAC_BITS};
 use crate::pg::stereo::phase::{PhaseKernel, SafePhase};
@@ -300,9 +300,7 @@ pub struct Product<'a, C, P, K = SafePhase> {
     pipeline: Pipeline<'a, K>,
 }
 
-impl<'a, C: StereoCamera, P: OutputPin, K: PhaseKernel + ColourKernel + MacKernel>
-    Product<'a, C, P, K>
-{
+impl<'a, C: StereoCamera, P: OutputPin, K: Kernels> Product<'a, C, P, K> {
     /// The product around a set-up pipeline.
     pub fn new(camera: C, led: P, pipeline: Pipeline<'a, K>) -> Self {
         Self {

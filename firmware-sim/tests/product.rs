@@ -59,6 +59,15 @@ fn pipeline() -> Pipeline<'static> {
 }
 
 /// The workspace's two parts, kept maps and shared region.
+/// The simulated camera's demo pair in a frame buffer, and where each eye is.
+fn demo_frame() -> (Vec<u16>, PairLayout) {
+    let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
+    let layout = SimStereoCamera::new()
+        .capture_pair(&mut frame, WIDTH, HEIGHT)
+        .unwrap();
+    (frame, layout)
+}
+
 fn workspace() -> (Vec<u64>, Vec<u64>) {
     assert_eq!(KEPT_WORDS + SHARED_WORDS, WORKSPACE_WORDS);
     (vec![0u64; KEPT_WORDS], vec![0u64; SHARED_WORDS])
@@ -173,10 +182,7 @@ fn the_pipeline_runs_the_kernel_it_is_given() {
 fn the_first_object_is_the_demo_scene_object() {
     // The RGB565 pair loses the colours' low bits; the object must survive.
     let p = pipeline();
-    let mut frame = vec![0u16; FRAME_LEN];
-    let layout = SimStereoCamera::new()
-        .capture_pair(&mut frame, WIDTH, HEIGHT)
-        .unwrap();
+    let (frame, layout) = demo_frame();
     let (l, r) = layout.views(&frame).unwrap();
     let mut ws = vec![0u64; WORKSPACE_WORDS];
     let result = p.run(&l, &r, &mut ws).unwrap();
@@ -273,10 +279,7 @@ fn rgb565_luv_table_is_the_conversion() {
         let want = LUV_TABLES.convert(expand_rgb565(v));
         assert_eq!(luv_of_rgb565(v), want, "RGB565 {v:#06x}");
     }
-    let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
-    let layout = SimStereoCamera::new()
-        .capture_pair(&mut frame, WIDTH, HEIGHT)
-        .unwrap();
+    let (frame, layout) = demo_frame();
     let (left, _) = layout.views(&frame).unwrap();
     let mut rgb = vec![Rgb8::default(); WIDTH];
     let (mut by_table, mut converted) = (vec![Luv::default(); WIDTH], vec![Luv::default(); WIDTH]);
@@ -305,10 +308,7 @@ fn rgb565_half_rows_are_the_means() {
         mean_2x2_row(&rgb[..2], &rgb[2..], &mut want);
         assert_eq!(mean_rgb565(p), want[0], "{p:04x?}");
     }
-    let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
-    let layout = SimStereoCamera::new()
-        .capture_pair(&mut frame, WIDTH, HEIGHT)
-        .unwrap();
+    let (frame, layout) = demo_frame();
     let (left, right) = layout.views(&frame).unwrap();
     let mut scratch = vec![Rgb8::default(); 2 * WIDTH];
     let (mut mine, mut default) = (
@@ -336,10 +336,7 @@ fn rgb565_grey_tables_are_grey8() {
         );
     }
     assert_eq!(grey8_of_rgb565(0xffff), 255 * 256);
-    let mut frame = vec![0u16; pair_len(WIDTH, HEIGHT)];
-    let layout = SimStereoCamera::new()
-        .capture_pair(&mut frame, WIDTH, HEIGHT)
-        .unwrap();
+    let (frame, layout) = demo_frame();
     let (_, right) = layout.views(&frame).unwrap();
     let mut rgb = vec![Rgb8::default(); WIDTH];
     let (mut by_table, mut converted) = (vec![0i32; WIDTH], vec![0i32; WIDTH]);

@@ -389,7 +389,14 @@ impl<'a, K: PhaseKernel> Pipeline<'a, K> {
     }
 }
 
-impl<K: PhaseKernel + ColourKernel + MacKernel> Pipeline<'_, K> {
+/// The kernels a pipeline runs: the stereo engine's ([`PhaseKernel`]), the
+/// colour stage's ([`ColourKernel`]) and the classifier's ([`MacKernel`]).
+/// Every type that is all three is one.
+pub trait Kernels: PhaseKernel + ColourKernel + MacKernel {}
+
+impl<K: PhaseKernel + ColourKernel + MacKernel> Kernels for K {}
+
+impl<K: Kernels> Pipeline<'_, K> {
     /// Runs a frame pair through every stage (see the module docs).
     ///
     /// # Errors

@@ -2,8 +2,8 @@
 
 use super::arena::Arena;
 use super::{
-    layout, Frame, Object, Observer, Pipeline, PipelineError, Region, RgbRows, Stage, MAX_OBJECTS,
-    TOP_K,
+    layout, Frame, Kernels, Object, Observer, Pipeline, PipelineError, Region, RgbRows, Stage,
+    MAX_OBJECTS, TOP_K,
 };
 use crate::complete::{
     complete_runs, pipeline_run_capacity, run_rows_len, RegionTables, RunBuffers, Tone,
@@ -18,7 +18,7 @@ use crate::segment::{
 };
 use crate::shape::{shape_vector_bits, RadialProfile, ShapeError, ShapeVector, SHAPE_LEN};
 use crate::stereo::c2f::{self, C2fBuffers};
-use crate::stereo::phase::{self, PhaseBuffers, PhaseKernel};
+use crate::stereo::phase::{self, PhaseBuffers};
 use crate::stereo::{Probe, Step};
 
 /// Passes the stereo engine's steps to the observer.
@@ -43,12 +43,7 @@ impl<O: Observer> SegmentObserver for SegmentSteps<'_, O> {
     }
 }
 
-pub(super) fn run<
-    'w,
-    S: RgbRows,
-    O: Observer,
-    K: PhaseKernel + conspicuity::ColourKernel + mlp::MacKernel,
->(
+pub(super) fn run<'w, S: RgbRows, O: Observer, K: Kernels>(
     p: &Pipeline<'_, K>,
     left: &S,
     right: &S,
@@ -72,12 +67,7 @@ pub(super) fn run<
     run_split(p, left, right, kept, shared, obs)
 }
 
-pub(super) fn run_split<
-    'w,
-    S: RgbRows,
-    O: Observer,
-    K: PhaseKernel + conspicuity::ColourKernel + mlp::MacKernel,
->(
+pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
     p: &Pipeline<'_, K>,
     left: &S,
     right: &S,
