@@ -145,6 +145,7 @@ impl PipelineParams {
             min_object: Ratio::new(1, 128),
             max_object_width: Ratio::new(3, 4),
             max_aspect: 4,
+            split_interiors: true,
             ..Self::PAPER.segment
         },
         ..Self::PAPER

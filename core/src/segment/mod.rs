@@ -170,6 +170,10 @@ pub struct SegmentParams {
     /// a wall's edge) is not an object, as with `min_object`. 0 (the
     /// paper): any shape.
     pub max_aspect: u8,
+    /// Whether the solid interiors of one search's mask (several objects
+    /// of one slice whose contours touch) are each an object of their own.
+    /// `false`: the paper.
+    pub split_interiors: bool,
 }
 
 /// Searches [`segment`] runs per object of `max_objects` at most, when
@@ -206,6 +210,7 @@ impl SegmentParams {
         min_object: Ratio::new(0, 1),
         max_object_width: Ratio::new(1, 1),
         max_aspect: 0,
+        split_interiors: false,
     };
 
     /// Checks the parameters.

@@ -416,60 +416,40 @@ pub fn segment_into(
             largest,
             area,
         };
-        let bbox = bits::bbox(g, bufs.mask);
-        let box_size = bbox.map_or((0, 0), |(x0, y0, x1, y1)| (x1 + 1 - x0, y1 + 1 - y0));
-        let object = params.is_object(area, box_size, (w, h));
-        let span = index * chunk..(index + 1) * chunk;
-        match &mut masks {
-            _ if !object => {}
-            Masks::Bools(m) => {
-                if let (Some((_, y0, _, y1)), Some(mask)) = (bbox, m.get_mut(span)) {
-                    // Rows by index: a zip of two `chunks_exact` is not
-                    // always inlined, and its size hint links a division
-                    // panic.
-                    for y in y0..=y1 {
-                        let (Some(out), Some(words)) = (
-                            mask.get_mut(y * w..(y + 1) * w),
-                            bufs.mask.get(y * g.stride..(y + 1) * g.stride),
-                        ) else {
-                            break;
-                        };
-                        for (o, b) in out.chunks_mut(32).zip(words) {
-                            for (i, o) in o.iter_mut().enumerate() {
-                                *o = b >> i & 1 != 0;
-                            }
-                        }
-                    }
-                }
-            }
-            Masks::Bits(m) => {
-                if let Some(mask) = m.get_mut(span) {
-                    bits::copy_map(mask, bufs.mask);
-                }
-            }
-        }
-        let det = Detection {
-            index,
-            delta: slice.delta,
-            range,
-            score: slice.score,
-            area,
-            bbox: bbox.map(|(x0, y0, x1, y1)| BoundingBox {
-                x: x0,
-                y: y0,
-                width: x1 - x0 + 1,
-                height: y1 - y0 + 1,
-            }),
-            regions,
+        // Several objects of one slice whose contours touch: each solid
+        // interior its own object (`split_interiors`).
+        let mut parts = [0u32; MAX_OBJECTS];
+        let n_parts = if params.split_interiors {
+            solid_interiors(params, bufs, &mut parts)?
+        } else {
+            0
         };
-        if object {
-            observer.object(&det, bufs);
-            // Capacity MAX_OBJECTS >= max_objects, checked by `validate`.
-            let _ = report.objects.push(det);
+        if n_parts >= 2 {
+            // `closed` keeps the union for the inhibition below.
+            bits::copy_map(bufs.closed, bufs.mask);
+            let ic = bits::components(g, bufs.nms, Connectivity::Four, bufs.rows, bufs.table)?;
+            for &root in parts.iter().take(n_parts) {
+                if report.objects.len() >= k {
+                    break;
+                }
+                ic.select(g, bufs.nms, bufs.table, bufs.c_obj, |r, _| r == root);
+                bits::morph_n(g, params.disk, bufs.c_obj, bufs.scratch, bufs.morph_rows, PART_DILATIONS, false);
+                let mut a = 0;
+                for ((m, &c), &u) in bufs.mask.iter_mut().zip(bufs.c_obj.iter()).zip(bufs.closed.iter()) {
+                    *m = c & u;
+                    a += m.count_ones();
+                }
+                let regions = AreaReport { area: a, ..regions };
+                emit(params, &mut masks, chunk, &slice, range, regions, bufs, &mut report, observer);
+            }
+            bits::copy_map(bufs.mask, bufs.closed);
+        } else {
+            emit(params, &mut masks, chunk, &slice, range, regions, bufs, &mut report, observer);
         }
         // Inhibit only before another search, so that after the run every
         // map shows what the last search saw (for K = 1, the paper's maps).
         if report.objects.len() < k && search + 1 < searches {
+            let _ = index;
             passes::inhibit(
                 disparity,
                 g,
@@ -483,4 +463,123 @@ pub fn segment_into(
         observer.step(Step::Mask);
     }
     Ok(report)
+}
+
+/// The interiors of this search's mask (its pixels off the closed
+/// contours, 4-connected) that are solid: at least `min_area` of the
+/// largest's area and half of them in the object's slice (a ring's hole or
+/// the gap between touching objects is not). Writes their roots into
+/// `parts`, largest first, and labels `bufs.nms` (the interiors) into
+/// `bufs.table`; returns how many.
+fn solid_interiors(
+    params: &SegmentParams,
+    bufs: &mut SegmentBuffers<'_>,
+    parts: &mut [u32; MAX_OBJECTS],
+) -> Result<usize, SegmentError> {
+    let g = bufs.g;
+    for ((n, &m), &c) in bufs.nms.iter_mut().zip(bufs.mask.iter()).zip(bufs.closed.iter()) {
+        *n = m & !c;
+    }
+    let ic = bits::components(g, bufs.nms, Connectivity::Four, bufs.rows, bufs.table)?;
+    let largest = ic.largest.map_or(0, |(_, a)| a);
+    let keep = params.min_area;
+    let mo = params.min_object;
+    let frame = u64::try_from(g.width * g.height).unwrap_or(u64::MAX);
+    let big = |area: u32| {
+        u64::from(area) * u64::from(mo.den) >= frame * u64::from(mo.num)
+            && u64::from(area) * u64::from(keep.den) >= u64::from(largest) * u64::from(keep.num)
+    };
+    let mut cand = [(0u32, 0u32); 2 * MAX_OBJECTS];
+    let n = ic.largest_roots(bufs.table, big, &mut cand);
+    let mut solid = 0;
+    for &(root, area) in cand.iter().take(n) {
+        ic.select(g, bufs.nms, bufs.table, bufs.c_obj, |r, _| r == root);
+        let inside: u32 = bufs
+            .c_obj
+            .iter()
+            .zip(bufs.d_obj_reg.iter())
+            .map(|(&c, &d)| (c & d).count_ones())
+            .sum();
+        if 2 * inside >= area {
+            if let Some(p) = parts.get_mut(solid) {
+                *p = root;
+                solid += 1;
+            }
+        }
+    }
+    Ok(solid)
+}
+
+/// Least interior area of a part, px.
+/// Dilations that give a part back the contour its interior leaves out.
+const PART_DILATIONS: u8 = 2;
+
+/// Reports `bufs.mask` as the next object when it is one.
+#[allow(clippy::too_many_arguments)]
+fn emit(
+    params: &SegmentParams,
+    masks: &mut Masks<'_>,
+    chunk: usize,
+    slice: &super::stats::Slice,
+    range: DisparityRange,
+    regions: AreaReport,
+    bufs: &mut SegmentBuffers<'_>,
+    report: &mut SegmentReport,
+    observer: &mut impl SegmentObserver,
+) {
+    let g = bufs.g;
+    let (w, h) = (g.width, g.height);
+    let index = report.objects.len();
+    let area = regions.area;
+    let bbox = bits::bbox(g, bufs.mask);
+    let box_size = bbox.map_or((0, 0), |(x0, y0, x1, y1)| (x1 + 1 - x0, y1 + 1 - y0));
+    let object = params.is_object(area, box_size, (w, h));
+    let span = index * chunk..(index + 1) * chunk;
+    match masks {
+        _ if !object => {}
+        Masks::Bools(m) => {
+            if let (Some((_, y0, _, y1)), Some(mask)) = (bbox, m.get_mut(span)) {
+                // Rows by index: a zip of two `chunks_exact` is not
+                // always inlined, and its size hint links a division
+                // panic.
+                for y in y0..=y1 {
+                    let (Some(out), Some(words)) = (
+                        mask.get_mut(y * w..(y + 1) * w),
+                        bufs.mask.get(y * g.stride..(y + 1) * g.stride),
+                    ) else {
+                        break;
+                    };
+                    for (o, b) in out.chunks_mut(32).zip(words) {
+                        for (i, o) in o.iter_mut().enumerate() {
+                            *o = b >> i & 1 != 0;
+                        }
+                    }
+                }
+            }
+        }
+        Masks::Bits(m) => {
+            if let Some(mask) = m.get_mut(span) {
+                bits::copy_map(mask, bufs.mask);
+            }
+        }
+    }
+    let det = Detection {
+        index,
+        delta: slice.delta,
+        range,
+        score: slice.score,
+        area,
+        bbox: bbox.map(|(x0, y0, x1, y1)| BoundingBox {
+            x: x0,
+            y: y0,
+            width: x1 - x0 + 1,
+            height: y1 - y0 + 1,
+        }),
+        regions,
+    };
+    if object {
+        observer.object(&det, bufs);
+        // Capacity MAX_OBJECTS >= max_objects, checked by `validate`.
+        let _ = report.objects.push(det);
+    }
 }

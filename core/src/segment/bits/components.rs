@@ -254,6 +254,36 @@ impl Components {
         n
     }
 
+    /// Writes into `out` the `(root, area)` of the largest components that
+    /// `keep(area)` accepts, largest first (the first in raster order on
+    /// ties), as many as `out` holds; returns how many it wrote.
+    pub fn largest_roots(
+        &self,
+        table: &[u32],
+        keep: impl Fn(u32) -> bool,
+        out: &mut [(u32, u32)],
+    ) -> usize {
+        let mut n = 0;
+        for i in 0..self.runs {
+            let e = entry(table, i);
+            let area = e & !ROOT;
+            if e & ROOT == 0 || !keep(area) {
+                continue;
+            }
+            // Insertion: after every entry at least as large.
+            let at = out.iter().take(n).position(|&(_, a)| a < area).unwrap_or(n);
+            if at >= out.len() {
+                continue;
+            }
+            n = (n + 1).min(out.len());
+            let mut carry = (i, area);
+            for slot in out.iter_mut().take(n).skip(at) {
+                core::mem::swap(slot, &mut carry);
+            }
+        }
+        n
+    }
+
     /// Calls `f(area)` for every component, in order.
     pub fn for_each_root(&self, table: &[u32], mut f: impl FnMut(u32)) {
         for i in 0..self.runs {
