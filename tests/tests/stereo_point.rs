@@ -162,7 +162,10 @@ fn run_into_a_map_gives_the_cells_run_gives() {
     ] {
         let cells = run(&p, &l, &r);
         with_engine(&p, &l, &r, |e, tables, st, [lv, rv]| {
-            let mut map = vec![DisparityCell::OFF; W * H];
+            // A value no cell takes: the map must come out with every
+            // cell written (the pipeline does not clear it first).
+            let stale: DisparityCell = Some(protogist::disparity::Disparity::from_num(250)).into();
+            let mut map = vec![stale; W * H];
             let mut view = ImageViewMut::packed(&mut map, W, H).unwrap();
             e.run_into(tables, &lv, &rv, &mut st.buffers(), &mut view, &mut ())
                 .unwrap();

@@ -134,7 +134,7 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
             maps: s.take(c2f::map_len(w, h, sp))?,
             phase,
         };
-        disparity.fill(DisparityCell::OFF);
+        // `run_into` writes every cell: no clearing first.
         p.c2f.run_into(
             tables,
             left,

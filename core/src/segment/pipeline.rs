@@ -419,7 +419,7 @@ pub fn segment_into(
         // Several objects of one slice whose contours touch: each solid
         // interior its own object (`split_interiors`).
         let mut parts = [0u32; MAX_OBJECTS];
-        let n_parts = if params.split_interiors {
+        let n_parts = if params.split_interiors && u64::from(area) >= 2 * min_part(params, g) {
             solid_interiors(params, bufs, &mut parts)?
         } else {
             0
@@ -437,7 +437,9 @@ pub fn segment_into(
                 let mut a = 0;
                 for ((m, &c), &u) in bufs.mask.iter_mut().zip(bufs.c_obj.iter()).zip(bufs.closed.iter()) {
                     *m = c & u;
-                    a += m.count_ones();
+                    if *m != 0 {
+                        a += m.count_ones();
+                    }
                 }
                 let regions = AreaReport { area: a, ..regions };
                 emit(params, &mut masks, chunk, &slice, range, regions, bufs, &mut report, observer);
@@ -483,10 +485,9 @@ fn solid_interiors(
     let ic = bits::components(g, bufs.nms, Connectivity::Four, bufs.rows, bufs.table)?;
     let largest = ic.largest.map_or(0, |(_, a)| a);
     let keep = params.min_area;
-    let mo = params.min_object;
-    let frame = u64::try_from(g.width * g.height).unwrap_or(u64::MAX);
+    let least = min_part(params, g);
     let big = |area: u32| {
-        u64::from(area) * u64::from(mo.den) >= frame * u64::from(mo.num)
+        u64::from(area) >= least
             && u64::from(area) * u64::from(keep.den) >= u64::from(largest) * u64::from(keep.num)
     };
     let mut cand = [(0u32, 0u32); 2 * MAX_OBJECTS];
@@ -498,6 +499,7 @@ fn solid_interiors(
             .c_obj
             .iter()
             .zip(bufs.d_obj_reg.iter())
+            .filter(|(&c, _)| c != 0)
             .map(|(&c, &d)| (c & d).count_ones())
             .sum();
         if 2 * inside >= area {
@@ -511,6 +513,14 @@ fn solid_interiors(
 }
 
 /// Least interior area of a part, px.
+/// Least interior area of a part, px: an object's least area
+/// ([`SegmentParams::min_object`]) of the frame.
+fn min_part(params: &SegmentParams, g: bits::Geom) -> u64 {
+    let mo = params.min_object;
+    let frame = u64::try_from(g.width * g.height).unwrap_or(u64::MAX);
+    (frame * u64::from(mo.num)).div_ceil(u64::from(mo.den).max(1))
+}
+
 /// Dilations that give a part back the contour its interior leaves out.
 const PART_DILATIONS: u8 = 2;
 
