@@ -339,6 +339,86 @@ fn elongated_masks_are_not_objects() {
 }
 
 #[test]
+fn touching_objects_of_one_slice_are_split_by_their_contours() {
+    // Two 16x16 boxes side by side at 9 px: one slice, one closed
+    // component of contours, so the paper's mask holds both.
+    let (d, c) = boxes(&[(6, 8, 22, 24, 9), (22, 8, 38, 24, 9)]);
+    let (merged, _) = detect(&OPEN, &d, &c).unwrap();
+    assert_eq!(merged.objects.len(), 1, "{merged:?}");
+    assert!(merged.objects[0].bbox.is_some_and(|b| b.width >= 30));
+    let p = SegmentParams {
+        split_interiors: true,
+        ..OPEN
+    };
+    let (r, masks) = detect(&p, &d, &c).unwrap();
+    assert_eq!(r.objects.len(), 2, "{r:?}");
+    let mut xs: Vec<usize> = r.objects.iter().map(|o| o.bbox.unwrap().x).collect();
+    xs.sort_unstable();
+    assert!(xs[0] <= 7 && (20..=23).contains(&xs[1]), "{xs:?}");
+    for (k, o) in r.objects.iter().enumerate() {
+        let b = o.bbox.unwrap();
+        assert!((14..=18).contains(&b.width) && (14..=18).contains(&b.height), "{b:?}");
+        let n = masks[k * BW * BH..(k + 1) * BW * BH].iter().filter(|&&m| m).count();
+        assert_eq!(n as u32, o.area);
+        assert!(o.area >= 200, "{o:?}");
+    }
+    // K caps the parts.
+    let (one, _) = detect(&SegmentParams { max_objects: 1, ..p }, &d, &c).unwrap();
+    assert_eq!(one.objects.len(), 1);
+}
+
+#[test]
+fn a_ring_is_one_object_when_interiors_are_split() {
+    // An 80x64 frame at 2 px; a 60x50 box at 9 px with a 30x26 hole at
+    // the background's 2 px, both outlined in C, with a weak inside. The
+    // hole is an interior of the mask too, but not in the slice: not an
+    // object of its own.
+    let (w, h) = (80, 64);
+    let mut d = vec![from_pixels(2); w * h];
+    let mut c = vec![EdgeCell::OFF; w * h];
+    let edge = EdgeCell::on(Conspicuity::from_num(40)).unwrap();
+    for y in 8..58 {
+        for x in 10..70 {
+            let hole = (25..55).contains(&x) && (19..45).contains(&y);
+            if !hole {
+                d[y * w + x] = from_pixels(9);
+            }
+            let outer = x == 10 || y == 8 || x == 69 || y == 57;
+            // The hole's outline on the box's side (C_ObjReg is C within
+            // the slice).
+            let around = (24..56).contains(&x) && (18..46).contains(&y);
+            let inner = around && !hole && (x == 24 || y == 18 || x == 55 || y == 45);
+            if outer || inner {
+                c[y * w + x] = edge;
+            } else if !hole {
+                // A weak inside, as `boxes` draws it.
+                c[y * w + x] = EdgeCell::on(Conspicuity::from_num(5)).unwrap();
+            }
+        }
+    }
+    let p = SegmentParams {
+        split_interiors: true,
+        ..OPEN
+    };
+    let run = |p: &SegmentParams| {
+        let mut store = SegmentStorage::new(w, h);
+        let mut masks = vec![false; usize::from(p.max_objects) * w * h];
+        sg::segment(
+            p,
+            &ImageView::packed(&d, w, h).unwrap(),
+            &ImageView::packed(&c, w, h).unwrap(),
+            &mut store.buffers().unwrap(),
+            &mut masks,
+        )
+        .unwrap()
+    };
+    let (r, paper) = (run(&p), run(&OPEN));
+    assert_eq!(r.objects.len(), 1, "{r:?}");
+    assert_eq!(r.objects, paper.objects);
+    assert!(r.objects[0].bbox.is_some_and(|b| b.width >= 58 && b.height >= 48));
+}
+
+#[test]
 fn bad_filter_and_ground_parameters_are_typed_errors() {
     let (d, c) = boxes(&[(10, 10, 30, 26, 9)]);
     let p = OPEN;
