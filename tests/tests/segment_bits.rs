@@ -122,28 +122,81 @@ fn by_steps(
         sg::close(p.disk, vm!(m.closed), vm!(scratch), p.closing_steps).unwrap();
         sg::fill_holes(&v!(m.closed), vm!(m.filled), &mut lab).unwrap();
         let regions = sg::area_filter(&v!(m.filled), vm!(mask), &mut lab, p.min_area).unwrap();
-        // Masks under `min_object` of the frame are not objects.
-        // ... and nor are boxes wider than `max_object_width` of it, or
-        // more than `max_aspect` times as long as wide.
-        let bbox = sg::bounding_box(&v!(mask));
-        let (bw, bh) = bbox.map_or((0, 0), |b| (b.width, b.height));
-        let a = usize::from(p.max_aspect);
-        let object = u64::from(regions.area) * u64::from(p.min_object.den)
-            >= (n as u64) * u64::from(p.min_object.num)
-            && bw * usize::from(mw.den) <= w * usize::from(mw.num)
-            && (a == 0 || (bw <= a * bh && bh <= a * bw));
-        if object {
-            let det = sg::Detection {
-                index,
-                delta: slice.delta,
-                range,
-                score: slice.score,
-                area: regions.area,
-                bbox,
-                regions,
-            };
-            report.objects.push(det).unwrap();
-            masks[index * n..(index + 1) * n].copy_from_slice(&mask);
+        // With `split_interiors`, the solid interiors of the mask, each
+        // given back its contour within the filled map, are the objects.
+        let least = (n as u64 * u64::from(p.min_object.num)).div_ceil(u64::from(p.min_object.den));
+        let mut parts: Vec<Vec<bool>> = Vec::new();
+        if p.split_interiors && u64::from(regions.area) >= 2 * least {
+            let inner: Vec<bool> = mask.iter().zip(&m.closed).map(|(&a, &c)| a && !c).collect();
+            let count = lab.label(&v!(inner), true, sg::Connectivity::Four).unwrap();
+            let largest = lab.largest().map_or(0, |(_, a)| a);
+            let keep = p.min_area;
+            let mut cand: Vec<(u16, u32)> = (1..=count)
+                .map(|l| (l, lab.area(l)))
+                .filter(|&(_, a)| {
+                    u64::from(a) >= least
+                        && u64::from(a) * u64::from(keep.den)
+                            >= u64::from(largest) * u64::from(keep.num)
+                })
+                .collect();
+            cand.sort_by_key(|&(l, a)| (std::cmp::Reverse(a), l));
+            cand.truncate(2 * sg::MAX_OBJECTS);
+            let labels: Vec<u16> = lab.labels().unwrap().rows().flatten().copied().collect();
+            for (l, a) in cand {
+                let inside = (0..n)
+                    .filter(|&i| labels[i] == l && m.d_obj_reg[i].is_on())
+                    .count() as u32;
+                if 2 * inside >= a && parts.len() < sg::MAX_OBJECTS {
+                    let mut part: Vec<bool> = labels.iter().map(|&x| x == l).collect();
+                    sg::dilate_n(p.disk, vm!(part), vm!(scratch), 2).unwrap();
+                    for (q, &f) in part.iter_mut().zip(&m.filled) {
+                        *q &= f;
+                    }
+                    parts.push(part);
+                }
+            }
+            if parts.len() < 2 {
+                parts.clear();
+            }
+        }
+        let whole = parts.is_empty();
+        if whole {
+            parts.push(mask.clone());
+        }
+        for part in &parts {
+            let index = report.objects.len();
+            if index >= k {
+                break;
+            }
+            let area = part.iter().filter(|&&b| b).count() as u32;
+            let regions = sg::AreaReport { area, ..regions };
+            // Masks under `min_object` of the frame are not objects.
+            // ... and nor are boxes wider than `max_object_width` of it, or
+            // more than `max_aspect` times as long as wide.
+            let bbox = sg::bounding_box(&v!(part));
+            let (bw, bh) = bbox.map_or((0, 0), |b| (b.width, b.height));
+            let a = usize::from(p.max_aspect);
+            let object = u64::from(area) * u64::from(p.min_object.den)
+                >= (n as u64) * u64::from(p.min_object.num)
+                && bw * usize::from(mw.den) <= w * usize::from(mw.num)
+                && (a == 0 || (bw <= a * bh && bh <= a * bw));
+            if object {
+                let det = sg::Detection {
+                    index,
+                    delta: slice.delta,
+                    range,
+                    score: slice.score,
+                    area,
+                    bbox,
+                    regions,
+                };
+                report.objects.push(det).unwrap();
+                masks[index * n..(index + 1) * n].copy_from_slice(part);
+            }
+        }
+        if !whole {
+            // The inhibition takes every part.
+            mask.copy_from_slice(&m.filled);
         }
         if report.objects.len() < k && search + 1 < searches {
             sg::inhibit(
@@ -220,10 +273,24 @@ fn params() -> impl Strategy<Value = SegmentParams> {
         any::<bool>(),
         1u8..=4,
         0u8..3,
-        (proptest::option::of(0u16..2048), 0u16..3, 1u16..=4, 0u8..4),
+        (
+            proptest::option::of(0u16..2048),
+            0u16..3,
+            1u16..=4,
+            0u8..4,
+            any::<bool>(),
+        ),
     )
         .prop_map(
-            |(disk, refine, close, on_cells, k, exponent, (ground, min_object, width, aspect))| {
+            |(
+                disk,
+                refine,
+                close,
+                on_cells,
+                k,
+                exponent,
+                (ground, min_object, width, aspect, split),
+            )| {
                 SegmentParams {
                     disk,
                     refine_dilations: refine,
@@ -239,6 +306,7 @@ fn params() -> impl Strategy<Value = SegmentParams> {
                     min_object: sg::Ratio::new(min_object, 64),
                     max_object_width: sg::Ratio::new(width, 4),
                     max_aspect: aspect,
+                    split_interiors: split,
                     ..SegmentParams::default()
                 }
             },

@@ -357,13 +357,27 @@ fn touching_objects_of_one_slice_are_split_by_their_contours() {
     assert!(xs[0] <= 7 && (20..=23).contains(&xs[1]), "{xs:?}");
     for (k, o) in r.objects.iter().enumerate() {
         let b = o.bbox.unwrap();
-        assert!((14..=18).contains(&b.width) && (14..=18).contains(&b.height), "{b:?}");
-        let n = masks[k * BW * BH..(k + 1) * BW * BH].iter().filter(|&&m| m).count();
+        assert!(
+            (14..=18).contains(&b.width) && (14..=18).contains(&b.height),
+            "{b:?}"
+        );
+        let n = masks[k * BW * BH..(k + 1) * BW * BH]
+            .iter()
+            .filter(|&&m| m)
+            .count();
         assert_eq!(n as u32, o.area);
         assert!(o.area >= 200, "{o:?}");
     }
     // K caps the parts.
-    let (one, _) = detect(&SegmentParams { max_objects: 1, ..p }, &d, &c).unwrap();
+    let (one, _) = detect(
+        &SegmentParams {
+            max_objects: 1,
+            ..p
+        },
+        &d,
+        &c,
+    )
+    .unwrap();
     assert_eq!(one.objects.len(), 1);
 }
 
@@ -415,7 +429,9 @@ fn a_ring_is_one_object_when_interiors_are_split() {
     let (r, paper) = (run(&p), run(&OPEN));
     assert_eq!(r.objects.len(), 1, "{r:?}");
     assert_eq!(r.objects, paper.objects);
-    assert!(r.objects[0].bbox.is_some_and(|b| b.width >= 58 && b.height >= 48));
+    assert!(r.objects[0]
+        .bbox
+        .is_some_and(|b| b.width >= 58 && b.height >= 48));
 }
 
 #[test]

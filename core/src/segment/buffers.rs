@@ -12,7 +12,7 @@ use crate::image::ImageError;
 
 /// Bit maps [`SegmentBuffers`] holds: D_fg, D_ObjReg, C_ObjReg, the refined
 /// region, C_Obj, C_Obj^M, F_Obj, the filled map, the mask and a scratch map.
-pub const BIT_MAPS: usize = 10;
+pub const BIT_MAPS: usize = 11;
 
 /// `u32` words of the `maps` buffer of [`SegmentBuffers`]: [`BIT_MAPS`] bit
 /// maps, two rows of runs for the labelling and two rows of words for the
@@ -51,6 +51,7 @@ pub struct SegmentBuffers<'a> {
     pub(super) closed: &'a mut [u32],
     pub(super) filled: &'a mut [u32],
     pub(super) mask: &'a mut [u32],
+    pub(super) interiors: &'a mut [u32],
     pub(super) scratch: &'a mut [u32],
     pub(super) rows: &'a mut [u32],
     pub(super) morph_rows: &'a mut [u32],
@@ -100,6 +101,7 @@ impl<'a> SegmentBuffers<'a> {
             closed: take(len),
             filled: take(len),
             mask: take(len),
+            interiors: take(len),
             scratch: take(len),
             rows: take(4 * row_runs(width)),
             morph_rows: take(morph_rows_len(width)),
@@ -120,6 +122,7 @@ impl<'a> SegmentBuffers<'a> {
             &mut self.closed,
             &mut self.filled,
             &mut self.mask,
+            &mut self.interiors,
         ] {
             m.fill(0);
         }
@@ -185,5 +188,11 @@ impl<'a> SegmentBuffers<'a> {
     /// The mask of the last object (also written to the caller's masks).
     pub fn mask(&self) -> BitView<'_> {
         self.view(self.mask)
+    }
+
+    /// The interiors of the last search's mask (its pixels off the closed
+    /// contours), with [`SegmentParams::split_interiors`](super::SegmentParams::split_interiors).
+    pub fn interiors(&self) -> BitView<'_> {
+        self.view(self.interiors)
     }
 }

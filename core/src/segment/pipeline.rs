@@ -419,34 +419,63 @@ pub fn segment_into(
         // Several objects of one slice whose contours touch: each solid
         // interior its own object (`split_interiors`).
         let mut parts = [0u32; MAX_OBJECTS];
-        let n_parts = if params.split_interiors && u64::from(area) >= 2 * min_part(params, g) {
-            solid_interiors(params, bufs, &mut parts)?
+        let split = if params.split_interiors && u64::from(area) >= 2 * min_part(params, g) {
+            let (n, ic) = solid_interiors(params, bufs, &mut parts)?;
+            (n >= 2).then_some((n, ic))
         } else {
-            0
+            None
         };
-        if n_parts >= 2 {
-            // `closed` keeps the union for the inhibition below.
-            bits::copy_map(bufs.closed, bufs.mask);
-            let ic = bits::components(g, bufs.nms, Connectivity::Four, bufs.rows, bufs.table)?;
+        if let Some((n_parts, ic)) = split {
             for &root in parts.iter().take(n_parts) {
                 if report.objects.len() >= k {
                     break;
                 }
-                ic.select(g, bufs.nms, bufs.table, bufs.c_obj, |r, _| r == root);
-                bits::morph_n(g, params.disk, bufs.c_obj, bufs.scratch, bufs.morph_rows, PART_DILATIONS, false);
+                // The part: its interior given back its contour, within
+                // the filled map.
+                ic.select(g, bufs.interiors, bufs.table, bufs.mask, |r, _| r == root);
+                bits::morph_n(
+                    g,
+                    params.disk,
+                    bufs.mask,
+                    bufs.scratch,
+                    bufs.morph_rows,
+                    PART_DILATIONS,
+                    false,
+                );
                 let mut a = 0;
-                for ((m, &c), &u) in bufs.mask.iter_mut().zip(bufs.c_obj.iter()).zip(bufs.closed.iter()) {
-                    *m = c & u;
+                for (m, &f) in bufs.mask.iter_mut().zip(bufs.filled.iter()) {
+                    *m &= f;
                     if *m != 0 {
                         a += m.count_ones();
                     }
                 }
                 let regions = AreaReport { area: a, ..regions };
-                emit(params, &mut masks, chunk, &slice, range, regions, bufs, &mut report, observer);
+                emit(
+                    params,
+                    &mut masks,
+                    chunk,
+                    &slice,
+                    range,
+                    regions,
+                    bufs,
+                    &mut report,
+                    observer,
+                );
             }
-            bits::copy_map(bufs.mask, bufs.closed);
+            // The inhibition takes every part.
+            bits::copy_map(bufs.mask, bufs.filled);
         } else {
-            emit(params, &mut masks, chunk, &slice, range, regions, bufs, &mut report, observer);
+            emit(
+                params,
+                &mut masks,
+                chunk,
+                &slice,
+                range,
+                regions,
+                bufs,
+                &mut report,
+                observer,
+            );
         }
         // Inhibit only before another search, so that after the run every
         // map shows what the last search saw (for K = 1, the paper's maps).
@@ -471,18 +500,23 @@ pub fn segment_into(
 /// contours, 4-connected) that are solid: at least `min_area` of the
 /// largest's area and half of them in the object's slice (a ring's hole or
 /// the gap between touching objects is not). Writes their roots into
-/// `parts`, largest first, and labels `bufs.nms` (the interiors) into
-/// `bufs.table`; returns how many.
+/// `parts`, largest first; `bufs.interiors` holds the interiors, labelled
+/// in `bufs.table` as the components returned. Returns how many.
 fn solid_interiors(
     params: &SegmentParams,
     bufs: &mut SegmentBuffers<'_>,
     parts: &mut [u32; MAX_OBJECTS],
-) -> Result<usize, SegmentError> {
+) -> Result<(usize, bits::Components), SegmentError> {
     let g = bufs.g;
-    for ((n, &m), &c) in bufs.nms.iter_mut().zip(bufs.mask.iter()).zip(bufs.closed.iter()) {
+    for ((n, &m), &c) in bufs
+        .interiors
+        .iter_mut()
+        .zip(bufs.mask.iter())
+        .zip(bufs.closed.iter())
+    {
         *n = m & !c;
     }
-    let ic = bits::components(g, bufs.nms, Connectivity::Four, bufs.rows, bufs.table)?;
+    let ic = bits::components(g, bufs.interiors, Connectivity::Four, bufs.rows, bufs.table)?;
     let largest = ic.largest.map_or(0, |(_, a)| a);
     let keep = params.min_area;
     let least = min_part(params, g);
@@ -494,9 +528,11 @@ fn solid_interiors(
     let n = ic.largest_roots(bufs.table, big, &mut cand);
     let mut solid = 0;
     for &(root, area) in cand.iter().take(n) {
-        ic.select(g, bufs.nms, bufs.table, bufs.c_obj, |r, _| r == root);
+        ic.select(g, bufs.interiors, bufs.table, bufs.scratch, |r, _| {
+            r == root
+        });
         let inside: u32 = bufs
-            .c_obj
+            .scratch
             .iter()
             .zip(bufs.d_obj_reg.iter())
             .filter(|(&c, _)| c != 0)
@@ -509,7 +545,7 @@ fn solid_interiors(
             }
         }
     }
-    Ok(solid)
+    Ok((solid, ic))
 }
 
 /// Least interior area of a part, px.

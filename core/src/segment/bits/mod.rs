@@ -16,7 +16,7 @@ use crate::image::ImageView;
 
 mod components;
 
-pub(super) use components::components;
+pub(super) use components::{components, Components};
 
 /// `u32` words per row of a bit map `width` pixels wide.
 pub const fn words_per_row(width: usize) -> usize {
