@@ -29,7 +29,7 @@ fn shipped_model_parses_and_records_its_parameters() {
     assert!(m.delta_q16() > 0 && m.delta_q16() < 65536);
 }
 
-/// `gen-shapes --out shapes --classes 19 --per-class 120 --seed 1 --size 64`
+/// `gen-shapes --out shapes --classes 19 --per-class 600 --seed 1 --size 64`
 /// then `train --dataset shapes --hidden 128 --epochs 300 --seed 1
 /// --gamma 0.5 --test-fraction 0.1 --through-pipeline --views 2
 /// --with-clean --out shapes_model.bin`.
@@ -40,7 +40,7 @@ fn documented_commands_regenerate_the_shipped_model() {
     gen_shapes(&GenShapesOptions {
         out: ds.clone(),
         classes: 19,
-        per_class: 120,
+        per_class: 600,
         seed: 1,
         size: 64,
     })
