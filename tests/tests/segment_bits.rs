@@ -79,11 +79,15 @@ fn by_steps(
     report.stats = Some(stats);
     report.thresholds = Some(t);
     report.foreground = sg::foreground(p, &dv, &t, vm!(m.d_fg)).unwrap();
-    if let Some(band) = p.ground_band {
+    if p.ground_band.is_some() || p.row_background.is_some() {
         let mut rows = vec![0u32; sg::ground_rows_len(h)];
-        report.ground = sg::fit_ground(&dv, &mut rows).unwrap();
-        if let Some(line) = &report.ground {
-            report.foreground -= sg::inhibit_ground(line, band, vm!(m.d_fg)).unwrap();
+        let line = sg::fit_ground(&dv, &mut rows).unwrap();
+        if let Some(band) = p.row_background {
+            report.foreground += sg::foreground_rows(p, &dv, &t, &rows, band, vm!(m.d_fg)).unwrap();
+        }
+        if let (Some(band), Some(line)) = (p.ground_band, line) {
+            report.ground = Some(line);
+            report.foreground -= sg::inhibit_ground(&line, band, vm!(m.d_fg)).unwrap();
         }
     }
     let mw = p.max_object_width;
@@ -279,6 +283,7 @@ fn params() -> impl Strategy<Value = SegmentParams> {
             1u16..=4,
             0u8..4,
             any::<bool>(),
+            proptest::option::of(0u16..1024),
         ),
     )
         .prop_map(
@@ -289,7 +294,7 @@ fn params() -> impl Strategy<Value = SegmentParams> {
                 on_cells,
                 k,
                 exponent,
-                (ground, min_object, width, aspect, split),
+                (ground, min_object, width, aspect, split, rows),
             )| {
                 SegmentParams {
                     disk,
@@ -307,6 +312,7 @@ fn params() -> impl Strategy<Value = SegmentParams> {
                     max_object_width: sg::Ratio::new(width, 4),
                     max_aspect: aspect,
                     split_interiors: split,
+                    row_background: rows,
                     ..SegmentParams::default()
                 }
             },

@@ -339,6 +339,40 @@ fn elongated_masks_are_not_objects() {
 }
 
 #[test]
+fn an_object_in_front_of_a_far_wall_is_foreground_by_its_row() {
+    // An 18x10 box at 20 px raises the frame's mean to 4 px and its
+    // band's lower bound to about 4.5 px; a 10x10 box at 4 px, in other
+    // rows, stands 2 px in front of the 2 px wall: under the band, but
+    // nearer than its rows' background.
+    let (d, c) = boxes(&[(4, 2, 22, 12, 20), (30, 16, 40, 26, 4)]);
+    let far = |r: &sg::SegmentReport| {
+        r.objects.iter().any(|o| {
+            o.bbox
+                .is_some_and(|b| b.x >= 28 && b.y >= 14 && b.width <= 12)
+        })
+    };
+    let (paper, _) = detect(&OPEN, &d, &c).unwrap();
+    assert!(!far(&paper), "{paper:?}");
+    let p = SegmentParams {
+        row_background: Some(256),
+        ..OPEN
+    };
+    let (r, _) = detect(&p, &d, &c).unwrap();
+    assert!(far(&r), "{r:?}");
+    // A band of the box's 2 px: nothing more than the paper.
+    let (wide, _) = detect(
+        &SegmentParams {
+            row_background: Some(2 * 256),
+            ..p
+        },
+        &d,
+        &c,
+    )
+    .unwrap();
+    assert!(!far(&wide), "{wide:?}");
+}
+
+#[test]
 fn touching_objects_of_one_slice_are_split_by_their_contours() {
     // Two 16x16 boxes side by side at 9 px: one slice, one closed
     // component of contours, so the paper's mask holds both.
@@ -446,6 +480,13 @@ fn bad_filter_and_ground_parameters_are_typed_errors() {
                 ..p
             },
             "ground_band",
+        ),
+        (
+            SegmentParams {
+                row_background: Some(sg::MAX_GROUND_BAND + 1),
+                ..p
+            },
+            "row_background",
         ),
         (
             SegmentParams {

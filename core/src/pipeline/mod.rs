@@ -147,6 +147,7 @@ impl PipelineParams {
             max_object_width: Ratio::new(3, 4),
             max_aspect: 4,
             split_interiors: true,
+            row_background: Some(2 * 256),
             ..Self::PAPER.segment
         },
         ..Self::PAPER

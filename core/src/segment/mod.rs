@@ -93,10 +93,10 @@ pub use pipeline::{
     Detection, Masks, SegmentObserver, SegmentReport, Step,
 };
 pub use stats::{
-    above_mean, foreground, foreground_conspicuity, in_selected_area, object_conspicuity,
-    object_region, plane, select_slice, selected_area, selected_bounds, selected_stats,
-    slice_cells, slice_counts, slice_radius, slice_range, thresholds, DisparityRange, PsiMean,
-    SelectedStats, Slice, SliceCounts, Thresholds, PLANES, STAT_FRAC_BITS,
+    above_mean, foreground, foreground_conspicuity, foreground_rows, in_selected_area,
+    object_conspicuity, object_region, plane, select_slice, selected_area, selected_bounds,
+    selected_stats, slice_cells, slice_counts, slice_radius, slice_range, thresholds,
+    DisparityRange, PsiMean, SelectedStats, Slice, SliceCounts, Thresholds, PLANES, STAT_FRAC_BITS,
 };
 
 use crate::image::ImageError;
@@ -155,6 +155,14 @@ pub struct SegmentParams {
     /// (1/256 px) nearer than it are OFF ([`inhibit_ground`]). `None`: no
     /// inhibition (the paper). At most [`MAX_GROUND_BAND`].
     pub ground_band: Option<u16>,
+    /// Background inhibition by rows: a cell of S nearer than its row's
+    /// dominant disparity (the row estimate of [`fit_ground`], a wall's or
+    /// the ground's) by more than this many disparity bits (1/256 px) is
+    /// foreground even under the band's lower bound (never over its upper
+    /// one), so that an object in front of a far wall counts though it is
+    /// farther than the frame's mean. `None`: the paper's band alone. At
+    /// most [`MAX_GROUND_BAND`].
+    pub row_background: Option<u16>,
     /// Least mask area of an object, a fraction of the frame's area
     /// (at most 1). A search whose mask is smaller is inhibited like any
     /// other but is not an object and does not count towards
@@ -207,6 +215,7 @@ impl SegmentParams {
         min_area: Ratio::new(1, 5),
         max_objects: 1,
         ground_band: None,
+        row_background: None,
         min_object: Ratio::new(0, 1),
         max_object_width: Ratio::new(1, 1),
         max_aspect: 0,
@@ -249,6 +258,9 @@ impl SegmentParams {
         }
         if self.ground_band.is_some_and(|b| b > MAX_GROUND_BAND) {
             return Err(SegmentError::BadParams("ground_band"));
+        }
+        if self.row_background.is_some_and(|b| b > MAX_GROUND_BAND) {
+            return Err(SegmentError::BadParams("row_background"));
         }
         if self.exponent > 8 {
             return Err(SegmentError::BadParams("exponent"));

@@ -26,14 +26,17 @@ fn bits_at(d: &ImageView<'_, DisparityCell>, x: usize, y: usize) -> Option<u16> 
     d.get(x, y).and_then(|c| c.get()).map(|v| v.to_bits())
 }
 
-/// D_fg as bits: valid D inside S with `low < D < high`, and, with a
-/// ground line, `D > d_g(y) + band` ([`inhibit_ground`](super::inhibit_ground)).
-/// Returns the count.
+/// D_fg as bits: valid D inside S with `low < D < high`, or `D < high`
+/// and nearer than the row's background by the band
+/// ([`foreground_rows`](super::foreground_rows)), and, with a ground line,
+/// `D > d_g(y) + band` ([`inhibit_ground`](super::inhibit_ground)). Returns
+/// the count.
 pub(super) fn foreground(
     params: &SegmentParams,
     d: &ImageView<'_, DisparityCell>,
     t: &Thresholds,
     ground: Option<(&GroundLine, u16)>,
+    rows: Option<(&[u32], u16)>,
     g: Geom,
     fg: &mut [u32],
 ) -> u32 {
@@ -45,8 +48,14 @@ pub(super) fn foreground(
     let lo = (t.low >> EXTRA) + 1;
     let hi = t.high.div_ceil(1 << EXTRA).min(u32::from(u16::MAX));
     let mut n = 0;
-    let rows = d.rows().zip(fg.chunks_exact_mut(g.stride.max(1)));
-    for (y, (row, out)) in rows.enumerate().take(y1).skip(y0) {
+    let cells = d.rows().zip(fg.chunks_exact_mut(g.stride.max(1)));
+    for (y, (row, out)) in cells.enumerate().take(y1).skip(y0) {
+        // Nearer than the row's background: b > r − 1 + band  <=>
+        // b >= r + band, r the row's estimate + 1 (0: none).
+        let lo = rows.map_or(lo, |(r, band)| match r.get(y) {
+            Some(&r) if r > 0 => lo.min(r + u32::from(band)),
+            _ => lo,
+        });
         // Above the ground: b > d_g(y) + band  <=>  b >= d_g(y) + band + 1.
         let lo = ground.map_or(lo, |(l, band)| {
             let above = l.at(y).saturating_add(i64::from(band) + 1);

@@ -327,11 +327,16 @@ pub fn segment_into(
     let t = thresholds(params, &stats);
     report.stats = Some(stats);
     report.thresholds = Some(t);
-    if params.ground_band.is_some() {
-        report.ground = fit_ground(disparity, bufs.ground_rows)?;
+    // The rows' dominant disparities (`bufs.ground_rows`) serve the ground
+    // fit and the background by rows.
+    let rows_needed = params.ground_band.is_some() || params.row_background.is_some();
+    if rows_needed {
+        let line = fit_ground(disparity, bufs.ground_rows)?;
+        report.ground = line.filter(|_| params.ground_band.is_some());
     }
     let ground = report.ground.as_ref().zip(params.ground_band);
-    report.foreground = passes::foreground(params, disparity, &t, ground, g, bufs.d_fg);
+    let rows = params.row_background.map(|b| (&*bufs.ground_rows, b));
+    report.foreground = passes::foreground(params, disparity, &t, ground, rows, g, bufs.d_fg);
     observer.step(Step::Foreground);
     let searches = if params.every_mask_is_an_object() {
         k

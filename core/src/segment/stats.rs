@@ -206,6 +206,50 @@ pub fn foreground(
     Ok(n)
 }
 
+/// Background inhibition by rows
+/// ([`SegmentParams::row_background`](super::SegmentParams::row_background)):
+/// adds to D_fg the disparities of S under `t.high` that are more than
+/// `band` bits nearer than their row's estimate (`rows`, as
+/// [`fit_ground`](super::fit_ground) writes it: the bits + 1, 0 for none).
+/// Returns the count added.
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`] (`rows` shorter than the height too).
+pub fn foreground_rows(
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+    t: &Thresholds,
+    rows: &[u32],
+    band: u16,
+    d_fg: &mut ImageViewMut<'_, DisparityCell>,
+) -> Result<u32, SegmentError> {
+    check_size(disparity.size(), d_fg.size())?;
+    let (w, h) = disparity.size();
+    if rows.len() < h {
+        return Err(SegmentError::SizeMismatch {
+            expected: (w, h),
+            got: (w, rows.len()),
+        });
+    }
+    let mut n = 0;
+    for (y, ((src, dst), &r)) in disparity.rows().zip(d_fg.rows_mut()).zip(rows).enumerate() {
+        for (x, (&d, o)) in src.iter().zip(dst.iter_mut()).enumerate() {
+            let add = !o.is_on()
+                && r > 0
+                && d.get().is_some_and(|v| {
+                    let b = u32::from(v.to_bits());
+                    b >= r + u32::from(band) && (b << EXTRA) < t.high
+                })
+                && in_selected_area(params, w, h, x, y);
+            if add {
+                *o = d;
+                n += 1;
+            }
+        }
+    }
+    Ok(n)
+}
+
 /// `dst = c` where `mask` is ON, else OFF; returns the ON count of `dst`.
 /// This is C_fg (mask D_fg) and ψ (mask D_ObjReg).
 fn masked(
