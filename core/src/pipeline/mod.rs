@@ -134,8 +134,10 @@ impl PipelineParams {
     /// left eighth, cutting objects near the border); with the ground
     /// plane inhibited up to 4 px above its fitted line; and with masks
     /// under 1/128 of the frame, boxes over 3/4 of its width or boxes more
-    /// than 4 times as long as wide not taken as objects; and touching
-    /// objects of one slice split along their contours
+    /// than 4 times as long as wide not taken as objects; with cells 2 px
+    /// nearer than their row's background foreground too
+    /// ([`SegmentParams::row_background`]); and touching objects of one
+    /// slice split along their contours
     /// ([`SegmentParams::split_interiors`]; docs/PIPELINE.md, "Choices").
     pub const DEFAULT: Self = Self {
         segment: SegmentParams {
