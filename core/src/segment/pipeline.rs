@@ -430,11 +430,14 @@ pub fn segment_into(
         } else {
             None
         };
-        if let Some((n_parts, ic)) = split {
-            for &root in parts.iter().take(n_parts) {
-                if report.objects.len() >= k {
-                    break;
-                }
+        // One object, or each solid interior.
+        let (parts_n, ic) = split.map_or((1, None), |(n, ic)| (n, Some(ic)));
+        for &root in parts.iter().take(parts_n) {
+            if report.objects.len() >= k {
+                break;
+            }
+            let mut regions = regions;
+            if let Some(ic) = &ic {
                 // The part: its interior given back its contour, within
                 // the filled map.
                 ic.select(g, bufs.interiors, bufs.table, bufs.mask, |r, _| r == root);
@@ -447,29 +450,14 @@ pub fn segment_into(
                     PART_DILATIONS,
                     false,
                 );
-                let mut a = 0;
+                regions.area = 0;
                 for (m, &f) in bufs.mask.iter_mut().zip(bufs.filled.iter()) {
                     *m &= f;
                     if *m != 0 {
-                        a += m.count_ones();
+                        regions.area += m.count_ones();
                     }
                 }
-                let regions = AreaReport { area: a, ..regions };
-                emit(
-                    params,
-                    &mut masks,
-                    chunk,
-                    &slice,
-                    range,
-                    regions,
-                    bufs,
-                    &mut report,
-                    observer,
-                );
             }
-            // The inhibition takes every part.
-            bits::copy_map(bufs.mask, bufs.filled);
-        } else {
             emit(
                 params,
                 &mut masks,
@@ -481,6 +469,10 @@ pub fn segment_into(
                 &mut report,
                 observer,
             );
+        }
+        if ic.is_some() {
+            // The inhibition takes every part.
+            bits::copy_map(bufs.mask, bufs.filled);
         }
         // Inhibit only before another search, so that after the run every
         // map shows what the last search saw (for K = 1, the paper's maps).
