@@ -126,6 +126,13 @@ fn a_short_row_buffer_is_a_typed_error() {
     let r = sg::fit_ground(&ImageView::packed(&d, 8, 6).unwrap(), &mut rows);
     assert!(matches!(r, Err(sg::SegmentError::Image(_))), "{r:?}");
     assert!(!r.unwrap_err().to_string().is_empty());
+    // The background by rows reads the same row estimates.
+    let dv = ImageView::packed(&d, 8, 6).unwrap();
+    let t = sg::thresholds(&OPEN, &sg::selected_stats(&OPEN, &dv).unwrap());
+    let mut fg = vec![DisparityCell::OFF; 8 * 6];
+    let mut fv = ImageViewMut::packed(&mut fg, 8, 6).unwrap();
+    let r = sg::foreground_rows(&OPEN, &dv, &t, &rows, 256, &mut fv);
+    assert!(matches!(r, Err(sg::SegmentError::Image(_))), "{r:?}");
 }
 
 /// Ground scenes with sub-pixel jitter, OFF cells and up to two objects,

@@ -77,6 +77,7 @@ mod buffers;
 mod ground;
 mod label;
 mod morph;
+mod parts;
 mod passes;
 mod pipeline;
 mod stats;
@@ -279,6 +280,15 @@ impl SegmentParams {
             && self.max_aspect == 0
     }
 
+    /// Whether `area` px is at least an object's least area in a `width`
+    /// x `height` frame: `min_object` of the frame (by products, no
+    /// division).
+    pub fn large_enough(&self, area: u64, width: usize, height: usize) -> bool {
+        let mo = self.min_object;
+        let frame = u64::try_from(width * height).unwrap_or(u64::MAX);
+        area.saturating_mul(u64::from(mo.den)) >= frame.saturating_mul(u64::from(mo.num))
+    }
+
     /// Whether a mask of `area` px with a `box_width` x `box_height` box is
     /// an object in a `width` x `height` frame: at least `min_object` of
     /// the frame, at most `max_object_width` of its width, and at most
@@ -289,10 +299,9 @@ impl SegmentParams {
         (box_width, box_height): (usize, usize),
         (width, height): (usize, usize),
     ) -> bool {
-        let (mo, mw) = (self.min_object, self.max_object_width);
-        let frame = u64::try_from(width * height).unwrap_or(u64::MAX);
+        let mw = self.max_object_width;
         let a = usize::from(self.max_aspect);
-        u64::from(area) * u64::from(mo.den) >= frame * u64::from(mo.num)
+        self.large_enough(u64::from(area), width, height)
             && box_width * usize::from(mw.den) <= width * usize::from(mw.num)
             && (a == 0 || (box_width <= a * box_height && box_height <= a * box_width))
     }

@@ -5,6 +5,7 @@ use super::buffers::SegmentBuffers;
 use super::ground::{fit_ground, GroundLine};
 use super::label::{AreaReport, Connectivity, Labeller};
 use super::morph::dilate_n;
+use super::parts;
 use super::passes;
 use super::stats::{
     plane, select_slice, selected_stats, slice_range, thresholds, DisparityRange, SelectedStats,
@@ -346,8 +347,7 @@ pub fn segment_into(
     // `w·h >= 1` (`check_size`); `max` shows the compiler, so that the
     // chunk loops have no panic path.
     for search in 0..searches {
-        let index = report.objects.len();
-        if index >= k {
+        if report.objects.len() >= k {
             break;
         }
         let counts = passes::slice_counts(conspicuity, disparity, g, bufs.d_fg);
@@ -423,40 +423,22 @@ pub fn segment_into(
         };
         // Several objects of one slice whose contours touch: each solid
         // interior its own object (`split_interiors`).
-        let mut parts = [0u32; MAX_OBJECTS];
-        let split = if params.split_interiors && u64::from(area) >= 2 * min_part(params, g) {
-            let (n, ic) = solid_interiors(params, bufs, &mut parts)?;
+        let mut roots = [0u32; MAX_OBJECTS];
+        let split = if params.split_interiors && params.large_enough(u64::from(area / 2), w, h) {
+            let (n, ic) = parts::solid_interiors(params, bufs, &mut roots)?;
             (n >= 2).then_some((n, ic))
         } else {
             None
         };
         // One object, or each solid interior.
         let (parts_n, ic) = split.map_or((1, None), |(n, ic)| (n, Some(ic)));
-        for &root in parts.iter().take(parts_n) {
+        for &root in roots.iter().take(parts_n) {
             if report.objects.len() >= k {
                 break;
             }
             let mut regions = regions;
             if let Some(ic) = &ic {
-                // The part: its interior given back its contour, within
-                // the filled map.
-                ic.select(g, bufs.interiors, bufs.table, bufs.mask, |r, _| r == root);
-                bits::morph_n(
-                    g,
-                    params.disk,
-                    bufs.mask,
-                    bufs.scratch,
-                    bufs.morph_rows,
-                    PART_DILATIONS,
-                    false,
-                );
-                regions.area = 0;
-                for (m, &f) in bufs.mask.iter_mut().zip(bufs.filled.iter()) {
-                    *m &= f;
-                    if *m != 0 {
-                        regions.area += m.count_ones();
-                    }
-                }
+                regions.area = parts::part_mask(params, bufs, ic, root);
             }
             emit(
                 params,
@@ -477,7 +459,6 @@ pub fn segment_into(
         // Inhibit only before another search, so that after the run every
         // map shows what the last search saw (for K = 1, the paper's maps).
         if report.objects.len() < k && search + 1 < searches {
-            let _ = index;
             passes::inhibit(
                 disparity,
                 g,
@@ -492,70 +473,6 @@ pub fn segment_into(
     }
     Ok(report)
 }
-
-/// The interiors of this search's mask (its pixels off the closed
-/// contours, 4-connected) that are solid: at least `min_area` of the
-/// largest's area and half of them in the object's slice (a ring's hole or
-/// the gap between touching objects is not). Writes their roots into
-/// `parts`, largest first; `bufs.interiors` holds the interiors, labelled
-/// in `bufs.table` as the components returned. Returns how many.
-fn solid_interiors(
-    params: &SegmentParams,
-    bufs: &mut SegmentBuffers<'_>,
-    parts: &mut [u32; MAX_OBJECTS],
-) -> Result<(usize, bits::Components), SegmentError> {
-    let g = bufs.g;
-    for ((n, &m), &c) in bufs
-        .interiors
-        .iter_mut()
-        .zip(bufs.mask.iter())
-        .zip(bufs.closed.iter())
-    {
-        *n = m & !c;
-    }
-    let ic = bits::components(g, bufs.interiors, Connectivity::Four, bufs.rows, bufs.table)?;
-    let largest = ic.largest.map_or(0, |(_, a)| a);
-    let keep = params.min_area;
-    let least = min_part(params, g);
-    let big = |area: u32| {
-        u64::from(area) >= least
-            && u64::from(area) * u64::from(keep.den) >= u64::from(largest) * u64::from(keep.num)
-    };
-    let mut cand = [(0u32, 0u32); 2 * MAX_OBJECTS];
-    let n = ic.largest_roots(bufs.table, big, &mut cand);
-    let mut solid = 0;
-    for &(root, area) in cand.iter().take(n) {
-        ic.select(g, bufs.interiors, bufs.table, bufs.scratch, |r, _| {
-            r == root
-        });
-        let inside: u32 = bufs
-            .scratch
-            .iter()
-            .zip(bufs.d_obj_reg.iter())
-            .filter(|(&c, _)| c != 0)
-            .map(|(&c, &d)| (c & d).count_ones())
-            .sum();
-        if 2 * inside >= area {
-            if let Some(p) = parts.get_mut(solid) {
-                *p = root;
-                solid += 1;
-            }
-        }
-    }
-    Ok((solid, ic))
-}
-
-/// Least interior area of a part, px.
-/// Least interior area of a part, px: an object's least area
-/// ([`SegmentParams::min_object`]) of the frame.
-fn min_part(params: &SegmentParams, g: bits::Geom) -> u64 {
-    let mo = params.min_object;
-    let frame = u64::try_from(g.width * g.height).unwrap_or(u64::MAX);
-    (frame * u64::from(mo.num)).div_ceil(u64::from(mo.den).max(1))
-}
-
-/// Dilations that give a part back the contour its interior leaves out.
-const PART_DILATIONS: u8 = 2;
 
 /// Reports `bufs.mask` as the next object when it is one.
 #[allow(clippy::too_many_arguments)]

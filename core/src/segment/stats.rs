@@ -8,7 +8,7 @@ use super::{check_size, Ratio, SegmentError, SegmentParams};
 use crate::conspicuity::EdgeCell;
 use crate::disparity::DisparityCell;
 use crate::fixed::isqrt_round_u64;
-use crate::image::{ImageView, ImageViewMut};
+use crate::image::{ImageError, ImageView, ImageViewMut};
 use core::num::{NonZeroU128, NonZeroU64};
 
 /// Fraction bits of [`SelectedStats`] and [`DisparityRange`] values.
@@ -214,7 +214,8 @@ pub fn foreground(
 /// Returns the count added.
 ///
 /// # Errors
-/// [`SegmentError::SizeMismatch`] (`rows` shorter than the height too).
+/// [`SegmentError::SizeMismatch`], or [`SegmentError::Image`] for `rows`
+/// shorter than the height.
 pub fn foreground_rows(
     params: &SegmentParams,
     disparity: &ImageView<'_, DisparityCell>,
@@ -226,10 +227,10 @@ pub fn foreground_rows(
     check_size(disparity.size(), d_fg.size())?;
     let (w, h) = disparity.size();
     if rows.len() < h {
-        return Err(SegmentError::SizeMismatch {
-            expected: (w, h),
-            got: (w, rows.len()),
-        });
+        return Err(SegmentError::Image(ImageError::BufferTooSmall {
+            needed: super::ground_rows_len(h),
+            got: rows.len(),
+        }));
     }
     let mut n = 0;
     for (y, ((src, dst), &r)) in disparity.rows().zip(d_fg.rows_mut()).zip(rows).enumerate() {
