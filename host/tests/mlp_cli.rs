@@ -158,7 +158,16 @@ fn train_and_eval_run_and_reject_bad_input() {
         src.contains(&format!("pub static MODEL: [u8; {n}]")),
         "{src}"
     );
-    assert_eq!(src.matches("0x").count(), n);
+    // The array holds the blob byte for byte (the header comment names
+    // the model's path, which may itself contain "0x").
+    let body = &src[src.find("= [").expect("array") + 3..src.rfind("];").expect("end")];
+    let bytes: Vec<u8> = body
+        .split(',')
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .map(|t| u8::from_str_radix(t.trim_start_matches("0x"), 16).expect("hex byte"))
+        .collect();
+    assert_eq!(bytes, fs::read(&model).unwrap());
     assert_one_line_error(
         &protogist(&["quantize", "--model", m], cwd),
         "give --out, --emit-rust or both",
