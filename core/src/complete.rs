@@ -54,13 +54,27 @@ pub struct CompleteParams {
     /// A region needs at least this many trusted cells to give a median
     /// (at least 1). Default 1.
     pub min_trusted: u32,
+    /// A region whose trusted cells lie at least this many rows apart
+    /// (first to last) takes its median plus its least-squares tilt in y
+    /// (module docs, "Tall regions"); 0: every region takes its median
+    /// alone. Default 48.
+    pub tilt_rows: u16,
 }
 
 impl CompleteParams {
-    /// Guard 1, one trusted cell per median.
+    /// Guard 1, one trusted cell per median, tall regions (48 rows or
+    /// more) along their tilt.
     pub const DEFAULT: Self = Self {
         guard: 1,
         min_trusted: 1,
+        tilt_rows: 48,
+    };
+
+    /// [`CompleteParams::DEFAULT`] with one median for every region, tall
+    /// or not: the completion before the tilt.
+    pub const MEDIAN: Self = Self {
+        tilt_rows: 0,
+        ..Self::DEFAULT
     };
 }
 
@@ -110,7 +124,13 @@ pub struct CompleteReport {
     /// Runs of non-edge cells past the run table's capacity
     /// ([`complete_runs`]), left unchanged.
     pub runs_unlabelled: u32,
+    /// Tall regions filled along their tilt ([`CompleteParams::tilt_rows`]).
+    pub tilted: u16,
 }
+
+/// Most tall regions filled along their tilt in a frame; later ones (in
+/// label order) take their median alone.
+pub const MAX_TILTED: usize = 16;
 
 /// Entries each region table needs so that no region of a `width` x
 /// `height` frame is ever skipped: one per label the labelling can return,
@@ -149,6 +169,78 @@ pub struct RegionTables<'a> {
     pub lo: &'a mut [u8],
     /// Bisection upper bound.
     pub hi: &'a mut [u8],
+    /// The sums of the tilt ([`CompleteParams::tilt_rows`]); regions at or
+    /// past its length take their median alone. May be empty when
+    /// `tilt_rows` is 0.
+    pub tilt: &'a mut [RegionSums],
+}
+
+/// One region's sums over its trusted cells, for its tilt in y: `y` is the
+/// row, `b` the cell's `U8F8` bits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct RegionSums {
+    /// Σ y.
+    pub sy: u64,
+    /// Σ y².
+    pub syy: u64,
+    /// Σ b.
+    pub sb: u64,
+    /// Σ y·b.
+    pub syb: u64,
+    /// The first row with a trusted cell.
+    pub first: u32,
+    /// The last row with a trusted cell.
+    pub last: u32,
+}
+
+/// A tall region's fill: `b(y) = 256·median + ⌊slope·(2^16·y − ybar) /
+/// 2^32⌋` bits (`slope` in bits per row and `ybar` in rows, both Q16).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tilt {
+    /// The least-squares slope, `⌊2^16·(nΣyb − ΣyΣb) / (nΣy² − (Σy)²)⌋`
+    /// (floor division), bits per row, Q16.
+    pub slope: i64,
+    /// The mean row of the trusted cells, `⌊2^16·Σy / n⌋`, Q16.
+    pub ybar: i64,
+}
+
+impl Tilt {
+    /// The tilt of `n` trusted cells with sums `s`, when their rows span at
+    /// least `rows` (`rows > 0`, `n > 0`); `None` otherwise or when a
+    /// value leaves `i64`.
+    pub fn of(n: u32, s: &RegionSums, rows: u16) -> Option<Self> {
+        if rows == 0 || n == 0 || s.last.saturating_sub(s.first) < u32::from(rows) {
+            return None;
+        }
+        let n = i128::from(n);
+        let (sy, syy, sb, syb) = (
+            i128::from(s.sy),
+            i128::from(s.syy),
+            i128::from(s.sb),
+            i128::from(s.syb),
+        );
+        let den = n.checked_mul(syy)?.checked_sub(sy.checked_mul(sy)?)?;
+        let num = n.checked_mul(syb)?.checked_sub(sy.checked_mul(sb)?)?;
+        if den <= 0 {
+            return None;
+        }
+        let slope = num.checked_mul(1 << 16)?.checked_div_euclid(den)?;
+        let ybar = sy.checked_mul(1 << 16)?.checked_div_euclid(n)?;
+        Some(Self {
+            slope: i64::try_from(slope).ok()?,
+            ybar: i64::try_from(ybar).ok()?,
+        })
+    }
+
+    /// The whole px of row `y` for a region of median `median` px:
+    /// `b(y)` rounded half up, within 0..=255.
+    pub fn at(&self, median: u8, y: usize) -> u8 {
+        let y = i128::try_from(y).unwrap_or(i128::MAX >> 20) << 16;
+        let d = i128::from(self.slope).saturating_mul(y.saturating_sub(i128::from(self.ybar)));
+        let b = (i128::from(median) << 8).saturating_add(d >> 32);
+        u8::try_from(((b + 128) >> 8).clamp(0, 255)).unwrap_or(u8::MAX)
+    }
 }
 
 impl RegionTables<'_> {

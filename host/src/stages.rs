@@ -552,8 +552,8 @@ pub fn run_complete(
     protogist::complete::CompleteReport,
 )> {
     use protogist::complete::{
-        complete_runs, region_table_len, run_rows_len, run_table_len, RegionTables, RunBuffers,
-        Tone, LABEL_ROWS,
+        complete_runs, region_table_len, run_rows_len, run_table_len, RegionSums, RegionTables,
+        RunBuffers, Tone, LABEL_ROWS,
     };
     use protogist::segment::bit_map_len;
     let (w, h) = (width, height);
@@ -571,11 +571,13 @@ pub fn run_complete(
     let n = region_table_len(w, h);
     let (mut total, mut below, mut lo, mut hi) =
         (vec![0u32; n], vec![0u32; n], vec![0u8; n], vec![0u8; n]);
+    let mut sums = vec![RegionSums::default(); n];
     let mut tables = RegionTables {
         total: &mut total,
         below: &mut below,
         lo: &mut lo,
         hi: &mut hi,
+        tilt: &mut sums,
     };
     let mut out = disparity.to_vec();
     let report = complete_runs(

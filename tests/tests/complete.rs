@@ -5,7 +5,7 @@
 use proptest::prelude::*;
 use protogist::complete::{
     complete_runs, region_table_len, run_rows_len, run_table_len, CompleteError, CompleteParams,
-    CompleteReport, RegionTables, RunBuffers, SideColour, Tone, LABEL_ROWS,
+    CompleteReport, RegionSums, RegionTables, RunBuffers, SideColour, Tone, LABEL_ROWS,
 };
 use protogist::conspicuity::{Conspicuity, EdgeCell, Luv};
 use protogist::disparity::{from_pixels, Disparity, DisparityCell};
@@ -31,48 +31,58 @@ fn case() -> impl Strategy<
         CompleteParams,
     ),
 > {
-    (1usize..=24, 1usize..=24, 0u8..=3, 0u32..=6).prop_flat_map(|(w, h, guard, min_trusted)| {
-        let n = w * h;
-        (
-            proptest::collection::vec(0u8..100, n),
-            proptest::collection::vec(0u8..4, n),
-            proptest::collection::vec(proptest::option::weighted(0.8, 0u16..=20 * 256), n),
-            0usize..=w,
-            Just((w, h, guard, min_trusted)),
-        )
-            .prop_map(|(noise, palette, disp, col, (w, h, guard, min_trusted))| {
-                let edges = noise
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &r)| {
-                        if i % w == col || r < 8 {
-                            edge_on()
-                        } else {
-                            EdgeCell::OFF
-                        }
-                    })
-                    .collect();
-                let colour = palette
-                    .iter()
-                    .map(|&c| Luv::from_bits(i16::from(c) * 900, -i16::from(c) * 300, 50))
-                    .collect();
-                let disparity = disp
-                    .iter()
-                    .map(|d| match d {
-                        Some(bits) => DisparityCell::on(Disparity::from_bits(*bits)).unwrap(),
-                        None => DisparityCell::OFF,
-                    })
-                    .collect();
-                (
-                    edges,
-                    colour,
-                    disparity,
-                    w,
-                    h,
-                    CompleteParams { guard, min_trusted },
+    (1usize..=24, 1usize..=24, 0u8..=3, 0u32..=6, 0u16..=8).prop_flat_map(
+        |(w, h, guard, min_trusted, tilt_rows)| {
+            let n = w * h;
+            (
+                proptest::collection::vec(0u8..100, n),
+                proptest::collection::vec(0u8..4, n),
+                proptest::collection::vec(proptest::option::weighted(0.8, 0u16..=20 * 256), n),
+                0usize..=w,
+                Just((w, h, guard, min_trusted, tilt_rows)),
+            )
+                .prop_map(
+                    |(noise, palette, disp, col, (w, h, guard, min_trusted, tilt_rows))| {
+                        let edges = noise
+                            .iter()
+                            .enumerate()
+                            .map(|(i, &r)| {
+                                if i % w == col || r < 8 {
+                                    edge_on()
+                                } else {
+                                    EdgeCell::OFF
+                                }
+                            })
+                            .collect();
+                        let colour = palette
+                            .iter()
+                            .map(|&c| Luv::from_bits(i16::from(c) * 900, -i16::from(c) * 300, 50))
+                            .collect();
+                        let disparity = disp
+                            .iter()
+                            .map(|d| match d {
+                                Some(bits) => {
+                                    DisparityCell::on(Disparity::from_bits(*bits)).unwrap()
+                                }
+                                None => DisparityCell::OFF,
+                            })
+                            .collect();
+                        (
+                            edges,
+                            colour,
+                            disparity,
+                            w,
+                            h,
+                            CompleteParams {
+                                guard,
+                                min_trusted,
+                                tilt_rows,
+                            },
+                        )
+                    },
                 )
-            })
-    })
+        },
+    )
 }
 
 proptest! {
@@ -135,6 +145,7 @@ fn try_by_runs<C: SideColour>(
         vec![0u8; regions],
         vec![0u8; regions],
     );
+    let mut sums = vec![RegionSums::default(); regions];
     let mut out = disp.to_vec();
     let report = complete_runs(
         params,
@@ -153,9 +164,57 @@ fn try_by_runs<C: SideColour>(
             below: &mut below,
             lo: &mut lo,
             hi: &mut hi,
+            tilt: &mut sums,
         },
     )?;
     Ok((out, report))
+}
+
+#[test]
+fn a_tall_region_is_completed_along_its_tilt() {
+    // A ground seen from row 1 down: its disparity grows by 1 px every 2
+    // rows (2 px at the top, 9 px at the bottom), under an edge row (the
+    // horizon) and with an OFF hole near its top. The median is 5 or 6
+    // px; along the tilt the horizon's cells, which join the ground, and
+    // the hole take the ground's value at their own row.
+    let mut rows: Vec<String> = vec!["|".repeat(12)];
+    for y in 1..16 {
+        let d = char::from_digit(2 + (y as u32 - 1) / 2, 10).unwrap();
+        rows.push(std::iter::repeat_n(d, 12).collect());
+    }
+    rows[3].replace_range(5..7, "..");
+    let refs: Vec<&str> = rows.iter().map(String::as_str).collect();
+    let (edges, disp, w, h) = parse(&refs);
+    let colour = vec![Luv::default(); w * h];
+    let px = |v: &[DisparityCell], x: usize, y: usize| {
+        v[y * w + x].get().map(|d| (d.to_bits() + 128) >> 8)
+    };
+    let tilted = CompleteParams {
+        tilt_rows: 10,
+        ..CompleteParams::default()
+    };
+    let (out, report) = by_runs(&tilted, &edges, &colour, &disp, w, h, run_table_len(w, h));
+    assert_eq!(report.tilted, 1);
+    // Trusted rows 2..=15 (row 1 is next to the edge): slope 1/2 px a
+    // row, so row 0 is at about 1.5 px and row 3 at 3 px.
+    assert_eq!(px(&out, 4, 0), Some(2), "{:?}", show(&out, w));
+    assert_eq!(px(&out, 5, 3), Some(3), "{:?}", show(&out, w));
+    let (rf_out, rf_report) = rf::complete(&tilted, &edges, &colour, &disp, w, h);
+    assert_eq!((&out, report), (&rf_out, rf_report));
+    // One median per region: the horizon and the hole take 6 px; a region
+    // spanning fewer rows than `tilt_rows` does too.
+    for params in [
+        CompleteParams::MEDIAN,
+        CompleteParams {
+            tilt_rows: 15,
+            ..CompleteParams::default()
+        },
+    ] {
+        let (flat, report) = by_runs(&params, &edges, &colour, &disp, w, h, run_table_len(w, h));
+        assert_eq!(report.tilted, 0);
+        assert_eq!(px(&flat, 4, 0), Some(6), "{:?}", show(&flat, w));
+        assert_eq!(px(&flat, 5, 3), Some(6), "{:?}", show(&flat, w));
+    }
 }
 
 #[test]
@@ -210,6 +269,7 @@ fn short_run_buffers_are_typed_errors() {
             below: &mut below,
             lo: &mut lo,
             hi: &mut hi,
+            tilt: &mut [],
         },
     )
     .unwrap_err();

@@ -24,7 +24,8 @@
 //! regions whose median is already found.
 
 use super::{
-    at_most_limit, whole_bits, CompleteError, CompleteParams, CompleteReport, RegionTables,
+    at_most_limit, whole_bits, CompleteError, CompleteParams, CompleteReport, RegionSums,
+    RegionTables, Tilt, MAX_TILTED,
 };
 use crate::conspicuity::{EdgeCell, Luv};
 use crate::disparity::{from_pixels, DisparityCell};
@@ -185,6 +186,13 @@ pub fn complete_runs<C: SideColour>(
     tables.total.fill(0);
     tables.lo.fill(u8::MAX);
     tables.hi.fill(0);
+    let tilting = params.tilt_rows > 0;
+    let regions_used = usize::from(regions).saturating_add(1);
+    if tilting {
+        if let Some(t) = tables.tilt.get_mut(..regions_used.min(tables.tilt.len())) {
+            t.fill(RegionSums::default());
+        }
+    }
 
     let open = &*bufs.open;
     let trusted = &*bufs.trusted;
@@ -199,7 +207,8 @@ pub fn complete_runs<C: SideColour>(
         cap,
     };
     // Counts, and each region's range.
-    walk.for_each_trusted(&disp, |l, drow, xs| {
+    let tilt = &mut *tables.tilt;
+    walk.for_each_trusted(&disp, |l, y, drow, xs| {
         let (Some(t), Some(lo), Some(hi)) = (
             tables.total.get_mut(l),
             tables.lo.get_mut(l),
@@ -207,20 +216,37 @@ pub fn complete_runs<C: SideColour>(
         ) else {
             return;
         };
-        // Per run in registers: the count and the least and greatest ON
-        // bits, whose whole px are the run's least and greatest.
-        let (mut n, mut least, mut most) = (0u32, u16::MAX, 0u16);
+        // Per run in registers: the count, the sum and the least and
+        // greatest ON bits, whose whole px are the run's least and
+        // greatest.
+        let (mut n, mut sum, mut least, mut most) = (0u32, 0u32, u16::MAX, 0u16);
         for x in xs {
             if let Some(&c) = drow.get(x) {
                 if c.is_on() {
                     let b = c.raw().to_bits();
                     n += 1;
+                    sum = sum.wrapping_add(u32::from(b));
                     least = least.min(b);
                     most = most.max(b);
                 }
             }
         }
         if n > 0 {
+            if tilting {
+                if let Some(s) = tilt.get_mut(l) {
+                    // A run has at most 2^16 cells below 2^16: `sum` is
+                    // exact when the row is narrower than 2^16 px.
+                    let (y64, n64, b64) = (y as u64, u64::from(n), u64::from(sum));
+                    if *t == 0 {
+                        s.first = u32::try_from(y).unwrap_or(u32::MAX);
+                    }
+                    s.last = u32::try_from(y).unwrap_or(u32::MAX);
+                    s.sy = s.sy.saturating_add(y64 * n64);
+                    s.syy = s.syy.saturating_add(y64 * y64 * n64);
+                    s.sb = s.sb.saturating_add(b64);
+                    s.syb = s.syb.saturating_add(y64 * b64);
+                }
+            }
             *t += n;
             *lo = (*lo).min(whole_bits(least));
             *hi = (*hi).max(whole_bits(most));
@@ -239,7 +265,7 @@ pub fn complete_runs<C: SideColour>(
     for _ in 0..passes {
         tables.below.fill(0);
         let (lo, hi, below) = (&*tables.lo, &*tables.hi, &mut *tables.below);
-        walk.for_each_run(&disp, |l, drow, trow, span| {
+        walk.for_each_run(&disp, |l, _, drow, trow, span| {
             let (Some(&a), Some(&b), Some(c)) = (lo.get(l), hi.get(l), below.get_mut(l)) else {
                 return;
             };
@@ -281,6 +307,34 @@ pub fn complete_runs<C: SideColour>(
     )
     .unwrap_or(u16::MAX);
 
+    // The tall regions' tilts (at most MAX_TILTED, in label order).
+    let mut tilts = [(0usize, Tilt { slope: 0, ybar: 0 }); MAX_TILTED];
+    let mut n_tilts = 0;
+    if tilting {
+        for (l, (s, &t)) in tables
+            .tilt
+            .iter()
+            .zip(tables.total.iter())
+            .enumerate()
+            .skip(1)
+        {
+            if n_tilts >= MAX_TILTED || l > usize::from(regions) {
+                break;
+            }
+            if t < min_trusted {
+                continue;
+            }
+            if let (Some(tl), Some(slot)) =
+                (Tilt::of(t, s, params.tilt_rows), tilts.get_mut(n_tilts))
+            {
+                *slot = (l, tl);
+                n_tilts += 1;
+            }
+        }
+    }
+    let tilts = tilts.get(..n_tilts).unwrap_or(&[]);
+    report.tilted = u16::try_from(n_tilts).unwrap_or(u16::MAX);
+
     // Targets, row by row, with the labels of two rows each side.
     let labels = &mut *bufs.labels;
     let (mut built, mut first_run) = (0usize, 0usize);
@@ -300,6 +354,9 @@ pub fn complete_runs<C: SideColour>(
         };
         let orow = open.get(y * stride..(y + 1) * stride).unwrap_or(&[]);
         let trow = trusted.get(y * stride..(y + 1) * stride).unwrap_or(&[]);
+        // The last region filled in this row and its value (a tall
+        // region's value depends on the row only).
+        let mut last: Option<(usize, u8)> = None;
         // The untrusted cells: edges, and OFF or near-edge cells.
         for (i, &tw) in trow.iter().enumerate() {
             let mut m = !tw
@@ -320,8 +377,19 @@ pub fn complete_runs<C: SideColour>(
                 if l == 0 || l >= cap || tables.total.get(l).copied().unwrap_or(0) < min_trusted {
                     continue;
                 }
-                let (Some(&v), Some(cell)) = (tables.lo.get(l), disparity.get(x, y)) else {
+                let (Some(&median), Some(cell)) = (tables.lo.get(l), disparity.get(x, y)) else {
                     continue;
+                };
+                let v = match last {
+                    Some((k, v)) if k == l => v,
+                    _ => {
+                        let v = tilts
+                            .iter()
+                            .find(|(k, _)| *k == l)
+                            .map_or(median, |(_, tl)| tl.at(median, y));
+                        last = Some((l, v));
+                        v
+                    }
                 };
                 if cell.is_on() {
                     report.replaced += 1;

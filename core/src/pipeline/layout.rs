@@ -17,7 +17,7 @@
 use super::arena::bytes;
 use super::PipelineParams;
 use crate::complete::{
-    pipeline_run_capacity, run_rows_len, Tone, DEFAULT_REGION_CAPACITY, LABEL_ROWS,
+    pipeline_run_capacity, run_rows_len, RegionSums, Tone, DEFAULT_REGION_CAPACITY, LABEL_ROWS,
 };
 use crate::conspicuity::{stream_scratch_len, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
@@ -93,6 +93,11 @@ pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) 
         + bytes(LABEL_ROWS * width, 2)
         + 2 * bytes(regions, 4)
         + 2 * bytes(regions, 1)
+        + if params.complete.tilt_rows > 0 {
+            bytes(regions, core::mem::size_of::<RegionSums>())
+        } else {
+            0
+        }
 }
 
 /// Bytes of segmentation and of the classifier's activations.

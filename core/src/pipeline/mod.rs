@@ -118,7 +118,7 @@ impl PipelineParams {
     pub const PAPER: Self = Self {
         stereo: STEREO_DEFAULT,
         edges: EdgeParams::DEFAULT,
-        complete: CompleteParams::DEFAULT,
+        complete: CompleteParams::MEDIAN,
         segment: SegmentParams::PAPER,
         delta_q16: None,
         model: ModelCapacity {
@@ -138,8 +138,11 @@ impl PipelineParams {
     /// nearer than their row's background foreground too
     /// ([`SegmentParams::row_background`]); and touching objects of one
     /// slice split along their contours
-    /// ([`SegmentParams::split_interiors`]; docs/PIPELINE.md, "Choices").
+    /// ([`SegmentParams::split_interiors`]); and tall regions completed
+    /// along their tilt ([`CompleteParams::tilt_rows`]; docs/PIPELINE.md,
+    /// "Choices").
     pub const DEFAULT: Self = Self {
+        complete: CompleteParams::DEFAULT,
         segment: SegmentParams {
             fg_high: Ratio::new(100, 1),
             top_bottom_strip: Ratio::new(0, 1),

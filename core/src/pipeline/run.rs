@@ -187,6 +187,7 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
             below: s.take(r)?,
             lo: s.take(r)?,
             hi: s.take(r)?,
+            tilt: s.take(if params.complete.tilt_rows > 0 { r } else { 0 })?,
         };
         complete_runs(
             &params.complete,

@@ -110,6 +110,18 @@ macro_rules! buffers {
                 $alloc!(u32, REGIONS, 0u32),
             ],
             bounds: [$alloc!(u8, REGIONS, 0u8), $alloc!(u8, REGIONS, 0u8)],
+            sums: $alloc!(
+                firmware_sim::pg::complete::RegionSums,
+                REGIONS,
+                firmware_sim::pg::complete::RegionSums {
+                    sy: 0,
+                    syy: 0,
+                    sb: 0,
+                    syb: 0,
+                    first: 0,
+                    last: 0
+                }
+            ),
             mask: $alloc!(u8, N, 0u8),
             mlp: mlp::Scratch {
                 input: $alloc!(u32, INPUT, 0u32),

@@ -64,10 +64,15 @@ pub fn complete(
             .map(|d| ((u32::from(d.to_bits()) + 128) >> 8).min(255) as u8)
     };
     let mut values: Vec<Vec<u8>> = vec![Vec::new(); regions as usize + 1];
+    // The trusted cells' (row, bits), per region, for the tilt.
+    let mut cells: Vec<Vec<(i128, i128)>> = vec![Vec::new(); regions as usize + 1];
     for p in 0..w * h {
         if let Some(v) = whole(disparity[p]) {
             if label[p] != 0 && !near(p % w, p / w) {
                 values[label[p] as usize].push(v);
+                if let Some(d) = disparity[p].get() {
+                    cells[label[p] as usize].push(((p / w) as i128, i128::from(d.to_bits())));
+                }
             }
         }
     }
@@ -81,6 +86,48 @@ pub fn complete(
             v.get(v.len().saturating_sub(1) / 2).copied()
         })
         .collect();
+    // Tall regions (trusted rows at least `tilt_rows` apart), the first
+    // MAX_TILTED with a median in label order: the least-squares slope
+    // and the mean row, Q16, floor divisions.
+    let mut tilt: Vec<Option<(i128, i128)>> = vec![None; regions as usize + 1];
+    let mut tilted = 0;
+    for l in 1..=regions as usize {
+        if params.tilt_rows == 0 || tilted >= protogist::complete::MAX_TILTED {
+            break;
+        }
+        let c = &cells[l];
+        if median[l].is_none() || c.is_empty() {
+            continue;
+        }
+        let rows = c.iter().map(|&(y, _)| y);
+        let span = rows.clone().max().unwrap_or(0) - rows.min().unwrap_or(0);
+        if span < i128::from(params.tilt_rows) {
+            continue;
+        }
+        let n = c.len() as i128;
+        let sy: i128 = c.iter().map(|&(y, _)| y).sum();
+        let syy: i128 = c.iter().map(|&(y, _)| y * y).sum();
+        let sb: i128 = c.iter().map(|&(_, b)| b).sum();
+        let syb: i128 = c.iter().map(|&(y, b)| y * b).sum();
+        let den = n * syy - sy * sy;
+        if den <= 0 {
+            continue;
+        }
+        tilt[l] = Some((
+            ((n * syb - sy * sb) << 16).div_euclid(den),
+            (sy << 16).div_euclid(n),
+        ));
+        tilted += 1;
+    }
+    let value = |l: usize, y: usize, m: u8| -> u8 {
+        match tilt[l] {
+            Some((slope, ybar)) => {
+                let b = (i128::from(m) << 8) + ((slope * (((y as i128) << 16) - ybar)) >> 32);
+                ((b + 128) >> 8).clamp(0, 255) as u8
+            }
+            None => m,
+        }
+    };
     let dist2 = |a: Luv, b: Luv| -> u64 {
         a.to_bits()
             .iter()
@@ -92,6 +139,7 @@ pub fn complete(
     let mut report = CompleteReport {
         regions: regions as u16,
         regions_with_median: median.iter().skip(1).filter(|m| m.is_some()).count() as u16,
+        tilted: tilted as u16,
         ..CompleteReport::default()
     };
     for y in 0..h {
@@ -137,7 +185,7 @@ pub fn complete(
             } else {
                 report.filled += 1;
             }
-            out[p] = from_pixels(v);
+            out[p] = from_pixels(value(l as usize, y, v));
         }
     }
     (out, report)

@@ -221,12 +221,12 @@ pub(super) struct Walk<'a> {
 }
 
 impl Walk<'_> {
-    /// Calls `f(region, disparity row, trusted row, (first, last))` for
-    /// every run of a region within the tables, in raster order.
+    /// Calls `f(region, row y, disparity row, trusted row, (first, last))`
+    /// for every run of a region within the tables, in raster order.
     pub(super) fn for_each_run<'d>(
         &self,
         disp: &ImageView<'d, DisparityCell>,
-        mut f: impl FnMut(usize, &'d [DisparityCell], &[u32], (usize, usize)),
+        mut f: impl FnMut(usize, usize, &'d [DisparityCell], &[u32], (usize, usize)),
     ) {
         let mut i = 0usize;
         let s = self.stride.max(1);
@@ -237,22 +237,22 @@ impl Walk<'_> {
                 let l = usize::from(get16(self.table, i));
                 i += 1;
                 if l != 0 && l < self.cap {
-                    f(l, drow, trow, (s as usize, e as usize));
+                    f(l, y, drow, trow, (s as usize, e as usize));
                 }
             });
         }
     }
 
-    /// Calls `f(region, disparity row, trusted x)` for every run of a
-    /// region within the tables, in raster order, with the trusted cells
+    /// Calls `f(region, row y, disparity row, trusted x)` for every run of
+    /// a region within the tables, in raster order, with the trusted cells
     /// of the run.
     pub(super) fn for_each_trusted<'d>(
         &self,
         disp: &ImageView<'d, DisparityCell>,
-        mut f: impl FnMut(usize, &'d [DisparityCell], SetBits<'_>),
+        mut f: impl FnMut(usize, usize, &'d [DisparityCell], SetBits<'_>),
     ) {
-        self.for_each_run(disp, |l, drow, trow, (s, e)| {
-            f(l, drow, SetBits::new(trow, s, e));
+        self.for_each_run(disp, |l, y, drow, trow, (s, e)| {
+            f(l, y, drow, SetBits::new(trow, s, e));
         });
     }
 }
