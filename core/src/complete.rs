@@ -144,6 +144,11 @@ pub const fn region_table_len(width: usize, height: usize) -> usize {
 /// synthetic scenes have a handful of regions and Aloe at 160 px about 600.
 pub const DEFAULT_REGION_CAPACITY: usize = 1024;
 
+/// Entries of the pipeline's tilt table ([`RegionTables::tilt`]): regions
+/// labelled past it take their median alone. The regions that tilt are
+/// the few tall ones, labelled early (raster order of their first cell).
+pub const PIPELINE_TILT_REGIONS: usize = 128;
+
 /// Bytes of [`complete_runs`]'s inputs and scratch beyond the disparity
 /// and C for a `width` x `height` frame with a full run table and region
 /// tables of `regions` entries: the [`Tone`] map, the edge and trusted bit
@@ -236,8 +241,19 @@ impl Tilt {
     /// The whole px of row `y` for a region of median `median` px:
     /// `b(y)` rounded half up, within 0..=255.
     pub fn at(&self, median: u8, y: usize) -> u8 {
-        let y = i128::try_from(y).unwrap_or(i128::MAX >> 20) << 16;
-        let d = i128::from(self.slope).saturating_mul(y.saturating_sub(i128::from(self.ybar)));
+        // In i64 when the product fits (any frame under 2^15 rows with a
+        // slope under 2^16 px a row), else in i128: the same integers.
+        let dy = i64::try_from(y)
+            .ok()
+            .and_then(|y| y.checked_mul(1 << 16))
+            .and_then(|y| y.checked_sub(self.ybar));
+        let d = match dy.and_then(|dy| self.slope.checked_mul(dy)) {
+            Some(d) => i128::from(d),
+            None => {
+                let y = i128::try_from(y).unwrap_or(i128::MAX >> 20) << 16;
+                i128::from(self.slope).saturating_mul(y.saturating_sub(i128::from(self.ybar)))
+            }
+        };
         let b = (i128::from(median) << 8).saturating_add(d >> 32);
         u8::try_from(((b + 128) >> 8).clamp(0, 255)).unwrap_or(u8::MAX)
     }

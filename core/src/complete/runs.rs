@@ -183,13 +183,22 @@ pub fn complete_runs<C: SideColour>(
         runs_unlabelled: u32::try_from(runs.saturating_sub(run_cap)).unwrap_or(u32::MAX),
         ..CompleteReport::default()
     };
-    tables.total.fill(0);
-    tables.lo.fill(u8::MAX);
-    tables.hi.fill(0);
+    // Only the labels in use (0..=regions, within the capacity) are set
+    // and read: the rest of the tables may hold anything.
+    let used = usize::from(regions).saturating_add(1).min(cap);
+    let first = |n: usize| ..n.min(used);
+    if let Some(t) = tables.total.get_mut(first(usize::MAX)) {
+        t.fill(0);
+    }
+    if let Some(t) = tables.lo.get_mut(first(usize::MAX)) {
+        t.fill(u8::MAX);
+    }
+    if let Some(t) = tables.hi.get_mut(first(usize::MAX)) {
+        t.fill(0);
+    }
     let tilting = params.tilt_rows > 0;
-    let regions_used = usize::from(regions).saturating_add(1);
     if tilting {
-        if let Some(t) = tables.tilt.get_mut(..regions_used.min(tables.tilt.len())) {
+        if let Some(t) = tables.tilt.get_mut(first(tables.tilt.len())) {
             t.fill(RegionSums::default());
         }
     }
@@ -241,10 +250,10 @@ pub fn complete_runs<C: SideColour>(
                         s.first = u32::try_from(y).unwrap_or(u32::MAX);
                     }
                     s.last = u32::try_from(y).unwrap_or(u32::MAX);
-                    s.sy = s.sy.saturating_add(y64 * n64);
-                    s.syy = s.syy.saturating_add(y64 * y64 * n64);
-                    s.sb = s.sb.saturating_add(b64);
-                    s.syb = s.syb.saturating_add(y64 * b64);
+                    s.sy = s.sy.wrapping_add(y64 * n64);
+                    s.syy = s.syy.wrapping_add(y64 * y64 * n64);
+                    s.sb = s.sb.wrapping_add(b64);
+                    s.syb = s.syb.wrapping_add(y64 * b64);
                 }
             }
             *t += n;
@@ -257,13 +266,16 @@ pub fn complete_runs<C: SideColour>(
         .iter()
         .zip(tables.hi.iter())
         .zip(tables.total.iter())
+        .take(used)
         .filter(|&(_, &t)| t > 0)
         .map(|((&lo, &hi), _)| hi.saturating_sub(lo))
         .max()
         .unwrap_or(0);
     let passes = 8 - widest.leading_zeros();
     for _ in 0..passes {
-        tables.below.fill(0);
+        if let Some(b) = tables.below.get_mut(..used) {
+            b.fill(0);
+        }
         let (lo, hi, below) = (&*tables.lo, &*tables.hi, &mut *tables.below);
         walk.for_each_run(&disp, |l, _, drow, trow, span| {
             let (Some(&a), Some(&b), Some(c)) = (lo.get(l), hi.get(l), below.get_mut(l)) else {
@@ -283,6 +295,7 @@ pub fn complete_runs<C: SideColour>(
             .zip(tables.hi.iter_mut())
             .zip(tables.below.iter())
             .zip(tables.total.iter())
+            .take(used)
         {
             if total == 0 {
                 continue;
@@ -300,8 +313,8 @@ pub fn complete_runs<C: SideColour>(
         tables
             .total
             .iter()
+            .take(used)
             .skip(1)
-            .take(usize::from(regions))
             .filter(|&&t| t >= min_trusted)
             .count(),
     )
@@ -318,7 +331,7 @@ pub fn complete_runs<C: SideColour>(
             .enumerate()
             .skip(1)
         {
-            if n_tilts >= MAX_TILTED || l > usize::from(regions) {
+            if n_tilts >= MAX_TILTED || l >= used {
                 break;
             }
             if t < min_trusted {

@@ -7,7 +7,7 @@ use super::{
 };
 use crate::complete::{
     complete_runs, pipeline_run_capacity, run_rows_len, RegionTables, RunBuffers, Tone,
-    DEFAULT_REGION_CAPACITY, LABEL_ROWS,
+    DEFAULT_REGION_CAPACITY, LABEL_ROWS, PIPELINE_TILT_REGIONS,
 };
 use crate::conspicuity::{self, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
@@ -187,7 +187,11 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
             below: s.take(r)?,
             lo: s.take(r)?,
             hi: s.take(r)?,
-            tilt: s.take(if params.complete.tilt_rows > 0 { r } else { 0 })?,
+            tilt: s.take(if params.complete.tilt_rows > 0 {
+                PIPELINE_TILT_REGIONS
+            } else {
+                0
+            })?,
         };
         complete_runs(
             &params.complete,
