@@ -28,6 +28,21 @@
 //!    raster order, first minimum) whose colour is closest to its own, so a
 //!    border cell goes to the side it looks like.
 //!
+//! **Tall regions.** One median is right for a surface facing the camera,
+//! not for the ground, whose disparity grows row by row from the wall's
+//! at the horizon to the nearest at the bottom: its median would put the
+//! horizon's edge cells, and the cells next to anything standing on it,
+//! at the disparity of its middle rows, a line across the frame that
+//! joins objects at that disparity (docs/RECALL.md). A region whose
+//! trusted cells lie at least [`CompleteParams::tilt_rows`] rows apart
+//! (at most [`MAX_TILTED`] a frame, in label order, and within the tilt
+//! table) takes, in row `y`, its median plus its least-squares tilt:
+//! `256·median + ⌊slope·(2^16·y − ybar) / 2^32⌋` bits, rounded to whole
+//! px (round half up, within 0..=255), with the slope and the mean row
+//! from the sums of its trusted cells ([`Tilt`]). Smaller regions keep
+//! the median: fitted to a few rows, a tilt is noise, and the median is
+//! what replaces the halo next to an object's outline.
+//!
 //! A region with fewer than `min_trusted` trusted cells, or beyond the region tables' capacity,
 //! leaves its cells as they were (the report counts skipped regions).
 //! Every step is integer; [`complete_runs`] never panics. It works on bit
