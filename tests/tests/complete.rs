@@ -189,31 +189,25 @@ fn a_tall_region_is_completed_along_its_tilt() {
     let px = |v: &[DisparityCell], x: usize, y: usize| {
         v[y * w + x].get().map(|d| (d.to_bits() + 128) >> 8)
     };
-    let tilted = CompleteParams {
-        tilt_rows: 10,
+    // Trusted rows 2..=15 (row 1 is next to the edge): slope 1/2 px a
+    // row, so along the tilt row 0 is at about 1.5 px and row 3 at 3 px.
+    // With one median per region the horizon and the hole take 6 px, and
+    // so does a region spanning fewer rows than `tilt_rows`.
+    let rows_apart = |tilt_rows| CompleteParams {
+        tilt_rows,
         ..CompleteParams::default()
     };
-    let (out, report) = by_runs(&tilted, &edges, &colour, &disp, w, h, run_table_len(w, h));
-    assert_eq!(report.tilted, 1);
-    // Trusted rows 2..=15 (row 1 is next to the edge): slope 1/2 px a
-    // row, so row 0 is at about 1.5 px and row 3 at 3 px.
-    assert_eq!(px(&out, 4, 0), Some(2), "{:?}", show(&out, w));
-    assert_eq!(px(&out, 5, 3), Some(3), "{:?}", show(&out, w));
-    let (rf_out, rf_report) = rf::complete(&tilted, &edges, &colour, &disp, w, h);
-    assert_eq!((&out, report), (&rf_out, rf_report));
-    // One median per region: the horizon and the hole take 6 px; a region
-    // spanning fewer rows than `tilt_rows` does too.
-    for params in [
-        CompleteParams::MEDIAN,
-        CompleteParams {
-            tilt_rows: 15,
-            ..CompleteParams::default()
-        },
+    for (params, tilted, horizon, hole) in [
+        (rows_apart(10), 1, 2, 3),
+        (CompleteParams::MEDIAN, 0, 6, 6),
+        (rows_apart(15), 0, 6, 6),
     ] {
-        let (flat, report) = by_runs(&params, &edges, &colour, &disp, w, h, run_table_len(w, h));
-        assert_eq!(report.tilted, 0);
-        assert_eq!(px(&flat, 4, 0), Some(6), "{:?}", show(&flat, w));
-        assert_eq!(px(&flat, 5, 3), Some(6), "{:?}", show(&flat, w));
+        let (out, report) = by_runs(&params, &edges, &colour, &disp, w, h, run_table_len(w, h));
+        assert_eq!(report.tilted, tilted);
+        assert_eq!(px(&out, 4, 0), Some(horizon), "{:?}", show(&out, w));
+        assert_eq!(px(&out, 5, 3), Some(hole), "{:?}", show(&out, w));
+        let (rf_out, rf_report) = rf::complete(&params, &edges, &colour, &disp, w, h);
+        assert_eq!((&out, report), (&rf_out, rf_report));
     }
 }
 
