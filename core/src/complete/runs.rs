@@ -186,19 +186,19 @@ pub fn complete_runs<C: SideColour>(
     // Only the labels in use (0..=regions, within the capacity) are set
     // and read: the rest of the tables may hold anything.
     let used = usize::from(regions).saturating_add(1).min(cap);
-    let first = |n: usize| ..n.min(used);
-    if let Some(t) = tables.total.get_mut(first(usize::MAX)) {
+    if let Some(t) = tables.total.get_mut(..used) {
         t.fill(0);
     }
-    if let Some(t) = tables.lo.get_mut(first(usize::MAX)) {
+    if let Some(t) = tables.lo.get_mut(..used) {
         t.fill(u8::MAX);
     }
-    if let Some(t) = tables.hi.get_mut(first(usize::MAX)) {
+    if let Some(t) = tables.hi.get_mut(..used) {
         t.fill(0);
     }
     let tilting = params.tilt_rows > 0;
     if tilting {
-        if let Some(t) = tables.tilt.get_mut(first(tables.tilt.len())) {
+        let n = used.min(tables.tilt.len());
+        if let Some(t) = tables.tilt.get_mut(..n) {
             t.fill(RegionSums::default());
         }
     }
