@@ -284,6 +284,7 @@ fn params() -> impl Strategy<Value = SegmentParams> {
             0u8..4,
             any::<bool>(),
             proptest::option::of(0u16..1024),
+            prop_oneof![Just(0u16), 0u16..=512],
         ),
     )
         .prop_map(
@@ -294,7 +295,7 @@ fn params() -> impl Strategy<Value = SegmentParams> {
                 on_cells,
                 k,
                 exponent,
-                (ground, min_object, width, aspect, split, rows),
+                (ground, min_object, width, aspect, split, rows, min_slice_radius),
             )| {
                 SegmentParams {
                     disk,
@@ -313,6 +314,7 @@ fn params() -> impl Strategy<Value = SegmentParams> {
                     max_aspect: aspect,
                     split_interiors: split,
                     row_background: rows,
+                    min_slice_radius,
                     ..SegmentParams::default()
                 }
             },

@@ -497,6 +497,13 @@ fn bad_filter_and_ground_parameters_are_typed_errors() {
         ),
         (
             SegmentParams {
+                min_slice_radius: sg::MAX_GROUND_BAND + 1,
+                ..p
+            },
+            "min_slice_radius",
+        ),
+        (
+            SegmentParams {
                 min_object: Ratio::new(2, 1),
                 ..p
             },

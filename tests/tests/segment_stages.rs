@@ -243,8 +243,12 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
     #[test]
-    fn statistics_match_the_float_reference((d, c, w, h) in disparity_scene(32), exponent in 0u8..3) {
-        let params = SegmentParams { exponent, ..Default::default() };
+    fn statistics_match_the_float_reference(
+        (d, c, w, h) in disparity_scene(32),
+        exponent in 0u8..3,
+        min_slice_radius in prop_oneof![Just(0u16), 0u16..=1024],
+    ) {
+        let params = SegmentParams { exponent, min_slice_radius, ..Default::default() };
         let dv = ImageView::packed(&d, w, h).unwrap();
         let df = to_f(&d);
         let fs = sg::selected_stats(&params, &dv);
@@ -287,6 +291,42 @@ proptest! {
         let (a, b) = (sg::select_slice(&counts, exponent), rf::select_slice(&rcounts, exponent));
         prop_assert_eq!(a.map(|s| (s.delta, s.cells, s.score as f64)), b);
     }
+}
+
+/// The slice is `δ ± σ_S · 2/5`, widened to `min_slice_radius`: an object
+/// whose cells lie on the whole-px plane below δ (as completed cells do)
+/// falls outside the paper's ±0.8 px but inside ±1 px.
+#[test]
+fn slice_is_at_least_the_least_radius() {
+    const ONE: i64 = 1 << sg::STAT_FRAC_BITS;
+    let narrow = sg::SelectedStats {
+        count: 100,
+        mean: 8 << sg::STAT_FRAC_BITS,
+        sigma: 2 << sg::STAT_FRAC_BITS,
+    };
+    let paper = SegmentParams::default();
+    let r = sg::slice_range(&paper, &narrow, 9);
+    // 2 px · 2/5 = 0.8 px = 3276.8 / 4096, rounded half up.
+    assert_eq!((r.low, r.high), (9 * ONE - 3277, 9 * ONE + 3277));
+    assert!(!r.contains_bits(8 * 256));
+    let floor = SegmentParams {
+        min_slice_radius: 256,
+        ..paper
+    };
+    let r = sg::slice_range(&floor, &narrow, 9);
+    assert_eq!((r.low, r.high), (8 * ONE, 10 * ONE));
+    assert!(r.contains_bits(8 * 256) && r.contains_bits(10 * 256));
+    assert!(!r.contains_bits(8 * 256 - 1) && !r.contains_bits(10 * 256 + 1));
+    // A wider σ_S is left alone.
+    let wide = sg::SelectedStats {
+        sigma: 5 << sg::STAT_FRAC_BITS,
+        ..narrow
+    };
+    assert_eq!(
+        sg::slice_range(&floor, &wide, 9),
+        sg::slice_range(&paper, &wide, 9)
+    );
+    assert_eq!(sg::slice_radius(&paper, &wide), 2 << sg::STAT_FRAC_BITS);
 }
 
 // ---------------------------------------------------------------------------

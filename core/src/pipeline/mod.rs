@@ -138,9 +138,10 @@ impl PipelineParams {
     /// nearer than their row's background foreground too
     /// ([`SegmentParams::row_background`]); and touching objects of one
     /// slice split along their contours
-    /// ([`SegmentParams::split_interiors`]); and tall regions completed
-    /// along their tilt ([`CompleteParams::tilt_rows`]; docs/PIPELINE.md,
-    /// "Choices").
+    /// ([`SegmentParams::split_interiors`]); with an object's slice at
+    /// least ±1 px wide ([`SegmentParams::min_slice_radius`]); and tall
+    /// regions completed along their tilt ([`CompleteParams::tilt_rows`];
+    /// docs/PIPELINE.md, "Choices").
     pub const DEFAULT: Self = Self {
         complete: CompleteParams::DEFAULT,
         segment: SegmentParams {
@@ -153,6 +154,7 @@ impl PipelineParams {
             max_aspect: 4,
             split_interiors: true,
             row_background: Some(2 * 256),
+            min_slice_radius: 256,
             ..Self::PAPER.segment
         },
         ..Self::PAPER

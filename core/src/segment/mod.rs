@@ -183,6 +183,13 @@ pub struct SegmentParams {
     /// of one slice whose contours touch) are each an object of their own.
     /// `false`: the paper.
     pub split_interiors: bool,
+    /// Least slice radius r, disparity bits (1/256 px): the slice is
+    /// `[δ − r, δ + r]` with r at least this. δ is chosen from the counts
+    /// of the whole-px planes δ − 1 to δ + 1 ([`slice_cells`]) and the
+    /// completion writes whole px, so a slice narrower than ±1 px can
+    /// leave out cells counted for it. 0 (the paper): r = σ_S · `range`
+    /// alone. At most [`MAX_GROUND_BAND`].
+    pub min_slice_radius: u16,
 }
 
 /// Searches [`segment`] runs per object of `max_objects` at most, when
@@ -221,6 +228,7 @@ impl SegmentParams {
         max_object_width: Ratio::new(1, 1),
         max_aspect: 0,
         split_interiors: false,
+        min_slice_radius: 0,
     };
 
     /// Checks the parameters.
@@ -262,6 +270,9 @@ impl SegmentParams {
         }
         if self.row_background.is_some_and(|b| b > MAX_GROUND_BAND) {
             return Err(SegmentError::BadParams("row_background"));
+        }
+        if self.min_slice_radius > MAX_GROUND_BAND {
+            return Err(SegmentError::BadParams("min_slice_radius"));
         }
         if self.exponent > 8 {
             return Err(SegmentError::BadParams("exponent"));

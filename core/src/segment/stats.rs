@@ -369,9 +369,12 @@ pub fn select_slice(counts: &SliceCounts, exponent: u8) -> Option<Slice> {
     best
 }
 
-/// r = σ_S · range (the paper's σ_S / 2.5), px · 2^[`STAT_FRAC_BITS`].
+/// r = σ_S · range (the paper's σ_S / 2.5), at least
+/// [`SegmentParams::min_slice_radius`], px · 2^[`STAT_FRAC_BITS`].
 pub fn slice_radius(params: &SegmentParams, stats: &SelectedStats) -> u32 {
-    u32::try_from(mul_ratio(u64::from(stats.sigma), params.range)).unwrap_or(u32::MAX)
+    let r = u32::try_from(mul_ratio(u64::from(stats.sigma), params.range)).unwrap_or(u32::MAX);
+    // Disparity bits are 1/256 px.
+    r.max(u32::from(params.min_slice_radius) << (STAT_FRAC_BITS - 8))
 }
 
 /// The object slice `[δ − r, δ + r]`.

@@ -151,9 +151,10 @@ pub fn select_slice(
     best
 }
 
-/// r = σ_S · range (σ_S / 2.5), px.
+/// r = σ_S · range (σ_S / 2.5), at least `min_slice_radius` / 256, px.
 pub fn slice_radius(params: &SegmentParams, stats: &SelectedStatsF) -> f32 {
-    (f64::from(stats.sigma) * ratio(params.range)) as f32
+    let r = (f64::from(stats.sigma) * ratio(params.range)) as f32;
+    r.max(f32::from(params.min_slice_radius) / 256.0)
 }
 
 fn offsets(disk: Disk) -> Vec<(isize, isize)> {
