@@ -12,7 +12,8 @@
 //!    D_fg rounds to `d−1..=d+1`, and δ = argmax A^C(d)·d^A. The paper
 //!    leaves the exponent A undefined; [`SegmentParams::exponent`] is 1 by
 //!    default (a linear preference for nearer planes). [`slice_range`] and
-//!    [`object_region`]: D_ObjReg keeps `δ − r ≤ D_fg ≤ δ + r`, r = σ_S/2.5.
+//!    [`object_region`]: D_ObjReg keeps `δ − r ≤ D_fg ≤ δ + r`, r = σ_S/2.5
+//!    (at least [`SegmentParams::min_slice_radius`]).
 //! 4. [`object_conspicuity`]: ψ = C where D_ObjReg is ON; [`above_mean`]:
 //!    C_ObjReg = ψ above its mean ψ̄ (by default over the whole object
 //!    region, inactive cells as 0; see [`PsiMean`]).
