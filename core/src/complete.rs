@@ -74,6 +74,11 @@ pub struct CompleteParams {
     /// (module docs, "Tall regions"); 0: every region takes its median
     /// alone. Default 48.
     pub tilt_rows: u16,
+    /// A tall region's tilt is fitted to its trusted cells within this
+    /// many disparity bits (1/256 px) of its median, so that the halo of
+    /// an object before a wall does not tilt the wall (module docs, "Tall
+    /// regions"); `u16::MAX`: every trusted cell. Default 1024 (4 px).
+    pub tilt_band: u16,
 }
 
 impl CompleteParams {
@@ -83,6 +88,7 @@ impl CompleteParams {
         guard: 1,
         min_trusted: 1,
         tilt_rows: 48,
+        tilt_band: 1024,
     };
 
     /// [`CompleteParams::DEFAULT`] with one median for every region, tall

@@ -31,18 +31,31 @@ fn case() -> impl Strategy<
         CompleteParams,
     ),
 > {
-    (1usize..=24, 1usize..=24, 0u8..=3, 0u32..=6, 0u16..=8).prop_flat_map(
-        |(w, h, guard, min_trusted, tilt_rows)| {
+    (
+        1usize..=24,
+        1usize..=24,
+        0u8..=3,
+        0u32..=6,
+        0u16..=8,
+        prop_oneof![Just(u16::MAX), 0u16..=6 * 256],
+    )
+        .prop_flat_map(|(w, h, guard, min_trusted, tilt_rows, tilt_band)| {
             let n = w * h;
             (
                 proptest::collection::vec(0u8..100, n),
                 proptest::collection::vec(0u8..4, n),
                 proptest::collection::vec(proptest::option::weighted(0.8, 0u16..=20 * 256), n),
                 0usize..=w,
-                Just((w, h, guard, min_trusted, tilt_rows)),
+                Just((w, h, guard, min_trusted, tilt_rows, tilt_band)),
             )
                 .prop_map(
-                    |(noise, palette, disp, col, (w, h, guard, min_trusted, tilt_rows))| {
+                    |(
+                        noise,
+                        palette,
+                        disp,
+                        col,
+                        (w, h, guard, min_trusted, tilt_rows, tilt_band),
+                    )| {
                         let edges = noise
                             .iter()
                             .enumerate()
@@ -77,12 +90,12 @@ fn case() -> impl Strategy<
                                 guard,
                                 min_trusted,
                                 tilt_rows,
+                                tilt_band,
                             },
                         )
                     },
                 )
-        },
-    )
+        })
 }
 
 proptest! {
@@ -206,6 +219,43 @@ fn a_tall_region_is_completed_along_its_tilt() {
         assert_eq!(report.tilted, tilted);
         assert_eq!(px(&out, 4, 0), Some(horizon), "{:?}", show(&out, w));
         assert_eq!(px(&out, 5, 3), Some(hole), "{:?}", show(&out, w));
+        let (rf_out, rf_report) = rf::complete(&params, &edges, &colour, &disp, w, h);
+        assert_eq!((&out, report), (&rf_out, rf_report));
+    }
+}
+
+/// A wall at 2 px with an object's halo, 9 px, in its lower left corner:
+/// fitted to every trusted cell its tilt rises towards the halo and fills
+/// the hole in row 13 at 3 px; fitted to the cells within 4 px of its
+/// median (2 px) it stays flat.
+#[test]
+fn a_halo_does_not_tilt_a_wall() {
+    let mut rows: Vec<String> = vec!["|".repeat(12)];
+    for y in 1..16 {
+        let mut r = "2".repeat(12);
+        if y >= 11 {
+            r.replace_range(0..4, "9999");
+        }
+        rows.push(r);
+    }
+    rows[13].replace_range(9..10, ".");
+    let refs: Vec<&str> = rows.iter().map(String::as_str).collect();
+    let (edges, disp, w, h) = parse(&refs);
+    let colour = vec![Luv::default(); w * h];
+    let band = |tilt_band| CompleteParams {
+        tilt_rows: 10,
+        tilt_band,
+        ..CompleteParams::default()
+    };
+    for (params, hole) in [
+        (band(u16::MAX), 3),
+        (band(4 * 256), 2),
+        (CompleteParams::MEDIAN, 2),
+    ] {
+        let (out, report) = by_runs(&params, &edges, &colour, &disp, w, h, run_table_len(w, h));
+        let got = out[13 * w + 9].get().map(|d| (d.to_bits() + 128) >> 8);
+        assert_eq!(got, Some(hole), "{params:?} {:?}", show(&out, w));
+        assert_eq!(report.tilted, u16::from(params.tilt_rows > 0));
         let (rf_out, rf_report) = rf::complete(&params, &edges, &colour, &disp, w, h);
         assert_eq!((&out, report), (&rf_out, rf_report));
     }

@@ -225,16 +225,14 @@ pub fn complete_runs<C: SideColour>(
         ) else {
             return;
         };
-        // Per run in registers: the count, the sum and the least and
-        // greatest ON bits, whose whole px are the run's least and
-        // greatest.
-        let (mut n, mut sum, mut least, mut most) = (0u32, 0u32, u16::MAX, 0u16);
+        // Per run in registers: the count and the least and greatest ON
+        // bits, whose whole px are the run's least and greatest.
+        let (mut n, mut least, mut most) = (0u32, u16::MAX, 0u16);
         for x in xs {
             if let Some(&c) = drow.get(x) {
                 if c.is_on() {
                     let b = c.raw().to_bits();
                     n += 1;
-                    sum = sum.wrapping_add(u32::from(b));
                     least = least.min(b);
                     most = most.max(b);
                 }
@@ -242,18 +240,13 @@ pub fn complete_runs<C: SideColour>(
         }
         if n > 0 {
             if tilting {
+                // The rows, for the tall test; the sums come later, over
+                // the cells near the median.
                 if let Some(s) = tilt.get_mut(l) {
-                    // A run has at most 2^16 cells below 2^16: `sum` is
-                    // exact when the row is narrower than 2^16 px.
-                    let (y64, n64, b64) = (y as u64, u64::from(n), u64::from(sum));
                     if *t == 0 {
                         s.first = u32::try_from(y).unwrap_or(u32::MAX);
                     }
                     s.last = u32::try_from(y).unwrap_or(u32::MAX);
-                    s.sy = s.sy.wrapping_add(y64 * n64);
-                    s.syy = s.syy.wrapping_add(y64 * y64 * n64);
-                    s.sb = s.sb.wrapping_add(b64);
-                    s.syb = s.syb.wrapping_add(y64 * b64);
                 }
             }
             *t += n;
@@ -320,10 +313,14 @@ pub fn complete_runs<C: SideColour>(
     )
     .unwrap_or(u16::MAX);
 
-    // The tall regions' tilts (at most MAX_TILTED, in label order).
-    let mut tilts = [(0usize, Tilt { slope: 0, ybar: 0 }); MAX_TILTED];
-    let mut n_tilts = 0;
+    // The tall regions (at most MAX_TILTED, in label order): their slot
+    // + 1 in `below`, free since the medians, 0 for the other regions.
+    let mut tall = [(0usize, 0u32, RegionSums::default()); MAX_TILTED];
+    let mut n_tall = 0;
     if tilting {
+        if let Some(b) = tables.below.get_mut(..used) {
+            b.fill(0);
+        }
         for (l, (s, &t)) in tables
             .tilt
             .iter()
@@ -331,18 +328,62 @@ pub fn complete_runs<C: SideColour>(
             .enumerate()
             .skip(1)
         {
-            if n_tilts >= MAX_TILTED || l >= used {
+            if n_tall >= MAX_TILTED || l >= used {
                 break;
             }
-            if t < min_trusted {
-                continue;
+            if t >= min_trusted && s.last.saturating_sub(s.first) >= u32::from(params.tilt_rows) {
+                if let (Some(slot), Some(b)) = (tall.get_mut(n_tall), tables.below.get_mut(l)) {
+                    slot.0 = l;
+                    n_tall += 1;
+                    *b = n_tall as u32;
+                }
             }
-            if let (Some(tl), Some(slot)) =
-                (Tilt::of(t, s, params.tilt_rows), tilts.get_mut(n_tilts))
-            {
-                *slot = (l, tl);
-                n_tilts += 1;
+        }
+    }
+    // Their sums over the trusted cells within `tilt_band` of the median.
+    if n_tall > 0 {
+        let (below, lo) = (&*tables.below, &*tables.lo);
+        let band = u32::from(params.tilt_band);
+        walk.for_each_trusted(&disp, |l, y, drow, xs| {
+            let k = below.get(l).copied().unwrap_or(0) as usize;
+            let (Some((_, n_k, s)), Some(&m)) = (tall.get_mut(k.wrapping_sub(1)), lo.get(l)) else {
+                return;
+            };
+            let m = u32::from(m) << 8;
+            // Per run in registers: the count and the sum of the bits.
+            let (mut n, mut sum) = (0u32, 0u32);
+            for x in xs {
+                if let Some(&c) = drow.get(x) {
+                    let b = u32::from(c.raw().to_bits());
+                    if c.is_on() && b.abs_diff(m) <= band {
+                        n += 1;
+                        sum = sum.wrapping_add(b);
+                    }
+                }
             }
+            if n > 0 {
+                // A run has at most 2^16 cells below 2^16: `sum` is exact
+                // when the row is narrower than 2^16 px.
+                let (y64, n64, b64) = (y as u64, u64::from(n), u64::from(sum));
+                if *n_k == 0 {
+                    s.first = u32::try_from(y).unwrap_or(u32::MAX);
+                }
+                s.last = u32::try_from(y).unwrap_or(u32::MAX);
+                *n_k += n;
+                s.sy = s.sy.wrapping_add(y64 * n64);
+                s.syy = s.syy.wrapping_add(y64 * y64 * n64);
+                s.sb = s.sb.wrapping_add(b64);
+                s.syb = s.syb.wrapping_add(y64 * b64);
+            }
+        });
+    }
+    // Their tilts: those whose cells near the median span two rows or more.
+    let mut tilts = [(0usize, Tilt { slope: 0, ybar: 0 }); MAX_TILTED];
+    let mut n_tilts = 0;
+    for &(l, n, ref s) in tall.iter().take(n_tall) {
+        if let (Some(tl), Some(slot)) = (Tilt::of(n, s, 1), tilts.get_mut(n_tilts)) {
+            *slot = (l, tl);
+            n_tilts += 1;
         }
     }
     let tilts = tilts.get(..n_tilts).unwrap_or(&[]);

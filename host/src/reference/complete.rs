@@ -87,21 +87,36 @@ pub fn complete(
         })
         .collect();
     // Tall regions (trusted rows at least `tilt_rows` apart), the first
-    // MAX_TILTED with a median in label order: the least-squares slope
-    // and the mean row, Q16, floor divisions.
+    // MAX_TILTED with a median in label order; each fitted to its trusted
+    // cells within `tilt_band` bits of its median, when they span two rows
+    // or more: the least-squares slope and the mean row, Q16, floor
+    // divisions.
     let mut tilt: Vec<Option<(i128, i128)>> = vec![None; regions as usize + 1];
+    let mut tall = 0;
     let mut tilted = 0;
     for l in 1..=regions as usize {
-        if params.tilt_rows == 0 || tilted >= protogist::complete::MAX_TILTED {
+        if params.tilt_rows == 0 || tall >= protogist::complete::MAX_TILTED {
             break;
         }
         let c = &cells[l];
-        if median[l].is_none() || c.is_empty() {
+        let Some(m) = median[l] else { continue };
+        if c.is_empty() {
             continue;
         }
         let rows = c.iter().map(|&(y, _)| y);
         let span = rows.clone().max().unwrap_or(0) - rows.min().unwrap_or(0);
         if span < i128::from(params.tilt_rows) {
+            continue;
+        }
+        tall += 1;
+        let m = i128::from(m) << 8;
+        let c: Vec<(i128, i128)> = c
+            .iter()
+            .copied()
+            .filter(|&(_, b)| (b - m).abs() <= i128::from(params.tilt_band))
+            .collect();
+        let rows = c.iter().map(|&(y, _)| y);
+        if rows.clone().max().unwrap_or(0) - rows.min().unwrap_or(0) < 1 {
             continue;
         }
         let n = c.len() as i128;
