@@ -201,6 +201,11 @@ pub struct RegionTables<'a> {
     pub tilt: &'a mut [RegionSums],
 }
 
+/// A tall region's tilt is fitted to the rows `y` with `y %
+/// TILT_ROW_STEP == 0`: a line needs few rows, and a pass over every
+/// trusted cell of the frame would not fit the board's budget.
+pub const TILT_ROW_STEP: usize = 4;
+
 /// One region's sums over its trusted cells, for its tilt in y: `y` is the
 /// row, `b` the cell's `U8F8` bits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]

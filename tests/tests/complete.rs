@@ -202,16 +202,18 @@ fn a_tall_region_is_completed_along_its_tilt() {
     let px = |v: &[DisparityCell], x: usize, y: usize| {
         v[y * w + x].get().map(|d| (d.to_bits() + 128) >> 8)
     };
-    // Trusted rows 2..=15 (row 1 is next to the edge): slope 1/2 px a
-    // row, so along the tilt row 0 is at about 1.5 px and row 3 at 3 px.
-    // With one median per region the horizon and the hole take 6 px, and
-    // so does a region spanning fewer rows than `tilt_rows`.
+    // Trusted rows 2..=15 (row 1 is next to the edge); the tilt is fitted
+    // to rows 4, 8 and 12 (every TILT_ROW_STEP-th): slope 1/2 px a row
+    // through the median, 6 px, at their mean row 8, so row 0 is at 2 px
+    // and row 3 at 3.5, rounded up to 4. With one median per region the
+    // horizon and the hole take 6 px, and so does a region spanning fewer
+    // rows than `tilt_rows`.
     let rows_apart = |tilt_rows| CompleteParams {
         tilt_rows,
         ..CompleteParams::default()
     };
     for (params, tilted, horizon, hole) in [
-        (rows_apart(10), 1, 2, 3),
+        (rows_apart(10), 1, 2, 4),
         (CompleteParams::MEDIAN, 0, 6, 6),
         (rows_apart(15), 0, 6, 6),
     ] {

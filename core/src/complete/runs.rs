@@ -25,7 +25,7 @@
 
 use super::{
     at_most_limit, whole_bits, CompleteError, CompleteParams, CompleteReport, RegionSums,
-    RegionTables, Tilt, MAX_TILTED,
+    RegionTables, Tilt, MAX_TILTED, TILT_ROW_STEP,
 };
 use crate::conspicuity::{EdgeCell, Luv};
 use crate::disparity::{from_pixels, DisparityCell};
@@ -340,11 +340,15 @@ pub fn complete_runs<C: SideColour>(
             }
         }
     }
-    // Their sums over the trusted cells within `tilt_band` of the median.
+    // Their sums over the trusted cells within `tilt_band` of the median,
+    // in every TILT_ROW_STEP-th row.
     if n_tall > 0 {
         let (below, lo) = (&*tables.below, &*tables.lo);
         let band = u32::from(params.tilt_band);
         walk.for_each_trusted(&disp, |l, y, drow, xs| {
+            if y % TILT_ROW_STEP != 0 {
+                return;
+            }
             let k = below.get(l).copied().unwrap_or(0) as usize;
             let (Some((_, n_k, s)), Some(&m)) = (tall.get_mut(k.wrapping_sub(1)), lo.get(l)) else {
                 return;

@@ -88,8 +88,8 @@ pub fn complete(
         .collect();
     // Tall regions (trusted rows at least `tilt_rows` apart), the first
     // MAX_TILTED with a median in label order; each fitted to its trusted
-    // cells within `tilt_band` bits of its median, when they span two rows
-    // or more: the least-squares slope and the mean row, Q16, floor
+    // cells within `tilt_band` bits of its median in every TILT_ROW_STEP-th
+    // row, when they span two such rows or more: the least-squares slope and the mean row, Q16, floor
     // divisions.
     let mut tilt: Vec<Option<(i128, i128)>> = vec![None; regions as usize + 1];
     let mut tall = 0;
@@ -113,7 +113,10 @@ pub fn complete(
         let c: Vec<(i128, i128)> = c
             .iter()
             .copied()
-            .filter(|&(_, b)| (b - m).abs() <= i128::from(params.tilt_band))
+            .filter(|&(y, b)| {
+                y % protogist::complete::TILT_ROW_STEP as i128 == 0
+                    && (b - m).abs() <= i128::from(params.tilt_band)
+            })
             .collect();
         let rows = c.iter().map(|&(y, _)| y);
         if rows.clone().max().unwrap_or(0) - rows.min().unwrap_or(0) < 1 {
