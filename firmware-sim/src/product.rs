@@ -439,7 +439,7 @@ impl fmt::Display for Fixed {
 ///
 /// ```text
 /// product 160x120 K=4 searches=4 objects=1
-/// object 0 box=64,26,53x69 area=2769 centroid=90.00,60.00 delta=11 slice=9.63..12.37 score=2596 class=04_circle cos=0.9595 verdict=known
+/// object 0 box=64,26,53x69 area=2769 centroid=90.00,60.00 delta=11 slice=9.63..12.37 score=2596 class=04_circle cos=0.9554 verdict=known
 /// objects-checksum 160x120 0x1234abcd
 /// ```
 ///
