@@ -39,9 +39,13 @@
 //! table) takes, in row `y`, its median plus its least-squares tilt:
 //! `256·median + ⌊slope·(2^16·y − ybar) / 2^32⌋` bits, rounded to whole
 //! px (round half up, within 0..=255), with the slope and the mean row
-//! from the sums of its trusted cells ([`Tilt`]). Smaller regions keep
-//! the median: fitted to a few rows, a tilt is noise, and the median is
-//! what replaces the halo next to an object's outline.
+//! from the sums of its trusted cells ([`Tilt`]) within
+//! [`CompleteParams::tilt_band`] of its median, in every
+//! [`TILT_ROW_STEP`]-th row; when those lie in one row, the median alone.
+//! The band keeps the halo of an object before a wall, far from the
+//! wall's median, from tilting the wall. Smaller regions keep the median:
+//! fitted to a few rows, a tilt is noise, and the median is what replaces
+//! the halo next to an object's outline.
 //!
 //! A region with fewer than `min_trusted` trusted cells, or beyond the region tables' capacity,
 //! leaves its cells as they were (the report counts skipped regions).
@@ -195,9 +199,11 @@ pub struct RegionTables<'a> {
     pub lo: &'a mut [u8],
     /// Bisection upper bound.
     pub hi: &'a mut [u8],
-    /// The sums of the tilt ([`CompleteParams::tilt_rows`]); regions at or
-    /// past its length take their median alone. May be empty when
-    /// `tilt_rows` is 0.
+    /// Each region's first and last trusted rows, for the tall test
+    /// ([`CompleteParams::tilt_rows`]; the tall regions' sums are taken in
+    /// a later pass, in a table of [`MAX_TILTED`] on the stack, so only
+    /// `first` and `last` are used here); regions at or past its length
+    /// take their median alone. May be empty when `tilt_rows` is 0.
     pub tilt: &'a mut [RegionSums],
 }
 
@@ -206,8 +212,10 @@ pub struct RegionTables<'a> {
 /// trusted cell of the frame would not fit the board's budget.
 pub const TILT_ROW_STEP: usize = 4;
 
-/// One region's sums over its trusted cells, for its tilt in y: `y` is the
-/// row, `b` the cell's `U8F8` bits.
+/// One region's sums over its trusted cells within
+/// [`CompleteParams::tilt_band`] of its median, in every
+/// [`TILT_ROW_STEP`]-th row, for its tilt in y: `y` is the row, `b` the
+/// cell's `U8F8` bits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct RegionSums {

@@ -140,8 +140,9 @@ impl PipelineParams {
     /// slice split along their contours
     /// ([`SegmentParams::split_interiors`]); with an object's slice at
     /// least ±1 px wide ([`SegmentParams::min_slice_radius`]); and tall
-    /// regions completed along their tilt ([`CompleteParams::tilt_rows`];
-    /// docs/PIPELINE.md, "Choices").
+    /// regions completed along their tilt ([`CompleteParams::tilt_rows`],
+    /// fitted near their median, [`CompleteParams::tilt_band`];
+    /// docs/CHOICES.md).
     pub const DEFAULT: Self = Self {
         complete: CompleteParams::DEFAULT,
         segment: SegmentParams {
