@@ -201,10 +201,20 @@ pub struct RegionTables<'a> {
     pub hi: &'a mut [u8],
     /// Each region's first and last trusted rows, for the tall test
     /// ([`CompleteParams::tilt_rows`]; the tall regions' sums are taken in
-    /// a later pass, in a table of [`MAX_TILTED`] on the stack, so only
-    /// `first` and `last` are used here); regions at or past its length
-    /// take their median alone. May be empty when `tilt_rows` is 0.
-    pub tilt: &'a mut [RegionSums],
+    /// a later pass, in a table of [`MAX_TILTED`] on the stack); regions
+    /// at or past its length take their median alone. May be empty when
+    /// `tilt_rows` is 0.
+    pub tilt: &'a mut [RowSpan],
+}
+
+/// The first and last rows of a region's trusted cells.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct RowSpan {
+    /// The first row.
+    pub first: u32,
+    /// The last row.
+    pub last: u32,
 }
 
 /// A tall region's tilt is fitted to the rows `y` with `y %

@@ -12,7 +12,7 @@
 
 use core::hint::black_box;
 
-use crate::pg::complete::{complete_runs, CompleteParams, RegionSums, RegionTables, RunBuffers};
+use crate::pg::complete::{complete_runs, CompleteParams, RegionTables, RowSpan, RunBuffers};
 use crate::pg::conspicuity::{edge_conspicuity, EdgeBuffers, EdgeCell, EdgeParams, Luv, LuvTables};
 use crate::pg::disparity::DisparityCell;
 use crate::pg::image::{ImageError, ImageView, ImageViewMut, Rgb8};
@@ -55,8 +55,8 @@ pub struct ProbeBuffers<'a> {
     pub counts: [&'a mut [u32]; 3],
     /// Completion tables (lo, hi).
     pub bounds: [&'a mut [u8]; 2],
-    /// The completion's tilt sums.
-    pub sums: &'a mut [RegionSums],
+    /// The completion's row spans, for its tilt.
+    pub spans: &'a mut [RowSpan],
     /// Shape: the u8 mask.
     pub mask: &'a mut [u8],
     /// Classifier scratch: input, hidden, output.
@@ -99,7 +99,7 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
         labels: [labels, parent],
         counts: [area, total, below],
         bounds: [lo, hi],
-        sums,
+        spans,
         mask,
         mlp: mut scratch,
         ranked,
@@ -155,7 +155,7 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
             below: &mut *below,
             lo: &mut *lo,
             hi: &mut *hi,
-            tilt: &mut *sums,
+            tilt: &mut *spans,
         };
         let params = black_box(CompleteParams::default());
         let r = complete_runs(&params, e, &c, &mut d, &mut bufs, &mut t);

@@ -552,7 +552,7 @@ pub fn run_complete(
     protogist::complete::CompleteReport,
 )> {
     use protogist::complete::{
-        complete_runs, region_table_len, run_rows_len, run_table_len, RegionSums, RegionTables,
+        complete_runs, region_table_len, run_rows_len, run_table_len, RegionTables, RowSpan,
         RunBuffers, Tone, LABEL_ROWS,
     };
     use protogist::segment::bit_map_len;
@@ -571,13 +571,13 @@ pub fn run_complete(
     let n = region_table_len(w, h);
     let (mut total, mut below, mut lo, mut hi) =
         (vec![0u32; n], vec![0u32; n], vec![0u8; n], vec![0u8; n]);
-    let mut sums = vec![RegionSums::default(); n];
+    let mut spans = vec![RowSpan::default(); n];
     let mut tables = RegionTables {
         total: &mut total,
         below: &mut below,
         lo: &mut lo,
         hi: &mut hi,
-        tilt: &mut sums,
+        tilt: &mut spans,
     };
     let mut out = disparity.to_vec();
     let report = complete_runs(

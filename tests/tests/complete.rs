@@ -5,7 +5,7 @@
 use proptest::prelude::*;
 use protogist::complete::{
     complete_runs, region_table_len, run_rows_len, run_table_len, CompleteError, CompleteParams,
-    CompleteReport, RegionSums, RegionTables, RunBuffers, SideColour, Tone, LABEL_ROWS,
+    CompleteReport, RegionTables, RowSpan, RunBuffers, SideColour, Tone, LABEL_ROWS,
 };
 use protogist::conspicuity::{Conspicuity, EdgeCell, Luv};
 use protogist::disparity::{from_pixels, Disparity, DisparityCell};
@@ -158,7 +158,7 @@ fn try_by_runs<C: SideColour>(
         vec![0u8; regions],
         vec![0u8; regions],
     );
-    let mut sums = vec![RegionSums::default(); regions];
+    let mut spans = vec![RowSpan::default(); regions];
     let mut out = disp.to_vec();
     let report = complete_runs(
         params,
@@ -177,7 +177,7 @@ fn try_by_runs<C: SideColour>(
             below: &mut below,
             lo: &mut lo,
             hi: &mut hi,
-            tilt: &mut sums,
+            tilt: &mut spans,
         },
     )?;
     Ok((out, report))

@@ -25,7 +25,7 @@
 
 use super::{
     at_most_limit, whole_bits, CompleteError, CompleteParams, CompleteReport, RegionSums,
-    RegionTables, Tilt, MAX_TILTED, TILT_ROW_STEP,
+    RegionTables, RowSpan, Tilt, MAX_TILTED, TILT_ROW_STEP,
 };
 use crate::conspicuity::{EdgeCell, Luv};
 use crate::disparity::{from_pixels, DisparityCell};
@@ -199,7 +199,7 @@ pub fn complete_runs<C: SideColour>(
     if tilting {
         let n = used.min(tables.tilt.len());
         if let Some(t) = tables.tilt.get_mut(..n) {
-            t.fill(RegionSums::default());
+            t.fill(RowSpan::default());
         }
     }
 

@@ -17,7 +17,7 @@
 use super::arena::bytes;
 use super::PipelineParams;
 use crate::complete::{
-    pipeline_run_capacity, run_rows_len, RegionSums, Tone, DEFAULT_REGION_CAPACITY, LABEL_ROWS,
+    pipeline_run_capacity, run_rows_len, RowSpan, Tone, DEFAULT_REGION_CAPACITY, LABEL_ROWS,
     PIPELINE_TILT_REGIONS,
 };
 use crate::conspicuity::{stream_scratch_len, EdgeCell, Luv};
@@ -95,7 +95,7 @@ pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) 
         + 2 * bytes(regions, 4)
         + 2 * bytes(regions, 1)
         + if params.complete.tilt_rows > 0 {
-            bytes(PIPELINE_TILT_REGIONS, core::mem::size_of::<RegionSums>())
+            bytes(PIPELINE_TILT_REGIONS, core::mem::size_of::<RowSpan>())
         } else {
             0
         }

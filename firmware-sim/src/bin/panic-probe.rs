@@ -110,17 +110,10 @@ macro_rules! buffers {
                 $alloc!(u32, REGIONS, 0u32),
             ],
             bounds: [$alloc!(u8, REGIONS, 0u8), $alloc!(u8, REGIONS, 0u8)],
-            sums: $alloc!(
-                firmware_sim::pg::complete::RegionSums,
+            spans: $alloc!(
+                firmware_sim::pg::complete::RowSpan,
                 REGIONS,
-                firmware_sim::pg::complete::RegionSums {
-                    sy: 0,
-                    syy: 0,
-                    sb: 0,
-                    syb: 0,
-                    first: 0,
-                    last: 0
-                }
+                firmware_sim::pg::complete::RowSpan { first: 0, last: 0 }
             ),
             mask: $alloc!(u8, N, 0u8),
             mlp: mlp::Scratch {
