@@ -50,12 +50,14 @@ pub const SHARED_WORDS: usize = pipeline::shared_words(WIDTH, HEIGHT, &PARAMS);
 /// `u16`s of a captured RGB565 pair at [`WIDTH`] x [`HEIGHT`].
 pub const FRAME_LEN: usize = pair_len(WIDTH, HEIGHT);
 
-/// The coarse-to-fine engine's decoder tables, level 0 first
-/// (`data/dem_c2f_l{0,1,2}.bin`).
+/// The coarse-to-fine engine's decoder tables at the pipeline's point
+/// (`half-narrow`: kernels of radius 2), level 0 first
+/// (`data/dem_c2f_narrow_l{0,1,2}.bin`, written by `protogist train-dem
+/// --levels 1 --max-disp 31 | 16 | 8 --radius 2`).
 pub const TABLES: [&[u8]; 3] = [
-    include_bytes!("../data/dem_c2f_l0.bin"),
-    include_bytes!("../data/dem_c2f_l1.bin"),
-    include_bytes!("../data/dem_c2f_l2.bin"),
+    include_bytes!("../data/dem_c2f_narrow_l0.bin"),
+    include_bytes!("../data/dem_c2f_narrow_l1.bin"),
+    include_bytes!("../data/dem_c2f_narrow_l2.bin"),
 ];
 /// The shipped classifier (`host/data/shapes_model.bin`).
 pub const MODEL: &[u8] = include_bytes!("../../host/data/shapes_model.bin");

@@ -6,7 +6,7 @@
 //! protogist conspicuity --image FILE --out DIR [--width W]
 //! protogist stereo --left L --right R [--gt GT --gt-scale S] [--width W]
 //!                  [--max-disp D] [--pool R] [--levels L] [--table FILE] [--json] --out DIR
-//! protogist train-dem --out FILE [--max-disp D --levels L]
+//! protogist train-dem --out FILE [--max-disp D --levels L --radius R]
 //! protogist gen-shapes --out DIR [--classes N --per-class M --seed S --size PX]
 //! protogist gen-rgbd --out DIR [--categories N --instances M --frames F --seed S]
 //! protogist experiment --dataset DIR --out DIR [--hidden H --epochs E]
@@ -102,6 +102,10 @@ pub enum Command {
         /// coarse-to-fine engine).
         #[arg(long, default_value_t = 2)]
         levels: u8,
+        /// Gabor kernel radius, px (7: the design's ⌈3σ⌉; 2: the
+        /// pipeline's `half-narrow` point).
+        #[arg(long, default_value_t = 7)]
+        radius: u8,
     },
     /// Generate seeded binary silhouettes of parametric shapes (PNG, object
     /// white on black), one subfolder per class.
@@ -238,10 +242,12 @@ pub fn run(cli: Cli) -> Result<Summary> {
             out,
             max_disp,
             levels,
+            radius,
         }) => run_train_dem(
             &DemParams {
                 max_disp,
                 levels,
+                radius,
                 ..DemParams::default()
             },
             &out,

@@ -17,9 +17,19 @@ use protogist::pipeline::{
 use protogist::segment::{Detection, SegmentBuffers, STAT_FRAC_BITS};
 use std::time::{Duration, Instant};
 
-/// The decoder tables of [`PipelineParams::DEFAULT`]'s stereo point (32
-/// disparities; levels 0, 1, 2), the ones the firmware carries.
+/// The decoder tables of [`PipelineParams::DEFAULT`]'s stereo point
+/// (`half-narrow`: 32 disparities, kernels of radius 2; levels 0, 1, 2),
+/// the ones the product firmware carries.
 pub const DEFAULT_TABLES: [&[u8]; 3] = [
+    include_bytes!("../../firmware-sim/data/dem_c2f_narrow_l0.bin"),
+    include_bytes!("../../firmware-sim/data/dem_c2f_narrow_l1.bin"),
+    include_bytes!("../../firmware-sim/data/dem_c2f_narrow_l2.bin"),
+];
+
+/// The tables of the points with the design's kernels (radius 7: `full`,
+/// `fast`, `half-low-penalty`, the paper's preset), which the firmware's
+/// stereo bench carries.
+pub const DESIGN_TABLES: [&[u8]; 3] = [
     include_bytes!("../../firmware-sim/data/dem_c2f_l0.bin"),
     include_bytes!("../../firmware-sim/data/dem_c2f_l1.bin"),
     include_bytes!("../../firmware-sim/data/dem_c2f_l2.bin"),
@@ -38,18 +48,15 @@ pub fn default_max_disp(width: usize) -> u8 {
 /// [`HostError`] from training.
 pub fn tables_for(params: &PipelineParams) -> Result<Vec<Vec<u8>>> {
     let s = &params.stereo;
-    let bundled = (0..params.tables()).all(|k| {
-        DEFAULT_TABLES
-            .get(k)
-            .and_then(|b| protogist::stereo::DemTable::parse(b).ok())
-            .is_some_and(|t| t.layout == s.level_params(k).layout())
-    });
-    if bundled {
-        return Ok(DEFAULT_TABLES
-            .iter()
-            .take(params.tables())
-            .map(|b| b.to_vec())
-            .collect());
+    for set in [&DEFAULT_TABLES, &DESIGN_TABLES] {
+        let fits = (0..params.tables()).all(|k| {
+            set.get(k)
+                .and_then(|b| protogist::stereo::DemTable::parse(b).ok())
+                .is_some_and(|t| t.layout == s.level_params(k).layout())
+        });
+        if fits {
+            return Ok(set.iter().take(params.tables()).map(|b| b.to_vec()).collect());
+        }
     }
     // The same mapping as `protogist stereo --engine reference`.
     let reference = params_of(s);

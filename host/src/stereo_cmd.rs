@@ -98,9 +98,16 @@ impl StereoOptions {
 /// `protogist train-dem`: trains for `params` and writes the table.
 ///
 /// # Errors
-/// [`HostError::Stereo`](crate::error::HostError::Stereo) for bad parameters, [`HostError::Io`](crate::error::HostError::Io).
+/// [`HostError::Stereo`](crate::error::HostError::Stereo) for bad parameters, [`HostError::InvalidArgument`](crate::error::HostError::InvalidArgument) for a radius core cannot hold, [`HostError::Io`](crate::error::HostError::Io).
 pub fn run_train_dem(params: &DemParams, out: &Path) -> Result<Summary> {
     params.check()?;
+    let max = protogist::stereo::filters::MAX_RADIUS;
+    if usize::from(params.radius) > max {
+        return Err(crate::error::HostError::InvalidArgument {
+            name: "radius",
+            reason: format!("{} px: core's kernels hold radii 1..={max}", params.radius),
+        });
+    }
     let start = Instant::now();
     let table = DemTable::from_decoder(&dem::train(params));
     let bytes = table.to_bytes();

@@ -454,14 +454,14 @@ pub mod c2f {
 
     /// The decoder tables of every level of `p` (trained once per layout).
     pub fn tables(p: &C2fParams) -> Vec<Vec<u8>> {
-        static CACHE: OnceLock<Mutex<HashMap<u8, Vec<u8>>>> = OnceLock::new();
+        static CACHE: OnceLock<Mutex<HashMap<(u8, u8), Vec<u8>>>> = OnceLock::new();
         let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
         let hp = host_params(p);
         (0..=usize::from(p.coarse))
             .map(|k| {
                 let lp = level_params(&hp, k);
                 let mut c = cache.lock().unwrap();
-                c.entry(lp.max_disp)
+                c.entry((lp.max_disp, lp.radius))
                     .or_insert_with(|| HostTable::from_decoder(&dem::train(&lp)).to_bytes())
                     .clone()
             })

@@ -224,6 +224,32 @@ fn firmware_tables_are_reproduced_by_training() {
     }
 }
 
+/// The product's tables (`half-narrow`, kernels of radius 2) are what
+/// `protogist train-dem --levels 1 --max-disp 31 | 16 | 8 --radius 2`
+/// writes, and differ from the design's.
+#[test]
+fn narrow_tables_are_reproduced_by_training() {
+    let shipped: [&[u8]; 3] = [
+        include_bytes!("../../firmware-sim/data/dem_c2f_narrow_l0.bin"),
+        include_bytes!("../../firmware-sim/data/dem_c2f_narrow_l1.bin"),
+        include_bytes!("../../firmware-sim/data/dem_c2f_narrow_l2.bin"),
+    ];
+    let design: [&[u8]; 3] = [
+        include_bytes!("../../firmware-sim/data/dem_c2f_l0.bin"),
+        include_bytes!("../../firmware-sim/data/dem_c2f_l1.bin"),
+        include_bytes!("../../firmware-sim/data/dem_c2f_l2.bin"),
+    ];
+    let trained = tables(&C2fParams::HALF_NARROW);
+    assert_eq!(trained.len(), 3);
+    for (k, ((t, s), d)) in trained.iter().zip(shipped).zip(design).enumerate() {
+        assert!(
+            t.as_slice() == s,
+            "level {k}: the shipped narrow table differs from training"
+        );
+        assert!(s != d, "level {k}: the narrow table is the design's");
+    }
+}
+
 /// A phase kernel that marks every cell it is given (the refined count is
 /// the row's length), to show that `C2f::<K>::with_kernel` hands the phase
 /// step to the kernel it names and `C2f::new` to the portable one.

@@ -104,19 +104,22 @@ pub struct PipelineParams {
 }
 
 /// The stereo point the pipeline runs by default,
-/// [`C2fParams::HALF_LOW_PENALTY`]: the half-size search, each cell
-/// spread over its 2x2 block, with a low SGM penalty that keeps small
-/// objects' disparity steps (docs/PIPELINE.md, "The stereo point").
-pub const STEREO_DEFAULT: C2fParams = C2fParams::HALF_LOW_PENALTY;
+/// [`C2fParams::HALF_NARROW`]: the half-size search, each cell spread
+/// over its 2x2 block, with a low SGM penalty that keeps small objects'
+/// disparity steps (docs/PIPELINE.md, "The stereo point") and Gabor
+/// kernels of 5 taps, whose disparity spreads less beyond an object's
+/// outline (docs/CHOICES.md, "Narrow filters").
+pub const STEREO_DEFAULT: C2fParams = C2fParams::HALF_NARROW;
 
 impl PipelineParams {
-    /// The paper's settings: [`STEREO_DEFAULT`] with 32 disparities, the
+    /// The paper's settings: [`C2fParams::HALF_LOW_PENALTY`] (the
+    /// design's 15-tap kernels) with 32 disparities, the
     /// paper's conspicuity and figure-ground values (the foreground band
     /// mean + 0.1σ .. mean + 2σ, r = σ/2.5, A = 1), one object, the
     /// model's Δ, and room for classifiers up to 2048 hidden units and 64
     /// classes.
     pub const PAPER: Self = Self {
-        stereo: STEREO_DEFAULT,
+        stereo: C2fParams::HALF_LOW_PENALTY,
         edges: EdgeParams::DEFAULT,
         complete: CompleteParams::MEDIAN,
         segment: SegmentParams::PAPER,
@@ -141,9 +144,10 @@ impl PipelineParams {
     /// ([`SegmentParams::split_interiors`]); with an object's slice at
     /// least ±1 px wide ([`SegmentParams::min_slice_radius`]); and tall
     /// regions completed along their tilt ([`CompleteParams::tilt_rows`],
-    /// fitted near their median, [`CompleteParams::tilt_band`];
-    /// docs/CHOICES.md).
+    /// fitted near their median, [`CompleteParams::tilt_band`]); and the
+    /// stereo's narrow filters ([`STEREO_DEFAULT`]; docs/CHOICES.md).
     pub const DEFAULT: Self = Self {
+        stereo: STEREO_DEFAULT,
         complete: CompleteParams::DEFAULT,
         segment: SegmentParams {
             fg_high: Ratio::new(100, 1),

@@ -101,8 +101,12 @@ impl Gabor {
             *e = libm::exp(-(t * t) / (2.0 * sigma * sigma));
             total += *e;
         }
-        // Largest-remainder rounding: Σ env = 2^14 exactly, every tap
-        // within 1 LSB of its value.
+        // Largest-remainder rounding by mirrored pairs: Σ env = 2^14
+        // exactly, every tap within 1 LSB of its value, and the envelope
+        // even, which the bank's fast path needs (a single remainder to
+        // one tap of a pair would break it). The centre takes one LSB when
+        // the deficit is odd, each pair two, largest remainders first; the
+        // deficit is below `taps`, so the `r` pairs always suffice.
         let one = f64::from(1u32 << KERNEL_FRAC);
         let mut env = [0i32; MAX_TAPS];
         let mut rem = [-1.0f64; MAX_TAPS];
@@ -113,16 +117,25 @@ impl Gabor {
             rem[i] = v - libm::floor(v);
             sum += env[i];
         }
-        while sum < 1 << KERNEL_FRAC {
+        let mut left = (1i32 << KERNEL_FRAC) - sum;
+        if left % 2 == 1 {
+            env[r] += 1;
+            left -= 1;
+        }
+        while left >= 2 {
             let mut best = 0;
-            for i in 0..taps {
+            for i in 1..r {
                 if rem[i] > rem[best] {
                     best = i;
                 }
             }
+            if rem[best] < 0.0 {
+                break;
+            }
             env[best] += 1;
+            env[taps - 1 - best] += 1;
             rem[best] = -1.0;
-            sum += 1;
+            left -= 2;
         }
         let th = f64::from(theta_deg).to_radians();
         let (fx, fy) = (

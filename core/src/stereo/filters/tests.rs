@@ -175,3 +175,34 @@ fn mixed_radii_fall_back_to_the_reference() {
     ];
     assert!(!check(&k, &mut rng));
 }
+
+#[test]
+fn the_envelope_is_even_sums_to_one_and_stays_within_one_lsb() {
+    for r in 1..=MAX_RADIUS as u8 {
+        for lambda in [2.0f32, 4.0, 8.0] {
+            let g = Gabor::new(lambda, 0.56, r, 0.0);
+            let taps = g.taps;
+            assert_eq!(g.env.iter().sum::<i32>(), 1 << KERNEL_FRAC, "r {r} λ {lambda}");
+            let sigma = 0.56 * f64::from(lambda);
+            let f = |i: usize| {
+                let t = i as f64 - f64::from(r);
+                libm::exp(-(t * t) / (2.0 * sigma * sigma))
+            };
+            let total: f64 = (0..taps).map(f).sum();
+            for i in 0..taps {
+                assert_eq!(g.env[i], g.env[taps - 1 - i], "r {r} λ {lambda} tap {i}");
+                let exact = f(i) / total * f64::from(1u32 << KERNEL_FRAC);
+                assert!((f64::from(g.env[i]) - exact).abs() < 1.0, "r {r} λ {lambda} tap {i}");
+            }
+        }
+    }
+}
+
+#[test]
+fn the_narrow_bank_takes_the_fast_path() {
+    let k: [Gabor; 3] = core::array::from_fn(|c| Gabor::new(4.0, 0.56, 2, carrier_deg(c, 3)));
+    let bank = Bank::new(&k);
+    assert!(bank.is_fast());
+    let mut rng = SplitMix64::new(11);
+    assert!(check(&k, &mut rng));
+}
