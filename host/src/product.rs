@@ -55,7 +55,11 @@ pub fn tables_for(params: &PipelineParams) -> Result<Vec<Vec<u8>>> {
                 .is_some_and(|t| t.layout == s.level_params(k).layout())
         });
         if fits {
-            return Ok(set.iter().take(params.tables()).map(|b| b.to_vec()).collect());
+            return Ok(set
+                .iter()
+                .take(params.tables())
+                .map(|b| b.to_vec())
+                .collect());
         }
     }
     // The same mapping as `protogist stereo --engine reference`.

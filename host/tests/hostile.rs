@@ -252,10 +252,7 @@ fn sizes_and_parameters_are_refused_before_any_work() {
         "70000 is over the model blob's limit of 65535",
     );
     assert_one_line_error(
-        &protogist(
-            &["train-dem", "--radius", "8", "--out", s(&out)],
-            cwd,
-        ),
+        &protogist(&["train-dem", "--radius", "8", "--out", s(&out)], cwd),
         "8 px: core's kernels hold radii 1..=7",
     );
     // None of these decoded a frame or trained anything (a generous

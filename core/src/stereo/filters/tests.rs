@@ -182,7 +182,11 @@ fn the_envelope_is_even_sums_to_one_and_stays_within_one_lsb() {
         for lambda in [2.0f32, 4.0, 8.0] {
             let g = Gabor::new(lambda, 0.56, r, 0.0);
             let taps = g.taps;
-            assert_eq!(g.env.iter().sum::<i32>(), 1 << KERNEL_FRAC, "r {r} λ {lambda}");
+            assert_eq!(
+                g.env.iter().sum::<i32>(),
+                1 << KERNEL_FRAC,
+                "r {r} λ {lambda}"
+            );
             let sigma = 0.56 * f64::from(lambda);
             let f = |i: usize| {
                 let t = i as f64 - f64::from(r);
@@ -192,7 +196,10 @@ fn the_envelope_is_even_sums_to_one_and_stays_within_one_lsb() {
             for i in 0..taps {
                 assert_eq!(g.env[i], g.env[taps - 1 - i], "r {r} λ {lambda} tap {i}");
                 let exact = f(i) / total * f64::from(1u32 << KERNEL_FRAC);
-                assert!((f64::from(g.env[i]) - exact).abs() < 1.0, "r {r} λ {lambda} tap {i}");
+                assert!(
+                    (f64::from(g.env[i]) - exact).abs() < 1.0,
+                    "r {r} λ {lambda} tap {i}"
+                );
             }
         }
     }
