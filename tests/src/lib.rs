@@ -452,9 +452,12 @@ pub mod c2f {
         protogist_host::dem_tables::params_of(p)
     }
 
+    /// Trained tables by largest disparity and kernel radius.
+    type TableCache = Mutex<HashMap<(u8, u8), Vec<u8>>>;
+
     /// The decoder tables of every level of `p` (trained once per layout).
     pub fn tables(p: &C2fParams) -> Vec<Vec<u8>> {
-        static CACHE: OnceLock<Mutex<HashMap<(u8, u8), Vec<u8>>>> = OnceLock::new();
+        static CACHE: OnceLock<TableCache> = OnceLock::new();
         let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
         let hp = host_params(p);
         (0..=usize::from(p.coarse))
