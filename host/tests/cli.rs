@@ -121,7 +121,8 @@ fn demo_takes_a_frame_size_and_rejects_zero() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     let left = image::open(dir.join("left.png")).unwrap();
     assert_eq!((left.width(), left.height()), (96, 72));
-    // Below what the stereo engine's coarsest level needs: a clear error.
+    // Below what the stereo engine's coarsest level needs (5 taps at a
+    // quarter of the frame, 20 px): a clear error.
     let small = tmp.path().join("s");
     let out = protogist(
         &[
@@ -129,9 +130,9 @@ fn demo_takes_a_frame_size_and_rejects_zero() {
             "--out",
             small.to_str().unwrap(),
             "--width",
-            "64",
+            "24",
             "--height",
-            "48",
+            "18",
         ],
         tmp.path(),
     );

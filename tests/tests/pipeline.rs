@@ -9,11 +9,8 @@ use protogist::pipeline::{
 };
 use protogist::synth::{render_left, render_mask, render_right, SceneSpec};
 
-const TABLES: [&[u8]; 3] = [
-    include_bytes!("../../firmware-sim/data/dem_c2f_l0.bin"),
-    include_bytes!("../../firmware-sim/data/dem_c2f_l1.bin"),
-    include_bytes!("../../firmware-sim/data/dem_c2f_l2.bin"),
-];
+/// The product point's tables (`half-narrow`).
+const TABLES: [&[u8]; 3] = protogist_host::product::DEFAULT_TABLES;
 const MODEL: &[u8] = include_bytes!("../../host/data/shapes_model.bin");
 const W: usize = 160;
 const H: usize = 120;
@@ -253,8 +250,8 @@ fn the_workspace_is_the_kept_maps_plus_the_largest_phase() {
         protogist::pipeline::kept_bytes(W, H, &p) + shared
     );
     // The colour phase (streamed conspicuity, completion by runs) is
-    // never the largest: it stays below the stereo phase at the board's
-    // two sizes.
+    // never the largest: it stays below figure-ground's at the board's two
+    // sizes.
     for (w, h) in [(W, H), (128, 96)] {
         eprintln!(
             "workspace {w}x{h} K=4: {} B (kept {}, stereo {}, colour {}, objects {})",
@@ -264,7 +261,7 @@ fn the_workspace_is_the_kept_maps_plus_the_largest_phase() {
             colour_bytes(w, h, &p),
             object_bytes(w, h, &p)
         );
-        assert!(colour_bytes(w, h, &p) < stereo_bytes(w, h, &p), "{w}x{h}");
+        assert!(colour_bytes(w, h, &p) < object_bytes(w, h, &p), "{w}x{h}");
     }
     // More objects need more kept bytes, never less.
     assert!(workspace_bytes(W, H, &p) > workspace_bytes(W, H, &p.with_objects(1)));

@@ -22,9 +22,9 @@
 //! use protogist::pipeline::{workspace_words, Pipeline, PipelineParams};
 //! # use protogist::synth::{render_left, render_right, SceneSpec};
 //! # let tables: [&[u8]; 3] = [
-//! #     include_bytes!("../../../firmware-sim/data/dem_c2f_l0.bin"),
-//! #     include_bytes!("../../../firmware-sim/data/dem_c2f_l1.bin"),
-//! #     include_bytes!("../../../firmware-sim/data/dem_c2f_l2.bin"),
+//! #     include_bytes!("../../../firmware-sim/data/dem_c2f_narrow_l0.bin"),
+//! #     include_bytes!("../../../firmware-sim/data/dem_c2f_narrow_l1.bin"),
+//! #     include_bytes!("../../../firmware-sim/data/dem_c2f_narrow_l2.bin"),
 //! # ];
 //! # let model: &[u8] = include_bytes!("../../../host/data/shapes_model.bin");
 //! let (w, h) = (160, 120);
