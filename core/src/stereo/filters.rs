@@ -119,22 +119,27 @@ impl Gabor {
         }
         let mut left = (1i32 << KERNEL_FRAC) - sum;
         if left % 2 == 1 {
-            env[r] += 1;
+            if let Some(c) = env.get_mut(r) {
+                *c += 1;
+            }
             left -= 1;
         }
         while left >= 2 {
             let mut best = 0;
             for i in 1..r {
-                if rem[i] > rem[best] {
+                if rem.get(i) > rem.get(best) {
                     best = i;
                 }
             }
-            if rem[best] < 0.0 {
+            if rem.get(best).is_none_or(|&v| v < 0.0) {
                 break;
             }
-            env[best] += 1;
-            env[taps - 1 - best] += 1;
-            rem[best] = -1.0;
+            for i in [best, taps - 1 - best] {
+                if let (Some(e), Some(q)) = (env.get_mut(i), rem.get_mut(i)) {
+                    *e += 1;
+                    *q = -1.0;
+                }
+            }
             left -= 2;
         }
         let th = f64::from(theta_deg).to_radians();
