@@ -334,16 +334,22 @@ pub fn run_segment(
     let mut store = crate::storage::SegmentStorage::new(width, height);
     let mut masks = vec![false; usize::from(params.max_objects) * width * height];
     let mut bufs = store.buffers()?;
-    let report = protogist::segment::segment(
+    // With the depth pass, C takes the disparity map's steps: the maps
+    // below show the C the searches saw.
+    let mut edges = edges.to_vec();
+    let mut first_fg = vec![0u32; protogist::segment::bit_map_len(width, height)];
+    let report = protogist::segment::segment_with_depth_pass(
         params,
         &ImageView::packed(disparity, width, height)?,
-        &ImageView::packed(edges, width, height)?,
+        &mut ImageViewMut::packed(&mut edges, width, height)?,
         &mut bufs,
-        &mut masks,
+        protogist::segment::Masks::Bools(&mut masks),
+        &mut (),
+        &mut first_fg,
     )?;
     let (dv, cv) = (
         ImageView::packed(disparity, width, height)?,
-        ImageView::packed(edges, width, height)?,
+        ImageView::packed(&edges, width, height)?,
     );
     let (d_off, c_off) = (protogist::disparity::DisparityCell::OFF, EdgeCell::OFF);
     Ok(SegmentResult {

@@ -58,7 +58,7 @@ use crate::disparity::DisparityCell;
 use crate::image::ImageView;
 use crate::mlp::blob::Model;
 use crate::mlp::MacKernel;
-use crate::segment::{Detection, Ratio, SegmentBuffers, SegmentParams};
+use crate::segment::{DepthPass, Detection, Ratio, SegmentBuffers, SegmentParams};
 use crate::shape::SHAPE_LEN;
 use crate::stereo::c2f::{C2f, C2fParams, MAX_COARSE};
 use crate::stereo::phase::{PhaseKernel, SafePhase};
@@ -144,8 +144,10 @@ impl PipelineParams {
     /// ([`SegmentParams::split_interiors`]); with an object's slice at
     /// least ±1 px wide ([`SegmentParams::min_slice_radius`]); and tall
     /// regions completed along their tilt ([`CompleteParams::tilt_rows`],
-    /// fitted near their median, [`CompleteParams::tilt_band`]); and the
-    /// stereo's narrow filters ([`STEREO_DEFAULT`]; docs/CHOICES.md).
+    /// fitted near their median, [`CompleteParams::tilt_band`]); with the
+    /// stereo's narrow filters ([`STEREO_DEFAULT`]); and the depth pass
+    /// for what C does not outline ([`SegmentParams::depth_pass`];
+    /// docs/CHOICES.md).
     pub const DEFAULT: Self = Self {
         stereo: STEREO_DEFAULT,
         complete: CompleteParams::DEFAULT,
@@ -160,6 +162,7 @@ impl PipelineParams {
             split_interiors: true,
             row_background: Some(2 * 256),
             min_slice_radius: 256,
+            depth_pass: Some(DepthPass::DEFAULT),
             ..Self::PAPER.segment
         },
         ..Self::PAPER

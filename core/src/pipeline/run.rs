@@ -1,6 +1,7 @@
 //! One frame through every stage, inside the workspace.
 
 use super::arena::Arena;
+use super::layout::first_fg_len;
 use super::{
     layout, Frame, Kernels, Object, Observer, Pipeline, PipelineError, Region, RgbRows, Stage,
     MAX_OBJECTS, TOP_K,
@@ -14,7 +15,7 @@ use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, Ranked, Scratch};
 use crate::segment::{
-    bit_map_len, maps_len, segment_into, table_len, BitView, Masks, SegmentBuffers, SegmentObserver,
+    bit_map_len, maps_len, segment_with_depth_pass, table_len, BitView, Masks, SegmentBuffers, SegmentObserver,
 };
 use crate::shape::{shape_vector_bits, RadialProfile, ShapeError, ShapeVector, SHAPE_LEN};
 use crate::stereo::c2f::{self, C2fBuffers};
@@ -202,24 +203,27 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
             &mut tables,
         )?;
     }
-    let edges: &'w [EdgeCell] = edges;
     let disparity: &'w [DisparityCell] = disparity;
-    let edges_v = ImageView::packed(edges, w, h)?;
     let disparity_v = ImageView::packed(disparity, w, h)?;
     obs.disparity(&disparity_v);
 
-    // Figure-ground, then shape and the classifier per object.
+    // Figure-ground (with the depth pass, C takes the disparity map's
+    // steps), then shape and the classifier per object.
     obs.enter(Stage::Segment);
     let mut s = Arena::new(shared);
     let mut seg = SegmentBuffers::new(w, h, s.take(maps_len(w, h))?, s.take(table_len(w, h))?)?;
-    let report = segment_into(
+    let first_fg: &mut [u32] = s.take(first_fg_len(w, h, &params.segment))?;
+    let report = segment_with_depth_pass(
         &params.segment,
         &disparity_v,
-        &edges_v,
+        &mut ImageViewMut::packed(&mut *edges, w, h)?,
         &mut seg,
         Masks::Bits(&mut *masks),
         &mut SegmentSteps(obs),
+        first_fg,
     )?;
+    let edges: &'w [EdgeCell] = edges;
+    let edges_v = ImageView::packed(edges, w, h)?;
 
     let masks: &'w [u32] = masks;
 

@@ -75,6 +75,7 @@
 
 mod bits;
 mod buffers;
+mod depth;
 mod ground;
 mod label;
 mod morph;
@@ -85,6 +86,7 @@ mod stats;
 
 pub use bits::{bit_map_len, row_runs, run_capacity, words_per_row, BitView};
 pub use buffers::{maps_len, scratch_bytes, table_len, SegmentBuffers, BIT_MAPS};
+pub use depth::{depth_steps, segment_with_depth_pass, DepthPass, DEPTH_EDGE};
 pub use ground::{fit_ground, ground_rows_len, inhibit_ground, GroundLine, MAX_SLOPE, MIN_SLOPE};
 pub use label::{area_filter, fill_holes, label_capacity, AreaReport, Connectivity, Labeller};
 pub use morph::{
@@ -191,6 +193,11 @@ pub struct SegmentParams {
     /// leave out cells counted for it. 0 (the paper): r = σ_S · `range`
     /// alone. At most [`MAX_GROUND_BAND`].
     pub min_slice_radius: u16,
+    /// The depth pass: when the searches on C found fewer than
+    /// `max_objects` objects, figure-ground searches again with the
+    /// disparity map's steps as edges ([`segment_with_depth_pass`],
+    /// [`DepthPass`]). `None` (the paper): C alone.
+    pub depth_pass: Option<DepthPass>,
 }
 
 /// Searches [`segment`] runs per object of `max_objects` at most, when
@@ -230,6 +237,7 @@ impl SegmentParams {
         max_aspect: 0,
         split_interiors: false,
         min_slice_radius: 0,
+        depth_pass: None,
     };
 
     /// Checks the parameters.
@@ -280,6 +288,9 @@ impl SegmentParams {
         }
         if self.max_objects == 0 || usize::from(self.max_objects) > MAX_OBJECTS {
             return Err(SegmentError::BadParams("max_objects"));
+        }
+        if let Some(pass) = &self.depth_pass {
+            pass.validate()?;
         }
         Ok(())
     }

@@ -11,6 +11,7 @@ use super::stats::{
     plane, select_slice, selected_stats, slice_range, thresholds, DisparityRange, SelectedStats,
     Thresholds,
 };
+use super::depth::Union;
 use super::{check_size, SegmentError, SegmentParams, MAX_OBJECTS, SEARCHES_PER_OBJECT};
 use crate::conspicuity::EdgeCell;
 use crate::disparity::DisparityCell;
@@ -271,6 +272,14 @@ pub enum Masks<'m> {
 }
 
 impl Masks<'_> {
+    /// The same masks, borrowed again for a shorter time.
+    pub fn reborrow(&mut self) -> Masks<'_> {
+        match self {
+            Masks::Bools(m) => Masks::Bools(m),
+            Masks::Bits(m) => Masks::Bits(m),
+        }
+    }
+
     fn len(&self) -> usize {
         match self {
             Self::Bools(m) => m.len(),
@@ -290,8 +299,23 @@ pub fn segment_into(
     disparity: &ImageView<'_, DisparityCell>,
     conspicuity: &ImageView<'_, EdgeCell>,
     bufs: &mut SegmentBuffers<'_>,
+    masks: Masks<'_>,
+    observer: &mut impl SegmentObserver,
+) -> Result<SegmentReport, SegmentError> {
+    segment_saving(params, disparity, conspicuity, bufs, masks, observer, None)
+}
+
+/// [`segment_into`], copying the foreground as it is before the first
+/// search into `first_fg` (a bit map) when given: the depth pass starts
+/// from it ([`super::depth`]).
+pub(super) fn segment_saving(
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+    conspicuity: &ImageView<'_, EdgeCell>,
+    bufs: &mut SegmentBuffers<'_>,
     mut masks: Masks<'_>,
     observer: &mut impl SegmentObserver,
+    first_fg: Option<&mut [u32]>,
 ) -> Result<SegmentReport, SegmentError> {
     params.validate()?;
     let (w, h) = bufs.size();
@@ -339,10 +363,52 @@ pub fn segment_into(
     let rows = params.row_background.map(|b| (&*bufs.ground_rows, b));
     report.foreground = passes::foreground(params, disparity, &t, ground, rows, g, bufs.d_fg);
     observer.step(Step::Foreground);
+    if let Some(first_fg) = first_fg {
+        bits::copy_map(first_fg, bufs.d_fg);
+    }
     let searches = if params.every_mask_is_an_object() {
         k
     } else {
         k * SEARCHES_PER_OBJECT
+    };
+    run_searches(
+        params,
+        disparity,
+        conspicuity,
+        bufs,
+        &mut masks,
+        &mut report,
+        observer,
+        searches,
+        None,
+    )?;
+    Ok(report)
+}
+
+/// Up to `searches` searches of figure-ground on the foreground in
+/// `bufs.d_fg`, adding objects to `report` and `masks` until it holds K;
+/// with `union`, only the objects it keeps ([`super::depth`]).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn run_searches(
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+    conspicuity: &ImageView<'_, EdgeCell>,
+    bufs: &mut SegmentBuffers<'_>,
+    masks: &mut Masks<'_>,
+    report: &mut SegmentReport,
+    observer: &mut impl SegmentObserver,
+    searches: usize,
+    union: Option<Union>,
+) -> Result<(), SegmentError> {
+    let Some(stats) = report.stats else {
+        return Ok(());
+    };
+    let g = bufs.g;
+    let (w, h) = (g.width, g.height);
+    let k = usize::from(params.max_objects);
+    let chunk = match masks {
+        Masks::Bools(_) => (w * h).max(1),
+        Masks::Bits(_) => g.len().max(1),
     };
     // `w·h >= 1` (`check_size`); `max` shows the compiler, so that the
     // chunk loops have no panic path.
@@ -442,14 +508,15 @@ pub fn segment_into(
             }
             emit(
                 params,
-                &mut masks,
+                masks,
                 chunk,
                 &slice,
                 range,
                 regions,
                 bufs,
-                &mut report,
+                report,
                 observer,
+                union,
             );
         }
         if ic.is_some() {
@@ -471,7 +538,7 @@ pub fn segment_into(
         }
         observer.step(Step::Mask);
     }
-    Ok(report)
+    Ok(())
 }
 
 /// Reports `bufs.mask` as the next object when it is one.
@@ -486,6 +553,7 @@ fn emit(
     bufs: &mut SegmentBuffers<'_>,
     report: &mut SegmentReport,
     observer: &mut impl SegmentObserver,
+    union: Option<Union>,
 ) {
     let g = bufs.g;
     let (w, h) = (g.width, g.height);
@@ -493,7 +561,8 @@ fn emit(
     let area = regions.area;
     let bbox = bits::bbox(g, bufs.mask);
     let box_size = bbox.map_or((0, 0), |(x0, y0, x1, y1)| (x1 + 1 - x0, y1 + 1 - y0));
-    let object = params.is_object(area, box_size, (w, h));
+    let object = params.is_object(area, box_size, (w, h))
+        && union.is_none_or(|u| u.keeps(g, area, bufs.mask, masks, chunk));
     let span = index * chunk..(index + 1) * chunk;
     match masks {
         _ if !object => {}

@@ -420,3 +420,30 @@ pub fn inhibit_ground(line: &GroundLineF, band: f32, d_fg: &[DispF], width: usiz
         .map(|(i, d)| d.filter(|&v| f64::from(v) > line.at(i / width) + f64::from(band)))
         .collect()
 }
+
+/// The depth pass's edges ([`protogist::segment::depth_steps`]): `c` with
+/// every cell whose symmetric pair of neighbours in `d` (left and right,
+/// up and down, or a diagonal; both ON) differs by at least `step` px set
+/// to `edge`, unless it is stronger already; border cells unchanged.
+pub fn depth_steps(c: &[EdgeCell], d: &[DispF], w: usize, h: usize, step: f32, edge: EdgeCell) -> Vec<EdgeCell> {
+    let mut out = c.to_vec();
+    let at = |x: usize, y: usize| d.get(y * w + x).copied().flatten();
+    for y in 1..h.saturating_sub(1) {
+        for x in 1..w.saturating_sub(1) {
+            let pairs = [
+                (at(x - 1, y), at(x + 1, y)),
+                (at(x, y - 1), at(x, y + 1)),
+                (at(x - 1, y - 1), at(x + 1, y + 1)),
+                (at(x + 1, y - 1), at(x - 1, y + 1)),
+            ];
+            let stepped = pairs
+                .iter()
+                .any(|&(a, b)| matches!((a, b), (Some(a), Some(b)) if (a - b).abs() >= step));
+            let cell = &mut out[y * w + x];
+            if stepped && cell.get().is_none_or(|v| Some(v) < edge.get()) {
+                *cell = edge;
+            }
+        }
+    }
+    out
+}
