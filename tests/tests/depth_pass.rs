@@ -6,8 +6,8 @@ use protogist::conspicuity::{Conspicuity, EdgeCell};
 use protogist::disparity::{from_pixels, Disparity, DisparityCell};
 use protogist::image::{ImageView, ImageViewMut};
 use protogist::segment::{
-    bit_map_len, depth_steps, segment_with_depth_pass, DepthPass, Masks, Ratio, SegmentError,
-    SegmentParams, SegmentReport, DEPTH_EDGE, MAX_GROUND_BAND,
+    bit_map_len, depth_steps, segment_with_depth_pass, BitView, DepthPass, Masks, Ratio,
+    SegmentError, SegmentParams, SegmentReport, DEPTH_EDGE, MAX_GROUND_BAND,
 };
 use protogist_host::reference::segment as rf;
 use protogist_tests::SegmentStorage;
@@ -33,6 +33,7 @@ fn a_step_marks_the_cells_whose_pair_straddles_it() {
         &mut ImageViewMut::packed(&mut c, w, h).unwrap(),
         &ImageView::packed(&d, w, h).unwrap(),
         4 * 256,
+        None,
     )
     .unwrap();
     let want: Vec<bool> = (0..w * h)
@@ -46,6 +47,7 @@ fn a_step_marks_the_cells_whose_pair_straddles_it() {
         &mut ImageViewMut::packed(&mut c, w, h).unwrap(),
         &ImageView::packed(&d, w, h).unwrap(),
         5 * 256 + 1,
+        None,
     )
     .unwrap();
     assert_eq!(n, 0);
@@ -68,6 +70,7 @@ fn off_pairs_diagonals_and_stronger_edges() {
         &mut ImageViewMut::packed(&mut c, w, h).unwrap(),
         &ImageView::packed(&d, w, h).unwrap(),
         4 * 256,
+        None,
     )
     .unwrap();
     for (x, y) in [(1, 2), (3, 2), (2, 1), (2, 3), (3, 1), (1, 3), (3, 3)] {
@@ -77,12 +80,19 @@ fn off_pairs_diagonals_and_stronger_edges() {
     // The centre's own pairs are all far-far: not a step.
     assert_eq!(c[12], EdgeCell::OFF);
     // An OFF member makes no pair.
-    let d = map(w, h, |x, y| if (x, y) == (2, 2) { None } else { Some(if x < 2 { 1 } else { 9 }) });
+    let d = map(w, h, |x, y| {
+        if (x, y) == (2, 2) {
+            None
+        } else {
+            Some(if x < 2 { 1 } else { 9 })
+        }
+    });
     let mut c = vec![EdgeCell::OFF; w * h];
     depth_steps(
         &mut ImageViewMut::packed(&mut c, w, h).unwrap(),
         &ImageView::packed(&d, w, h).unwrap(),
         4 * 256,
+        None,
     )
     .unwrap();
     // Columns 0 and 1 at 1 px, 2 to 4 at 9 px, the centre OFF. (2, 1)
@@ -105,7 +115,8 @@ fn maps_of_other_sizes_are_an_error() {
         depth_steps(
             &mut ImageViewMut::packed(&mut c, 5, 3).unwrap(),
             &ImageView::packed(&d, 4, 3).unwrap(),
-            256
+            256,
+            None,
         ),
         Err(SegmentError::SizeMismatch { .. })
     ));
@@ -115,15 +126,40 @@ fn maps_of_other_sizes_are_an_error() {
 fn the_settings_are_checked() {
     assert!(DepthPass::DEFAULT.validate().is_ok());
     let bad = [
-        DepthPass { step: 0, ..DepthPass::DEFAULT },
-        DepthPass { step: MAX_GROUND_BAND + 1, ..DepthPass::DEFAULT },
-        DepthPass { searches: 0, ..DepthPass::DEFAULT },
-        DepthPass { searches: 17, ..DepthPass::DEFAULT },
-        DepthPass { min_area: Ratio::new(1, 0), ..DepthPass::DEFAULT },
-        DepthPass { min_area: Ratio::new(2, 1), ..DepthPass::DEFAULT },
+        DepthPass {
+            step: 0,
+            ..DepthPass::DEFAULT
+        },
+        DepthPass {
+            step: MAX_GROUND_BAND + 1,
+            ..DepthPass::DEFAULT
+        },
+        DepthPass {
+            searches: 0,
+            ..DepthPass::DEFAULT
+        },
+        DepthPass {
+            searches: 17,
+            ..DepthPass::DEFAULT
+        },
+        DepthPass {
+            clearance: 17,
+            ..DepthPass::DEFAULT
+        },
+        DepthPass {
+            min_area: Ratio::new(1, 0),
+            ..DepthPass::DEFAULT
+        },
+        DepthPass {
+            min_area: Ratio::new(2, 1),
+            ..DepthPass::DEFAULT
+        },
     ];
     for b in bad {
-        assert!(matches!(b.validate(), Err(SegmentError::BadParams(_))), "{b:?}");
+        assert!(
+            matches!(b.validate(), Err(SegmentError::BadParams(_))),
+            "{b:?}"
+        );
     }
     // 1/48 of 160x120 is 400 px; of 7x7, 49/48 rounded up.
     assert_eq!(DepthPass::DEFAULT.least_area(160, 120), 400);
@@ -140,11 +176,12 @@ proptest! {
     /// `U8F8` values, which `f32` holds exactly (error bound: none).
     #[test]
     fn depth_steps_are_the_references(
-        (w, h, d, c) in (3usize..24, 3usize..20).prop_flat_map(|(w, h)| (
+        (w, h, d, c, within) in (3usize..40, 3usize..20).prop_flat_map(|(w, h)| (
             Just(w),
             Just(h),
             prop::collection::vec(prop::option::weighted(0.9, 0u16..(31 * 256)), w * h),
             prop::collection::vec(prop::option::weighted(0.3, 0u16..(128 << 6)), w * h),
+            prop::option::of(prop::collection::vec(any::<bool>(), w * h)),
         )),
         step in 1u16..(8 * 256),
     ) {
@@ -157,12 +194,20 @@ proptest! {
             .map(|v| v.map_or(EdgeCell::OFF, |b| EdgeCell::from_raw(Conspicuity::from_bits(b))))
             .collect();
         let df: Vec<Option<f32>> = d.iter().map(|v| v.get().map(f32::from)).collect();
-        let want = rf::depth_steps(&c, &df, w, h, f32::from(step) / 256.0, EdgeCell::from_raw(DEPTH_EDGE));
+        let edge = EdgeCell::from_raw(DEPTH_EDGE);
+        let want = rf::depth_steps(&c, &df, (w, h), f32::from(step) / 256.0, edge, within.as_deref());
+        let mut words = vec![0u32; bit_map_len(w, h)];
+        let stride = words.len() / h;
+        for (i, _) in within.iter().flatten().enumerate().filter(|(_, &on)| on) {
+            words[(i / w) * stride + (i % w) / 32] |= 1 << (i % w % 32);
+        }
+        let bits = BitView::new(&words, w, h).unwrap();
         let mut got = c.clone();
         depth_steps(
             &mut ImageViewMut::packed(&mut got, w, h).unwrap(),
             &ImageView::packed(&d, w, h).unwrap(),
             step,
+            within.is_some().then_some(&bits),
         )
         .unwrap();
         prop_assert_eq!(got, want);
@@ -209,6 +254,7 @@ const PASS: SegmentParams = SegmentParams {
     depth_pass: Some(DepthPass {
         step: 4 * 256,
         searches: 2,
+        clearance: 2,
         min_area: Ratio::new(1, 48),
     }),
     ..OPEN
@@ -278,7 +324,10 @@ fn the_pass_adds_to_the_colour_objects_and_never_repeats_one() {
     assert!(iou_box(mask(&masks, 1), (26, 12, 42, 28)) > 0.8);
     assert_eq!(r.objects[1].index, 1);
     // No cell in both.
-    assert!(!mask(&masks, 0).iter().zip(mask(&masks, 1)).any(|(a, b)| *a && *b));
+    assert!(!mask(&masks, 0)
+        .iter()
+        .zip(mask(&masks, 1))
+        .any(|(a, b)| *a && *b));
 }
 
 #[test]
@@ -315,7 +364,10 @@ fn a_short_foreground_copy_is_a_typed_error() {
         &mut (),
         &mut first,
     );
-    assert!(matches!(r, Err(SegmentError::MasksTooSmall { .. })), "{r:?}");
+    assert!(
+        matches!(r, Err(SegmentError::MasksTooSmall { .. })),
+        "{r:?}"
+    );
     let bad = SegmentParams {
         depth_pass: Some(DepthPass {
             searches: 0,
@@ -323,5 +375,28 @@ fn a_short_foreground_copy_is_a_typed_error() {
         }),
         ..OPEN
     };
-    assert!(matches!(bad.validate(), Err(SegmentError::BadParams("depth_pass.searches"))));
+    assert!(matches!(
+        bad.validate(),
+        Err(SegmentError::BadParams("depth_pass.searches"))
+    ));
+}
+
+#[test]
+fn the_colour_objects_clearance_is_left_out_of_the_pass() {
+    // A plain box 6 px wide, 2 px right of an outlined one (a halo's
+    // place): found by the pass with no clearance; with 8 square
+    // dilations of the outlined box's mask it lies in the clearance.
+    let (d, c) = boxes(&[(4, 8, 18, 24, 7, true), (20, 8, 26, 24, 12, false)]);
+    let with = |clearance| SegmentParams {
+        depth_pass: Some(DepthPass {
+            clearance,
+            ..PASS.depth_pass.unwrap()
+        }),
+        ..PASS
+    };
+    let (r, masks, _) = run(&with(0), &d, &c).unwrap();
+    assert_eq!(r.objects.len(), 2, "{:?}", r.objects);
+    assert!(iou_box(mask(&masks, 1), (20, 8, 26, 24)) > 0.6);
+    let (r, _, _) = run(&with(8), &d, &c).unwrap();
+    assert_eq!(r.objects.len(), 1, "{:?}", r.objects);
 }

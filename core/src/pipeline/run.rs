@@ -15,7 +15,8 @@ use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, Ranked, Scratch};
 use crate::segment::{
-    bit_map_len, maps_len, segment_with_depth_pass, table_len, BitView, Masks, SegmentBuffers, SegmentObserver,
+    bit_map_len, maps_len, segment_with_depth_pass, table_len, BitView, Masks, SegmentBuffers,
+    SegmentObserver,
 };
 use crate::shape::{shape_vector_bits, RadialProfile, ShapeError, ShapeVector, SHAPE_LEN};
 use crate::stereo::c2f::{self, C2fBuffers};

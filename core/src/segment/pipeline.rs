@@ -1,7 +1,8 @@
 //! Border refinement, object inhibition and the whole stage.
 
-use super::bits;
+use super::bits::{self, Geom};
 use super::buffers::SegmentBuffers;
+use super::depth::Union;
 use super::ground::{fit_ground, GroundLine};
 use super::label::{AreaReport, Connectivity, Labeller};
 use super::morph::dilate_n;
@@ -11,7 +12,6 @@ use super::stats::{
     plane, select_slice, selected_stats, slice_range, thresholds, DisparityRange, SelectedStats,
     Thresholds,
 };
-use super::depth::Union;
 use super::{check_size, SegmentError, SegmentParams, MAX_OBJECTS, SEARCHES_PER_OBJECT};
 use crate::conspicuity::EdgeCell;
 use crate::disparity::DisparityCell;
@@ -272,6 +272,38 @@ pub enum Masks<'m> {
 }
 
 impl Masks<'_> {
+    /// Length of one object's slot: a frame of `bool`s or a bit map.
+    pub(super) fn chunk(&self, g: Geom) -> usize {
+        match self {
+            Masks::Bools(_) => (g.width * g.height).max(1),
+            Masks::Bits(_) => g.len().max(1),
+        }
+    }
+
+    /// ORs slot `i` into the bit map `dst`.
+    pub(super) fn or_into(&self, i: usize, chunk: usize, g: Geom, dst: &mut [u32]) {
+        match self {
+            Masks::Bits(m) => {
+                if let Some(m) = m.get(i * chunk..(i + 1) * chunk) {
+                    for (d, s) in dst.iter_mut().zip(m) {
+                        *d |= *s;
+                    }
+                }
+            }
+            Masks::Bools(m) => {
+                let Some(m) = m.get(i * chunk..(i + 1) * chunk) else {
+                    return;
+                };
+                for (k, _) in m.iter().enumerate().filter(|(_, &on)| on) {
+                    let (x, y) = (k % g.width.max(1), k / g.width.max(1));
+                    if let Some(word) = dst.get_mut(y * g.stride + x / 32) {
+                        *word |= 1 << (x % 32);
+                    }
+                }
+            }
+        }
+    }
+
     /// The same masks, borrowed again for a shorter time.
     pub fn reborrow(&mut self) -> Masks<'_> {
         match self {
@@ -406,10 +438,7 @@ pub(super) fn run_searches(
     let g = bufs.g;
     let (w, h) = (g.width, g.height);
     let k = usize::from(params.max_objects);
-    let chunk = match masks {
-        Masks::Bools(_) => (w * h).max(1),
-        Masks::Bits(_) => g.len().max(1),
-    };
+    let chunk = masks.chunk(g);
     // `w·h >= 1` (`check_size`); `max` shows the compiler, so that the
     // chunk loops have no panic path.
     for search in 0..searches {
@@ -507,16 +536,7 @@ pub(super) fn run_searches(
                 regions.area = parts::part_mask(params, bufs, ic, root);
             }
             emit(
-                params,
-                masks,
-                chunk,
-                &slice,
-                range,
-                regions,
-                bufs,
-                report,
-                observer,
-                union,
+                params, masks, chunk, &slice, range, regions, bufs, report, observer, union,
             );
         }
         if ic.is_some() {

@@ -422,10 +422,18 @@ pub fn inhibit_ground(line: &GroundLineF, band: f32, d_fg: &[DispF], width: usiz
 }
 
 /// The depth pass's edges ([`protogist::segment::depth_steps`]): `c` with
-/// every cell whose symmetric pair of neighbours in `d` (left and right,
-/// up and down, or a diagonal; both ON) differs by at least `step` px set
-/// to `edge`, unless it is stronger already; border cells unchanged.
-pub fn depth_steps(c: &[EdgeCell], d: &[DispF], w: usize, h: usize, step: f32, edge: EdgeCell) -> Vec<EdgeCell> {
+/// every cell (of `within`, when given) whose symmetric pair of
+/// neighbours in `d` (left and right, up and down, or a diagonal; both ON)
+/// differs by at least `step` px set to `edge`, unless it is stronger
+/// already; border cells unchanged.
+pub fn depth_steps(
+    c: &[EdgeCell],
+    d: &[DispF],
+    (w, h): (usize, usize),
+    step: f32,
+    edge: EdgeCell,
+    within: Option<&[bool]>,
+) -> Vec<EdgeCell> {
     let mut out = c.to_vec();
     let at = |x: usize, y: usize| d.get(y * w + x).copied().flatten();
     for y in 1..h.saturating_sub(1) {
@@ -439,8 +447,9 @@ pub fn depth_steps(c: &[EdgeCell], d: &[DispF], w: usize, h: usize, step: f32, e
             let stepped = pairs
                 .iter()
                 .any(|&(a, b)| matches!((a, b), (Some(a), Some(b)) if (a - b).abs() >= step));
+            let inside = within.is_none_or(|m| m[y * w + x]);
             let cell = &mut out[y * w + x];
-            if stepped && cell.get().is_none_or(|v| Some(v) < edge.get()) {
+            if inside && stepped && cell.get().is_none_or(|v| Some(v) < edge.get()) {
                 *cell = edge;
             }
         }
