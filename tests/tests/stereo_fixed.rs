@@ -12,15 +12,26 @@ use protogist_host::reference::stereo::population as fp;
 use protogist_host::reference::stereo::table::DEFAULT_TABLE;
 use protogist_host::reference::stereo::{self as dem};
 
+/// The kernels' radii: the design's 7 and the pipeline's 2
+/// (`C2fParams::HALF_NARROW`).
+const RADII: [u8; 2] = [7, 2];
+
+/// Carrier `k` of 3 at kernel radius `r` (as `k + 3·[r == 2]`: carrier
+/// and radius in one index, so that the helpers keep one argument).
 fn float_kernel(k: usize) -> ff::Gabor {
-    ff::gabor(&dem::DemParams::default(), ff::carrier_deg(k, 3))
+    let p = dem::DemParams {
+        radius: RADII[k / 3],
+        ..dem::DemParams::default()
+    };
+    ff::gabor(&p, ff::carrier_deg(k % 3, 3))
 }
 
 fn core_kernel(k: usize) -> Gabor {
-    *Dem::new(&qs::DemParams::default())
-        .unwrap()
-        .kernel(k)
-        .unwrap()
+    let p = qs::DemParams {
+        radius: RADII[k / 3],
+        ..qs::DemParams::default()
+    };
+    *Dem::new(&p).unwrap().kernel(k % 3).unwrap()
 }
 
 /// Σ over the 2-D taps of |K_q − K_f| per component (re, im): the kernel
@@ -105,13 +116,18 @@ fn grey_plane() -> impl Strategy<Value = (Vec<u16>, usize, usize)> {
 
 #[test]
 fn the_quantised_kernels_are_zero_dc_and_close_to_the_float_ones() {
-    for k in 0..3 {
+    for k in 0..6 {
         let (q, f) = (core_kernel(k), float_kernel(k));
         let e = kernel_l1_error(&q, &f);
         let b = z_bound(k);
         eprintln!(
-            "carrier {k}: Σ|ΔK| = {:.2e}, {:.2e}; z bound {:.4}, {:.4} grey",
-            e[0], e[1], b[0], b[1]
+            "radius {}, carrier {}: Σ|ΔK| = {:.2e}, {:.2e}; z bound {:.4}, {:.4} grey",
+            RADII[k / 3],
+            k % 3,
+            e[0],
+            e[1],
+            b[0],
+            b[1]
         );
         assert!(e[0] < 1e-2 && e[1] < 1e-2);
         assert_eq!(q.env[..q.taps].iter().sum::<i32>(), 1 << qf::KERNEL_FRAC);
@@ -135,7 +151,7 @@ proptest! {
     #[test]
     fn responses_are_within_the_kernel_bound((grey, w, h) in grey_plane()) {
         let plane = plane_of(&grey, w, h);
-        for k in 0..3 {
+        for k in 0..6 {
             let b = z_bound(k);
             let q = core_respond(&core_kernel(k), &grey, w, h);
             let f = ff::respond(&plane, &float_kernel(k));
@@ -155,7 +171,7 @@ proptest! {
             let src = grey[(i / w) * w + (i % w + shift).min(w - 1)];
             src.wrapping_add(v >> 6).min(65280)
         }).collect();
-        for k in 0..3 {
+        for k in 0..6 {
             let b = z_bound(k);
             let e = 2f64.sqrt() * b[0].max(b[1]);
             let (g, f) = (core_kernel(k), float_kernel(k));
