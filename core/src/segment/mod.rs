@@ -78,6 +78,7 @@ mod buffers;
 mod depth;
 mod ground;
 mod label;
+mod masks;
 mod morph;
 mod parts;
 mod passes;

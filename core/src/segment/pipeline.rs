@@ -1,10 +1,11 @@
 //! Border refinement, object inhibition and the whole stage.
 
-use super::bits::{self, Geom};
+use super::bits;
 use super::buffers::SegmentBuffers;
 use super::depth::Union;
 use super::ground::{fit_ground, GroundLine};
 use super::label::{AreaReport, Connectivity, Labeller};
+pub use super::masks::Masks;
 use super::morph::dilate_n;
 use super::parts;
 use super::passes;
@@ -258,65 +259,6 @@ struct StepsOnly<'p>(&'p mut dyn FnMut(Step));
 impl SegmentObserver for StepsOnly<'_> {
     fn step(&mut self, step: Step) {
         (self.0)(step);
-    }
-}
-
-/// Where [`segment_into`] writes the object masks: one chunk per object.
-#[derive(Debug)]
-pub enum Masks<'m> {
-    /// `width · height` `bool`s per object (as [`segment`]).
-    Bools(&'m mut [bool]),
-    /// One bit map per object, [`bit_map_len`](super::bit_map_len) words
-    /// each, read with [`BitView::new`](super::BitView::new).
-    Bits(&'m mut [u32]),
-}
-
-impl Masks<'_> {
-    /// Length of one object's slot: a frame of `bool`s or a bit map.
-    pub(super) fn chunk(&self, g: Geom) -> usize {
-        match self {
-            Masks::Bools(_) => (g.width * g.height).max(1),
-            Masks::Bits(_) => g.len().max(1),
-        }
-    }
-
-    /// ORs slot `i` into the bit map `dst`.
-    pub(super) fn or_into(&self, i: usize, chunk: usize, g: Geom, dst: &mut [u32]) {
-        match self {
-            Masks::Bits(m) => {
-                if let Some(m) = m.get(i * chunk..(i + 1) * chunk) {
-                    for (d, s) in dst.iter_mut().zip(m) {
-                        *d |= *s;
-                    }
-                }
-            }
-            Masks::Bools(m) => {
-                let Some(m) = m.get(i * chunk..(i + 1) * chunk) else {
-                    return;
-                };
-                for (k, _) in m.iter().enumerate().filter(|(_, &on)| on) {
-                    let (x, y) = (k % g.width.max(1), k / g.width.max(1));
-                    if let Some(word) = dst.get_mut(y * g.stride + x / 32) {
-                        *word |= 1 << (x % 32);
-                    }
-                }
-            }
-        }
-    }
-
-    /// The same masks, borrowed again for a shorter time.
-    pub fn reborrow(&mut self) -> Masks<'_> {
-        match self {
-            Masks::Bools(m) => Masks::Bools(m),
-            Masks::Bits(m) => Masks::Bits(m),
-        }
-    }
-
-    fn len(&self) -> usize {
-        match self {
-            Self::Bools(m) => m.len(),
-            Self::Bits(m) => m.len(),
-        }
     }
 }
 
