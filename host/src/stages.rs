@@ -334,8 +334,7 @@ pub fn run_segment(
     let mut store = crate::storage::SegmentStorage::new(width, height);
     let mut masks = vec![false; usize::from(params.max_objects) * width * height];
     let mut bufs = store.buffers()?;
-    // With the depth pass, C takes the disparity map's steps: the maps
-    // below show the C the searches saw.
+    // With the depth pass C takes the map's steps: the panels show that C.
     let mut edges = edges.to_vec();
     let mut first_fg = vec![0u32; protogist::segment::bit_map_len(width, height)];
     let report = protogist::segment::segment_with_depth_pass(

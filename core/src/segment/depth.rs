@@ -193,7 +193,7 @@ pub fn segment_with_depth_pass(
     let Some(pass) = params.depth_pass else {
         return super::segment_into(params, disparity, &edges.as_view(), bufs, masks, observer);
     };
-    pass.validate()?;
+    // `segment_saving` validates `params`, the pass's settings with them.
     let words = bufs.g.len();
     let Some(first_fg) = first_fg.get_mut(..words) else {
         return Err(SegmentError::MasksTooSmall {
