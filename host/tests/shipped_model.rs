@@ -17,20 +17,20 @@ use protogist_host::classify::pipeline_data::PipelineTraining;
 use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
 use protogist_host::classify::shipped::SHIPPED_MODEL;
 
-const META: &str = "protogist train --dataset shapes --features shape --hidden 128 --epochs 300 --test-fraction 0.1 --seed 1 --gamma 0.5 --through-pipeline --views 2 --with-clean";
+const META: &str = "protogist train --dataset shapes --features shape --hidden 256 --epochs 600 --test-fraction 0.1 --seed 1 --gamma 0.5 --through-pipeline --views 2 --with-clean";
 
 #[test]
 fn shipped_model_parses_and_records_its_parameters() {
     let m = Model::parse(SHIPPED_MODEL).unwrap();
-    assert_eq!((m.inputs(), m.hidden(), m.classes()), (720, 128, 19));
+    assert_eq!((m.inputs(), m.hidden(), m.classes()), (720, 256, 19));
     assert_eq!(m.meta(), META);
     assert_eq!(m.class_name(0), Some("00_square"));
     assert_eq!(m.class_name(18), Some("18_d-shape"));
     assert!(m.delta_q16() > 0 && m.delta_q16() < 65536);
 }
 
-/// `gen-shapes --out shapes --classes 19 --per-class 600 --seed 1 --size 64`
-/// then `train --dataset shapes --hidden 128 --epochs 300 --seed 1
+/// `gen-shapes --out shapes --classes 19 --per-class 1000 --seed 1 --size 64`
+/// then `train --dataset shapes --hidden 256 --epochs 600 --seed 1
 /// --gamma 0.5 --test-fraction 0.1 --through-pipeline --views 2
 /// --with-clean --out shapes_model.bin`.
 #[test]
@@ -40,7 +40,7 @@ fn documented_commands_regenerate_the_shipped_model() {
     gen_shapes(&GenShapesOptions {
         out: ds.clone(),
         classes: 19,
-        per_class: 600,
+        per_class: 1000,
         seed: 1,
         size: 64,
     })
@@ -49,8 +49,8 @@ fn documented_commands_regenerate_the_shipped_model() {
     run_train_with(
         &TrainOptions {
             dataset: ds,
-            hidden: 128,
-            epochs: 300,
+            hidden: 256,
+            epochs: 600,
             out: out.clone(),
             test_fraction: 0.1,
             seed: 1,

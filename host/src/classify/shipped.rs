@@ -7,8 +7,8 @@
 //! ([`super::pipeline_data`]):
 //!
 //! ```text
-//! protogist gen-shapes --out shapes --classes 19 --per-class 600 --seed 1 --size 64
-//! protogist train --dataset shapes --hidden 128 --epochs 300 --seed 1 --gamma 0.5 \
+//! protogist gen-shapes --out shapes --classes 19 --per-class 1000 --seed 1 --size 64
+//! protogist train --dataset shapes --hidden 256 --epochs 600 --seed 1 --gamma 0.5 \
 //!                 --test-fraction 0.1 --through-pipeline --views 2 --with-clean \
 //!                 --out host/data/shapes_model.bin
 //! ```

@@ -131,7 +131,7 @@ pub(super) fn mlp_host() -> Section {
             "--classes",
             "19",
             "--per-class",
-            "600",
+            "1000",
             "--seed",
             "1",
             "--size",
@@ -142,9 +142,9 @@ pub(super) fn mlp_host() -> Section {
             "--dataset",
             &shapes,
             "--hidden",
-            "128",
+            "256",
             "--epochs",
-            "300",
+            "600",
             "--seed",
             "1",
             "--gamma",
@@ -188,8 +188,8 @@ pub(super) fn mlp_host() -> Section {
     let mut body =
         format!(
         "The shipped model's commands (docs/CLASSIFY.md, Shipped model): `protogist gen-shapes \
-         --classes 19 --per-class 600 --seed 1 --size 64`, `protogist train --hidden 128 --epochs \
-         300 --seed 1 --gamma 0.5 --test-fraction 0.1 --through-pipeline --views 2 --with-clean`, \
+         --classes 19 --per-class 1000 --seed 1 --size 64`, `protogist train --hidden 256 --epochs \
+         600 --seed 1 --gamma 0.5 --test-fraction 0.1 --through-pipeline --views 2 --with-clean`, \
          then `protogist eval --json` on the held-out tenth ({} probes, {} classes). The model built here is {} \
          `host/data/shapes_model.bin`.\n\n| measure | float | int8 |\n|---|---|---|\n",
         v["float"]["test"],
