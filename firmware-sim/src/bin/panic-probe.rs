@@ -21,8 +21,9 @@ const ROWS: usize = conspicuity::row_scratch_len(W);
 const C2F: stereo::c2f::C2fParams = firmware_sim::probe::C2F;
 const LABELS: usize = segment::label_capacity(W, H);
 const REGIONS: usize = complete::region_table_len(W, H);
-/// The shipped model's shape: 720 inputs, 128 hidden, 19 classes.
-const HIDDEN: usize = mlp::hidden_len(128);
+/// The shipped model's shape: 720 inputs, 256 hidden, 19 classes
+/// (`tests/panic_probe.rs` fails when the model outgrows these buffers).
+const HIDDEN: usize = mlp::hidden_len(256);
 const OUTPUT: usize = mlp::output_len(19);
 const INPUT: usize = mlp::input_len(720);
 
