@@ -215,7 +215,7 @@ fn bad_input_gets_typed_errors() {
         Some(PipelineError::ModelMismatch {
             what: "hidden",
             expected: 16,
-            got: 128
+            got: protogist::mlp::Model::parse(MODEL).unwrap().hidden()
         })
     );
     narrow.model.hidden = 2048;
