@@ -18,6 +18,17 @@ fn map(w: usize, h: usize, f: impl Fn(usize, usize) -> Option<u8>) -> Vec<Dispar
         .collect()
 }
 
+/// `depth_steps` over the whole frame (no `within`); the cells marked.
+fn steps_everywhere(c: &mut [EdgeCell], d: &[DisparityCell], w: usize, h: usize, step: u16) -> u32 {
+    depth_steps(
+        &mut ImageViewMut::packed(c, w, h).unwrap(),
+        &ImageView::packed(d, w, h).unwrap(),
+        step,
+        None,
+    )
+    .unwrap()
+}
+
 fn marked(edges: &[EdgeCell]) -> Vec<bool> {
     edges.iter().map(|e| e.get() == Some(DEPTH_EDGE)).collect()
 }
@@ -29,13 +40,7 @@ fn a_step_marks_the_cells_whose_pair_straddles_it() {
     let (w, h) = (7, 5);
     let d = map(w, h, |x, _| Some(if x <= 2 { 2 } else { 7 }));
     let mut c = vec![EdgeCell::OFF; w * h];
-    let n = depth_steps(
-        &mut ImageViewMut::packed(&mut c, w, h).unwrap(),
-        &ImageView::packed(&d, w, h).unwrap(),
-        4 * 256,
-        None,
-    )
-    .unwrap();
+    let n = steps_everywhere(&mut c, &d, w, h, 4 * 256);
     let want: Vec<bool> = (0..w * h)
         .map(|i| (1..h - 1).contains(&(i / w)) && (2..=3).contains(&(i % w)))
         .collect();
@@ -43,13 +48,7 @@ fn a_step_marks_the_cells_whose_pair_straddles_it() {
     assert_eq!(n, 6);
     // A step under the least one marks nothing.
     let mut c = vec![EdgeCell::OFF; w * h];
-    let n = depth_steps(
-        &mut ImageViewMut::packed(&mut c, w, h).unwrap(),
-        &ImageView::packed(&d, w, h).unwrap(),
-        5 * 256 + 1,
-        None,
-    )
-    .unwrap();
+    let n = steps_everywhere(&mut c, &d, w, h, 5 * 256 + 1);
     assert_eq!(n, 0);
 }
 
@@ -66,13 +65,7 @@ fn off_pairs_diagonals_and_stronger_edges() {
     let mut c = vec![EdgeCell::OFF; w * h];
     c[6] = strong; // (1, 1): a stronger colour edge keeps its value
     c[8] = weak; // (3, 1): a weaker one takes the depth edge
-    depth_steps(
-        &mut ImageViewMut::packed(&mut c, w, h).unwrap(),
-        &ImageView::packed(&d, w, h).unwrap(),
-        4 * 256,
-        None,
-    )
-    .unwrap();
+    steps_everywhere(&mut c, &d, w, h, 4 * 256);
     for (x, y) in [(1, 2), (3, 2), (2, 1), (2, 3), (3, 1), (1, 3), (3, 3)] {
         assert_eq!(c[y * w + x].get(), Some(DEPTH_EDGE), "({x}, {y})");
     }
@@ -88,13 +81,7 @@ fn off_pairs_diagonals_and_stronger_edges() {
         }
     });
     let mut c = vec![EdgeCell::OFF; w * h];
-    depth_steps(
-        &mut ImageViewMut::packed(&mut c, w, h).unwrap(),
-        &ImageView::packed(&d, w, h).unwrap(),
-        4 * 256,
-        None,
-    )
-    .unwrap();
+    steps_everywhere(&mut c, &d, w, h, 4 * 256);
     // Columns 0 and 1 at 1 px, 2 to 4 at 9 px, the centre OFF. (2, 1)
     // straddles the step in its row; so does the OFF centre itself, whose
     // row pair is (1, 2) and (3, 2). (1, 2)'s row pair holds the OFF
