@@ -431,7 +431,11 @@ struct Fixed(i64, u32);
 impl fmt::Display for Fixed {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let half = (1u128 << self.1) >> 1;
+        // Below 2^64 once shifted for any `.1` >= 7; printed as `u64`,
+        // whose formatting links no panic path (`u128`'s does, with
+        // rustc 1.96).
         let h = (u128::from(self.0.unsigned_abs()) * 100 + half) >> self.1;
+        let h = u64::try_from(h).unwrap_or(u64::MAX);
         let sign = if self.0 < 0 && h > 0 { "-" } else { "" };
         write!(f, "{sign}{}.{:02}", h / 100, h % 100)
     }

@@ -334,21 +334,17 @@ pub fn run_segment(
     let mut store = crate::storage::SegmentStorage::new(width, height);
     let mut masks = vec![false; usize::from(params.max_objects) * width * height];
     let mut bufs = store.buffers()?;
-    // With the depth pass C takes the map's steps: the panels show that C.
-    let mut edges = edges.to_vec();
-    let mut first_fg = vec![0u32; protogist::segment::bit_map_len(width, height)];
     let report = protogist::segment::segment_with_depth_pass(
         params,
         &ImageView::packed(disparity, width, height)?,
-        &mut ImageViewMut::packed(&mut edges, width, height)?,
+        &ImageView::packed(edges, width, height)?,
         &mut bufs,
         protogist::segment::Masks::Bools(&mut masks),
         &mut (),
-        &mut first_fg,
     )?;
     let (dv, cv) = (
         ImageView::packed(disparity, width, height)?,
-        ImageView::packed(&edges, width, height)?,
+        ImageView::packed(edges, width, height)?,
     );
     let (d_off, c_off) = (protogist::disparity::DisparityCell::OFF, EdgeCell::OFF);
     Ok(SegmentResult {

@@ -24,7 +24,7 @@ use crate::conspicuity::{stream_scratch_len, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::Rgb8;
 use crate::mlp;
-use crate::segment::{bit_map_len, maps_len, table_len, SegmentParams};
+use crate::segment::{bit_map_len, maps_len, table_len};
 use crate::shape::{ShapeElem, SHAPE_LEN};
 use crate::stereo::c2f;
 use crate::stereo::filters::Z;
@@ -101,23 +101,11 @@ pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) 
         }
 }
 
-/// `u32` words of the foreground the depth pass starts from: a bit map
-/// when `segment.depth_pass` is set, else none.
-pub const fn first_fg_len(width: usize, height: usize, segment: &SegmentParams) -> usize {
-    if segment.depth_pass.is_some() {
-        bit_map_len(width, height)
-    } else {
-        0
-    }
-}
-
-/// Bytes of segmentation (with the depth pass's first foreground) and of
-/// the classifier's activations.
+/// Bytes of segmentation and of the classifier's activations.
 pub const fn object_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
     let m = &params.model;
     bytes(maps_len(width, height), 4)
         + bytes(table_len(width, height), 4)
-        + bytes(first_fg_len(width, height, &params.segment), 4)
         + bytes(mlp::packed_len(SHAPE_LEN, m.hidden as usize), 4)
         + bytes(mlp::hidden_len(m.hidden as usize), 1)
         + bytes(mlp::output_len(m.classes as usize), 2)

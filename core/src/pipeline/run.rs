@@ -1,7 +1,6 @@
 //! One frame through every stage, inside the workspace.
 
 use super::arena::Arena;
-use super::layout::first_fg_len;
 use super::{
     layout, Frame, Kernels, Object, Observer, Pipeline, PipelineError, Region, RgbRows, Stage,
     MAX_OBJECTS, TOP_K,
@@ -213,18 +212,16 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
     obs.enter(Stage::Segment);
     let mut s = Arena::new(shared);
     let mut seg = SegmentBuffers::new(w, h, s.take(maps_len(w, h))?, s.take(table_len(w, h))?)?;
-    let first_fg: &mut [u32] = s.take(first_fg_len(w, h, &params.segment))?;
+    let edges: &'w [EdgeCell] = edges;
+    let edges_v = ImageView::packed(edges, w, h)?;
     let report = segment_with_depth_pass(
         &params.segment,
         &disparity_v,
-        &mut ImageViewMut::packed(&mut *edges, w, h)?,
+        &edges_v,
         &mut seg,
         Masks::Bits(&mut *masks),
         &mut SegmentSteps(obs),
-        first_fg,
     )?;
-    let edges: &'w [EdgeCell] = edges;
-    let edges_v = ImageView::packed(edges, w, h)?;
 
     let masks: &'w [u32] = masks;
 

@@ -1,5 +1,5 @@
-//! The depth pass: figure-ground searched again with the disparity map's
-//! steps as edges, for the objects the colour edges do not outline.
+//! The depth pass: the objects the colour edges do not outline, found as
+//! slices of the disparity map that stand above their rows' background.
 //!
 //! The paper's figure-ground needs a closed contour of conspicuity edges
 //! C around an object; an object whose colour is close to its
@@ -7,39 +7,53 @@
 //! colour searches ([`segment_into`](super::segment_into)), when they found
 //! fewer than K objects:
 //!
-//! 1. every foreground cell whose symmetric pair of neighbours (left and
-//!    right, up and down, or either diagonal; both ON) differs by at least
-//!    [`DepthPass::step`] becomes a strong edge of C ([`depth_steps`],
-//!    [`DEPTH_EDGE`]; the searches read C only on the foreground);
-//! 2. the foreground is restored to what it was before the first search,
-//!    less the colour objects' masks grown by [`DepthPass::clearance`]
-//!    square dilations (their halo in the stereo's map would otherwise
-//!    come back as rings and slivers);
-//! 3. figure-ground searches again, at most [`DepthPass::searches`] times;
-//!    an object of this pass is kept when its mask covers at least
-//!    [`DepthPass::min_area`] of the frame and overlaps no mask of the
-//!    colour searches.
+//! 1. the pass's foreground is every cell of the selected area whose
+//!    disparity is at least [`DepthPass::rise`] nearer than its row's
+//!    dominant disparity (the rows of the ground fit, `fit_ground`), less
+//!    the colour objects' masks grown by [`DepthPass::clearance`] square
+//!    dilations (their halo in the stereo's map would otherwise come back
+//!    as rings and slivers);
+//! 2. each search, at most [`DepthPass::searches`]: δ is the whole-pixel
+//!    plane with the most foreground cells within one plane of it, its
+//!    own counted twice (the lowest on a tie); the slice is the foreground within
+//!    [`DepthPass::radius`] of δ; the slice, closed by
+//!    [`DepthPass::closing`] square steps, gives its largest 4-connected
+//!    component, holes filled, as the mask; the slice grown by one square
+//!    step leaves the foreground;
+//! 3. a mask is an object when it is one for the colour searches
+//!    ([`SegmentParams::is_object`]), covers at least
+//!    [`DepthPass::min_area`] of the frame and overlaps no colour object.
 //!
-//! Adding the steps to C for the colour searches instead cuts the
-//! contrasted objects' masks along the stereo's halo (docs/RECALL.md,
-//! "What reaches the targets").
+//! No contour is needed: the slice's own component is the mask. The
+//! stereo's halo around a near object is where the clearance takes it
+//! out; what remains in front of its rows is an object or a part of one
+//! (docs/CHOICES.md, "The depth pass").
 
-use super::bits::{self, words_per_row, BitView, Geom};
+use super::bits::{self, for_each_on, Geom};
 use super::buffers::SegmentBuffers;
+use super::label::AreaReport;
+use super::label::Connectivity;
 use super::morph::Disk;
-use super::pipeline::{run_searches, Masks, SegmentObserver, SegmentReport};
+use super::pipeline::{emit, Masks, SegmentObserver, SegmentReport, Step};
+use super::stats::{plane, selected_bounds, DisparityRange, Slice, PLANES, STAT_FRAC_BITS};
 use super::{Ratio, SegmentError, SegmentParams};
-use crate::conspicuity::{Conspicuity, EdgeCell};
+use crate::conspicuity::EdgeCell;
 use crate::disparity::DisparityCell;
-use crate::image::{ImageView, ImageViewMut};
+use crate::image::ImageView;
 
 /// The depth pass's settings ([`SegmentParams::depth_pass`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DepthPass {
-    /// Least disparity step between a cell's symmetric neighbours that
-    /// makes it an edge, disparity bits (1/256 px); 1 to
+    /// Least height of a foreground cell above its row's dominant
+    /// disparity, disparity bits (1/256 px); 1 to
     /// [`MAX_GROUND_BAND`](super::MAX_GROUND_BAND).
-    pub step: u16,
+    pub rise: u16,
+    /// Half-width of a slice around δ, disparity bits; at most
+    /// [`MAX_GROUND_BAND`](super::MAX_GROUND_BAND).
+    pub radius: u16,
+    /// Square closing steps of the slice before its largest component is
+    /// taken (0 to 8).
+    pub closing: u8,
     /// Most searches of the pass (1 to 16).
     pub searches: u8,
     /// Square dilations of the colour objects' masks taken out of the
@@ -51,14 +65,16 @@ pub struct DepthPass {
 }
 
 impl DepthPass {
-    /// Steps of 4 px, one search, 6 px of clearance around the colour
-    /// objects, objects of at least 1/48 of the frame (docs/CHOICES.md,
-    /// "The depth pass").
+    /// Cells 3 px above their row, slices of ±1.5 px closed by 2 steps, 4
+    /// searches, 6 px of clearance around the colour objects, objects of
+    /// at least 1/64 of the frame (docs/CHOICES.md, "The depth pass").
     pub const DEFAULT: Self = Self {
-        step: 4 * 256,
-        searches: 1,
+        rise: 3 * 256,
+        radius: 384,
+        closing: 2,
+        searches: 4,
         clearance: 6,
-        min_area: Ratio::new(1, 48),
+        min_area: Ratio::new(1, 64),
     };
 
     /// Checks the settings.
@@ -66,8 +82,14 @@ impl DepthPass {
     /// # Errors
     /// [`SegmentError::BadParams`] naming the field.
     pub fn validate(&self) -> Result<(), SegmentError> {
-        if self.step == 0 || self.step > super::MAX_GROUND_BAND {
-            return Err(SegmentError::BadParams("depth_pass.step"));
+        if self.rise == 0 || self.rise > super::MAX_GROUND_BAND {
+            return Err(SegmentError::BadParams("depth_pass.rise"));
+        }
+        if self.radius > super::MAX_GROUND_BAND {
+            return Err(SegmentError::BadParams("depth_pass.radius"));
+        }
+        if self.closing > 8 {
+            return Err(SegmentError::BadParams("depth_pass.closing"));
         }
         if !(1..=16).contains(&self.searches) {
             return Err(SegmentError::BadParams("depth_pass.searches"));
@@ -92,137 +114,134 @@ impl DepthPass {
     }
 }
 
-/// The conspicuity a depth step takes: a CIELUV distance of 64, above
-/// most colour edges' C̃, so that non-maximum suppression keeps it beside
-/// them; a stronger colour edge keeps its own value.
-pub const DEPTH_EDGE: Conspicuity = Conspicuity::from_bits(64 << 6);
-
-/// Marks every cell of `edges` (within the bit map `within`, when given)
-/// whose symmetric pair of neighbours in `disparity` (both ON) differs by
-/// at least `step` bits as [`DEPTH_EDGE`], unless it is stronger already;
-/// the frame's border rows and columns, which lack a pair, are left as
-/// they are. Returns the cells marked.
-///
-/// # Errors
-/// [`SegmentError::SizeMismatch`] when the maps differ in size.
-pub fn depth_steps(
-    edges: &mut ImageViewMut<'_, EdgeCell>,
-    disparity: &ImageView<'_, DisparityCell>,
-    step: u16,
-    within: Option<&BitView<'_>>,
-) -> Result<u32, SegmentError> {
-    super::check_size(edges.size(), disparity.size())?;
-    if let Some(m) = within {
-        super::check_size(m.size(), disparity.size())?;
-    }
-    let (w, h) = disparity.size();
-    if w < 3 || h < 3 {
-        return Ok(0);
-    }
-    // Cells are `U8F8` bits with OFF as `u16::MAX`; a disparity is below
-    // 256 px, so `hi == u16::MAX` alone says a pair has an OFF member.
-    let is_step = |a: u16, b: u16| {
-        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-        hi != u16::MAX && hi - lo >= step
-    };
-    let strong = EdgeCell::from_raw(DEPTH_EDGE);
-    let stride = words_per_row(w);
-    let mut marked = 0;
-    for y in 1..h - 1 {
-        let (Some(up), Some(mid), Some(dn), Some(out)) = (
-            disparity.row(y - 1),
-            disparity.row(y),
-            disparity.row(y + 1),
-            edges.row_mut(y),
-        ) else {
-            break;
+/// The pass's foreground as bits into `fg`: the ON cells of the selected
+/// area at least `rise` bits nearer than their row's dominant disparity
+/// (`rows`: per row the disparity bits + 1, 0 for none, as `fit_ground`
+/// writes them). Returns the count.
+fn rise_foreground(
+    params: &SegmentParams,
+    d: &ImageView<'_, DisparityCell>,
+    rows: &[u32],
+    rise: u16,
+    g: Geom,
+    fg: &mut [u32],
+) -> u32 {
+    fg.fill(0);
+    let (x0, y0, y1) = selected_bounds(params, g.width, g.height);
+    let mut n = 0;
+    let cells = d.rows().zip(fg.chunks_exact_mut(g.stride.max(1)));
+    for (y, (row, out)) in cells.enumerate().take(y1).skip(y0) {
+        // b >= (r − 1) + rise, r the row's estimate + 1.
+        let Some(lo) = rows
+            .get(y)
+            .filter(|&&r| r > 0)
+            .map(|&r| r - 1 + u32::from(rise))
+        else {
+            continue;
         };
-        let b = |r: &[DisparityCell], x: usize| r.get(x).map_or(u16::MAX, |c| c.raw().to_bits());
-        let mut cell = |x: usize| {
-            let stepped = is_step(b(mid, x - 1), b(mid, x + 1))
-                | is_step(b(up, x), b(dn, x))
-                | is_step(b(up, x - 1), b(dn, x + 1))
-                | is_step(b(up, x + 1), b(dn, x - 1));
-            if let Some(e) = out
-                .get_mut(x)
-                .filter(|e| stepped && e.get().is_none_or(|c| c < DEPTH_EDGE))
-            {
-                *e = strong;
-                marked += 1;
+        // 32 cells a word, without branches; the cells left of `x0` are
+        // cleared after. OFF is `u16::MAX`, above every threshold: tested
+        // apart.
+        for (word, cells) in out.iter_mut().zip(row.chunks(32)) {
+            let mut bits = 0u32;
+            for (i, c) in cells.iter().enumerate() {
+                let b = c.raw().to_bits();
+                bits |= u32::from((u32::from(b) >= lo) & (b != u16::MAX)) << (i % 32);
             }
-        };
-        match within {
-            None => (1..w - 1).for_each(&mut cell),
-            Some(m) => {
-                let words = m.words().get(y * stride..(y + 1) * stride).unwrap_or(&[]);
-                for (i, &word) in words.iter().enumerate() {
-                    let mut bits = word;
-                    while bits != 0 {
-                        let x = 32 * i + bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        if (1..w - 1).contains(&x) {
-                            cell(x);
-                        }
-                    }
-                }
+            *word = bits;
+        }
+        for (i, word) in out.iter_mut().enumerate().take(x0.div_ceil(32)) {
+            let first = 32 * i;
+            if x0 >= first + 32 {
+                *word = 0;
+            } else if x0 > first {
+                *word &= u32::MAX << ((x0 - first) % 32);
             }
         }
+        n += out.iter().map(|w| w.count_ones()).sum::<u32>();
     }
-    Ok(marked)
+    n
+}
+
+/// The densest whole-pixel plane of the foreground: the plane δ with the
+/// most `fg` cells in planes δ − 1 to δ + 1, δ's own counted twice, the
+/// lowest on a tie, and that weighted count; `None` for an empty
+/// foreground.
+fn densest_plane(d: &ImageView<'_, DisparityCell>, g: Geom, fg: &[u32]) -> Option<(u16, u32)> {
+    let mut counts = [0u32; PLANES];
+    for_each_on(g, fg, |x, y| {
+        if let Some(k) = d
+            .get(x, y)
+            .and_then(|c| c.get())
+            .and_then(|v| counts.get_mut(usize::from(plane(v.to_bits()))))
+        {
+            *k += 1;
+        }
+    });
+    let c = |p: usize| counts.get(p).copied().unwrap_or(0);
+    let mut best: Option<(u16, u32)> = None;
+    for p in 0..PLANES {
+        // Planes δ − 1 to δ + 1, δ's own twice: a plane between two equal
+        // neighbours wins over them.
+        let n = p.checked_sub(1).map_or(0, c) + 2 * c(p) + c(p + 1);
+        if n > best.map_or(0, |(_, m)| m) {
+            best = Some((u16::try_from(p).unwrap_or(u16::MAX), n));
+        }
+    }
+    best
+}
+
+/// `dst` = the cells of `fg` whose disparity lies in `range`.
+fn slice_bits(
+    d: &ImageView<'_, DisparityCell>,
+    range: &DisparityRange,
+    g: Geom,
+    fg: &[u32],
+    dst: &mut [u32],
+) -> u32 {
+    dst.fill(0);
+    let mut n = 0;
+    for_each_on(g, fg, |x, y| {
+        let inside = d
+            .get(x, y)
+            .and_then(|c| c.get())
+            .is_some_and(|v| range.contains_bits(v.to_bits()));
+        if let Some(w) = dst.get_mut(y * g.stride + x / 32).filter(|_| inside) {
+            *w |= 1 << (x % 32);
+            n += 1;
+        }
+    });
+    n
 }
 
 /// The colour searches of [`segment_into`](super::segment_into), then,
 /// when `params.depth_pass` is set and they found fewer than K objects,
-/// the depth pass (module docs): `edges` takes the depth steps, and
-/// `first_fg` (a bit map, [`bit_map_len`](super::bit_map_len) words) keeps
-/// the foreground between the two. Without a depth pass this is
-/// [`segment_into`](super::segment_into) and `edges` is not written.
+/// the depth pass (module docs). Without a depth pass this is
+/// [`segment_into`](super::segment_into).
 ///
 /// # Errors
-/// As [`segment_into`](super::segment_into); [`SegmentError::MasksTooSmall`]
-/// when `first_fg` is shorter than a bit map.
+/// As [`segment_into`](super::segment_into).
 pub fn segment_with_depth_pass(
     params: &SegmentParams,
     disparity: &ImageView<'_, DisparityCell>,
-    edges: &mut ImageViewMut<'_, EdgeCell>,
+    edges: &ImageView<'_, EdgeCell>,
     bufs: &mut SegmentBuffers<'_>,
     mut masks: Masks<'_>,
     observer: &mut impl SegmentObserver,
-    first_fg: &mut [u32],
 ) -> Result<SegmentReport, SegmentError> {
+    // `segment_into` validates `params`, the pass's settings with them.
+    let mut report =
+        super::segment_into(params, disparity, edges, bufs, masks.reborrow(), observer)?;
     let Some(pass) = params.depth_pass else {
-        return super::segment_into(params, disparity, &edges.as_view(), bufs, masks, observer);
+        return Ok(report);
     };
-    // `segment_saving` validates `params`, the pass's settings with them.
-    let words = bufs.g.len();
-    let Some(first_fg) = first_fg.get_mut(..words) else {
-        return Err(SegmentError::MasksTooSmall {
-            needed: words,
-            got: first_fg.len(),
-        });
-    };
-    let mut report = super::pipeline::segment_saving(
-        params,
-        disparity,
-        &edges.as_view(),
-        bufs,
-        masks.reborrow(),
-        observer,
-        Some(&mut *first_fg),
-    )?;
     let k = usize::from(params.max_objects);
     if report.objects.len() >= k || report.stats.is_none() {
         return Ok(report);
     }
     let g = bufs.g;
     let (w, h) = bufs.size();
-    depth_steps(
-        edges,
-        disparity,
-        pass.step,
-        Some(&BitView::with_geom(first_fg, g)),
-    )?;
-    bits::copy_map(bufs.d_fg, first_fg);
+    rise_foreground(params, disparity, bufs.ground_rows, pass.rise, g, bufs.d_fg);
     // The colour objects, grown by the clearance, leave the foreground.
     let chunk = masks.chunk(g);
     bufs.mask.fill(0);
@@ -241,21 +260,86 @@ pub fn segment_with_depth_pass(
     for (f, m) in bufs.d_fg.iter_mut().zip(bufs.mask.iter()) {
         *f &= !m;
     }
+    observer.step(Step::Foreground);
     let union = Union {
         min_area: pass.least_area(w, h),
         first: report.objects.len(),
     };
-    run_searches(
-        params,
-        disparity,
-        &edges.as_view(),
-        bufs,
-        &mut masks,
-        &mut report,
-        observer,
-        usize::from(pass.searches),
-        Some(union),
-    )?;
+    let extra = STAT_FRAC_BITS - 8;
+    for _ in 0..pass.searches {
+        if report.objects.len() >= k {
+            break;
+        }
+        let Some((delta, cells)) = densest_plane(disparity, g, bufs.d_fg) else {
+            break;
+        };
+        if cells < union.min_area {
+            break;
+        }
+        let centre = i64::from(delta) << 8;
+        let r = i64::from(pass.radius);
+        let range = DisparityRange {
+            low: (centre - r) << extra,
+            high: (centre + r) << extra,
+        };
+        let slice = Slice {
+            delta,
+            cells,
+            score: u64::from(cells),
+        };
+        slice_bits(disparity, &range, g, bufs.d_fg, bufs.region);
+        observer.step(Step::Slice);
+        bits::copy_map(bufs.closed, bufs.region);
+        bits::close(
+            g,
+            Disk::Square,
+            bufs.closed,
+            bufs.scratch,
+            bufs.morph_rows,
+            pass.closing,
+        );
+        observer.step(Step::Close);
+        let comps = bits::components(g, bufs.closed, Connectivity::Four, bufs.rows, bufs.table)?;
+        let (best, largest) = comps.largest.map_or((None, 0), |(r, a)| (Some(r), a));
+        comps.select(g, bufs.closed, bufs.table, bufs.filled, |r, _| {
+            Some(r) == best
+        });
+        bits::fill_holes(g, bufs.filled, bufs.mask, bufs.scratch);
+        let area = bufs.mask.iter().map(|w| w.count_ones()).sum();
+        observer.step(Step::Fill);
+        // The slice, grown by a step, leaves the foreground.
+        bits::morph_n(
+            g,
+            Disk::Square,
+            bufs.region,
+            bufs.scratch,
+            bufs.morph_rows,
+            1,
+            false,
+        );
+        for (f, m) in bufs.d_fg.iter_mut().zip(bufs.region.iter()) {
+            *f &= !m;
+        }
+        let regions = AreaReport {
+            regions: u16::try_from(comps.count).unwrap_or(u16::MAX),
+            kept: 1,
+            largest,
+            area,
+        };
+        emit(
+            params,
+            &mut masks,
+            chunk,
+            &slice,
+            range,
+            regions,
+            bufs,
+            &mut report,
+            observer,
+            Some(union),
+        );
+        observer.step(Step::Mask);
+    }
     Ok(report)
 }
 

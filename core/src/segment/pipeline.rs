@@ -273,23 +273,8 @@ pub fn segment_into(
     disparity: &ImageView<'_, DisparityCell>,
     conspicuity: &ImageView<'_, EdgeCell>,
     bufs: &mut SegmentBuffers<'_>,
-    masks: Masks<'_>,
-    observer: &mut impl SegmentObserver,
-) -> Result<SegmentReport, SegmentError> {
-    segment_saving(params, disparity, conspicuity, bufs, masks, observer, None)
-}
-
-/// [`segment_into`], copying the foreground as it is before the first
-/// search into `first_fg` (a bit map) when given: the depth pass starts
-/// from it ([`super::depth`]).
-pub(super) fn segment_saving(
-    params: &SegmentParams,
-    disparity: &ImageView<'_, DisparityCell>,
-    conspicuity: &ImageView<'_, EdgeCell>,
-    bufs: &mut SegmentBuffers<'_>,
     mut masks: Masks<'_>,
     observer: &mut impl SegmentObserver,
-    first_fg: Option<&mut [u32]>,
 ) -> Result<SegmentReport, SegmentError> {
     params.validate()?;
     let (w, h) = bufs.size();
@@ -328,7 +313,9 @@ pub(super) fn segment_saving(
     report.thresholds = Some(t);
     // The rows' dominant disparities (`bufs.ground_rows`) serve the ground
     // fit and the background by rows.
-    let rows_needed = params.ground_band.is_some() || params.row_background.is_some();
+    let rows_needed = params.ground_band.is_some()
+        || params.row_background.is_some()
+        || params.depth_pass.is_some();
     if rows_needed {
         let line = fit_ground(disparity, bufs.ground_rows)?;
         report.ground = line.filter(|_| params.ground_band.is_some());
@@ -337,9 +324,6 @@ pub(super) fn segment_saving(
     let rows = params.row_background.map(|b| (&*bufs.ground_rows, b));
     report.foreground = passes::foreground(params, disparity, &t, ground, rows, g, bufs.d_fg);
     observer.step(Step::Foreground);
-    if let Some(first_fg) = first_fg {
-        bits::copy_map(first_fg, bufs.d_fg);
-    }
     let searches = if params.every_mask_is_an_object() {
         k
     } else {
@@ -354,14 +338,12 @@ pub(super) fn segment_saving(
         &mut report,
         observer,
         searches,
-        None,
     )?;
     Ok(report)
 }
 
 /// Up to `searches` searches of figure-ground on the foreground in
-/// `bufs.d_fg`, adding objects to `report` and `masks` until it holds K;
-/// with `union`, only the objects it keeps ([`super::depth`]).
+/// `bufs.d_fg`, adding objects to `report` and `masks` until it holds K.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn run_searches(
     params: &SegmentParams,
@@ -372,7 +354,6 @@ pub(super) fn run_searches(
     report: &mut SegmentReport,
     observer: &mut impl SegmentObserver,
     searches: usize,
-    union: Option<Union>,
 ) -> Result<(), SegmentError> {
     let Some(stats) = report.stats else {
         return Ok(());
@@ -478,7 +459,7 @@ pub(super) fn run_searches(
                 regions.area = parts::part_mask(params, bufs, ic, root);
             }
             emit(
-                params, masks, chunk, &slice, range, regions, bufs, report, observer, union,
+                params, masks, chunk, &slice, range, regions, bufs, report, observer, None,
             );
         }
         if ic.is_some() {
@@ -505,7 +486,7 @@ pub(super) fn run_searches(
 
 /// Reports `bufs.mask` as the next object when it is one.
 #[allow(clippy::too_many_arguments)]
-fn emit(
+pub(super) fn emit(
     params: &SegmentParams,
     masks: &mut Masks<'_>,
     chunk: usize,

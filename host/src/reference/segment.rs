@@ -330,9 +330,12 @@ impl GroundLineF {
 /// 1/2 px per row in steps of 1/128 (intercepts at the bottom row in half
 /// px, two bins a window), three least-squares refinements over the rows
 /// near the line before (within 1/2 px, then 1/4 px), and the checks (a quarter of the rows, slope ≥ 1/32).
-pub fn fit_ground(disparity: &[DispF], width: usize, height: usize) -> Option<GroundLineF> {
+/// Each row's dominant disparity as [`fit_ground`] takes it: the mean
+/// within a plane of its most common whole-px plane (the lowest on ties),
+/// to 1/256 px, when a quarter of the row agrees; `None` otherwise.
+pub fn row_disparities(disparity: &[DispF], width: usize, height: usize) -> Vec<Option<f64>> {
     let plane = |v: f64| (v + 0.5).floor() as i64;
-    let rows: Vec<Option<f64>> = (0..height)
+    (0..height)
         .map(|y| {
             let row: Vec<f64> = disparity[y * width..(y + 1) * width]
                 .iter()
@@ -353,7 +356,12 @@ pub fn fit_ground(disparity: &[DispF], width: usize, height: usize) -> Option<Gr
                 // In the disparity's unit, 1/256 px, as core keeps it.
                 .then(|| (near.iter().sum::<f64>() / near.len() as f64 * 256.0).round() / 256.0)
         })
-        .collect();
+        .collect()
+}
+
+pub fn fit_ground(disparity: &[DispF], width: usize, height: usize) -> Option<GroundLineF> {
+    let plane = |v: f64| (v + 0.5).floor() as i64;
+    let rows = row_disparities(disparity, width, height);
     let bottom = height as f64 - 1.0;
     let mut best: Option<(usize, f64, f64)> = None;
     for step in 0..=60 {
@@ -421,37 +429,115 @@ pub fn inhibit_ground(line: &GroundLineF, band: f32, d_fg: &[DispF], width: usiz
         .collect()
 }
 
-/// The depth pass's edges ([`protogist::segment::depth_steps`]): `c` with
-/// every cell (of `within`, when given) whose symmetric pair of
-/// neighbours in `d` (left and right, up and down, or a diagonal; both ON)
-/// differs by at least `step` px set to `edge`, unless it is stronger
-/// already; border cells unchanged.
-pub fn depth_steps(
-    c: &[EdgeCell],
-    d: &[DispF],
-    (w, h): (usize, usize),
-    step: f32,
-    edge: EdgeCell,
-    within: Option<&[bool]>,
-) -> Vec<EdgeCell> {
-    let mut out = c.to_vec();
-    let at = |x: usize, y: usize| d.get(y * w + x).copied().flatten();
-    for y in 1..h.saturating_sub(1) {
-        for x in 1..w.saturating_sub(1) {
-            let pairs = [
-                (at(x - 1, y), at(x + 1, y)),
-                (at(x, y - 1), at(x, y + 1)),
-                (at(x - 1, y - 1), at(x + 1, y + 1)),
-                (at(x + 1, y - 1), at(x - 1, y + 1)),
-            ];
-            let stepped = pairs
-                .iter()
-                .any(|&(a, b)| matches!((a, b), (Some(a), Some(b)) if (a - b).abs() >= step));
-            let inside = within.is_none_or(|m| m[y * w + x]);
-            let cell = &mut out[y * w + x];
-            if inside && stepped && cell.get().is_none_or(|v| Some(v) < edge.get()) {
-                *cell = edge;
+/// Reference of the depth pass of
+/// [`protogist::segment::segment_with_depth_pass`], after the colour
+/// searches found `colour` (their masks): the masks of the objects it
+/// adds, in order. Its foreground is every ON cell of S at least `rise`
+/// px above its row's dominant disparity ([`row_disparities`]), less the
+/// colour masks grown by `clearance` square dilations; each search takes
+/// the whole-px plane δ with the most foreground cells in planes δ − 1 to
+/// δ + 1, δ's own counted twice (the lowest on a tie), the foreground within `radius` px of δ,
+/// closes it by `closing` square steps, keeps its largest 4-connected
+/// component (the first in raster order on a tie) with holes filled, and
+/// takes the slice grown by one square step out of the foreground. A
+/// mask is kept when it is an object ([`SegmentParams::is_object`]), of
+/// at least the pass's least area, and touches no colour mask.
+pub fn depth_pass(
+    params: &SegmentParams,
+    disparity: &[DispF],
+    colour: &[Vec<bool>],
+    w: usize,
+    h: usize,
+) -> Vec<Vec<bool>> {
+    let Some(pass) = params.depth_pass else {
+        return Vec::new();
+    };
+    let k = usize::from(params.max_objects);
+    let rows = row_disparities(disparity, w, h);
+    let rise = f64::from(pass.rise) / 256.0;
+    let mut fg: Vec<bool> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            in_selected_area(params, w, h, x, y)
+                && matches!((disparity[i], rows[y]), (Some(d), Some(r)) if f64::from(d) >= r + rise)
+        })
+        .collect();
+    let mut taken = vec![false; w * h];
+    for m in colour {
+        taken.iter_mut().zip(m).for_each(|(t, &c)| *t |= c);
+    }
+    for _ in 0..pass.clearance {
+        taken = dilate(Disk::Square, &taken, w, h);
+    }
+    fg.iter_mut().zip(&taken).for_each(|(f, &t)| *f &= !t);
+    let least = pass.least_area(w, h) as usize;
+    let plane = |v: f32| (f64::from(v) + 0.5).floor() as i64;
+    let mut out = Vec::new();
+    for _ in 0..pass.searches {
+        if colour.len() + out.len() >= k {
+            break;
+        }
+        let mut counts = vec![0usize; 258];
+        for (i, &on) in fg.iter().enumerate() {
+            if let (true, Some(d)) = (on, disparity[i]) {
+                counts[plane(d).clamp(0, 256) as usize] += 1;
             }
+        }
+        // Planes δ − 1 to δ + 1, δ's own twice; the first (lowest) best wins.
+        let window = |p: usize| {
+            let below = if p == 0 { 0 } else { counts[p - 1] };
+            below + 2 * counts[p] + counts[p + 1]
+        };
+        let best = (0..257).fold((0, 0), |b, p| {
+            let n = window(p);
+            if n > b.1 {
+                (p, n)
+            } else {
+                b
+            }
+        });
+        if best.1 == 0 || best.1 < least {
+            break;
+        }
+        let (delta, r) = (best.0 as f64, f64::from(pass.radius) / 256.0);
+        let slice: Vec<bool> = (0..w * h)
+            .map(|i| fg[i] && disparity[i].is_some_and(|d| (f64::from(d) - delta).abs() <= r))
+            .collect();
+        let closed = close(Disk::Square, &slice, w, h, pass.closing);
+        let (labels, n) = label(&closed, w, h, true, Connectivity::Four);
+        let mut area = vec![0usize; usize::from(n) + 1];
+        labels.iter().for_each(|&l| area[usize::from(l)] += 1);
+        area[0] = 0;
+        let top = (1..=n).fold(0u16, |b, l| {
+            if area[usize::from(l)] > area[usize::from(b)] {
+                l
+            } else {
+                b
+            }
+        });
+        let comp: Vec<bool> = labels.iter().map(|&l| top != 0 && l == top).collect();
+        let mask = fill_holes(&comp, w, h);
+        let grown = dilate(Disk::Square, &slice, w, h);
+        fg.iter_mut().zip(&grown).for_each(|(f, &g)| *f &= !g);
+        let a = mask.iter().filter(|&&m| m).count();
+        let (xs, ys): (Vec<usize>, Vec<usize>) = (0..w * h)
+            .filter(|&i| mask[i])
+            .map(|i| (i % w, i / w))
+            .unzip();
+        let box_size = match (
+            xs.iter().min(),
+            xs.iter().max(),
+            ys.iter().min(),
+            ys.iter().max(),
+        ) {
+            (Some(x0), Some(x1), Some(y0), Some(y1)) => (x1 + 1 - x0, y1 + 1 - y0),
+            _ => (0, 0),
+        };
+        let clash = colour
+            .iter()
+            .any(|c| c.iter().zip(&mask).any(|(&a, &b)| a && b));
+        if params.is_object(a as u32, box_size, (w, h)) && a >= least && !clash {
+            out.push(mask);
         }
     }
     out
