@@ -195,9 +195,10 @@ pub struct SegmentParams {
     /// alone. At most [`MAX_GROUND_BAND`].
     pub min_slice_radius: u16,
     /// The depth pass: when the searches on C found fewer than
-    /// `max_objects` objects, figure-ground searches again with the
-    /// disparity map's steps as edges ([`segment_with_depth_pass`],
-    /// [`DepthPass`]). `None` (the paper): C alone.
+    /// `max_objects` objects, the disparity map's slices that stand above
+    /// their rows' background are objects too, no contour needed
+    /// ([`segment_with_depth_pass`], [`DepthPass`]). `None` (the paper):
+    /// C alone.
     pub depth_pass: Option<DepthPass>,
 }
 
