@@ -104,7 +104,9 @@ pub struct Detection {
     pub delta: u16,
     /// The object slice `[δ − r, δ + r]`.
     pub range: DisparityRange,
-    /// Saliency: A^C(δ)·δ^A.
+    /// Saliency: A^C(δ)·δ^A; for an object of the depth pass
+    /// ([`DepthPass`](super::DepthPass)), which has no C, its slice's
+    /// foreground cells in planes δ − 1 to δ + 1, δ's own counted twice.
     pub score: u64,
     /// Mask pixels (0 when the contour never closed).
     pub area: u32,
