@@ -93,7 +93,7 @@ pub fn run_chain(
             }
         }
     };
-    let segment = run_segment(segment, &disparity, &edges.edges, w, h)?;
+    let segment = run_segment(segment, &disparity, &edges.edges, Some(left), w, h)?;
     Ok(ChainRun {
         edges,
         disparity,

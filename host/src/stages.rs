@@ -320,7 +320,9 @@ pub struct SegmentResult {
     pub c_obj: Vec<EdgeCell>,
 }
 
-/// Runs the core segmentation stage on a disparity map and the edge map C.
+/// Runs the core segmentation stage on a disparity map and the edge map C;
+/// the depth pass refines its masks against `left` (the left image), and
+/// does not refine them without one.
 ///
 /// # Errors
 /// The stage's [`SegmentError`](protogist::segment::SegmentError).
@@ -328,24 +330,38 @@ pub fn run_segment(
     params: &protogist::segment::SegmentParams,
     disparity: &[protogist::disparity::DisparityCell],
     edges: &[EdgeCell],
+    left: Option<&[Rgb8]>,
     width: usize,
     height: usize,
 ) -> Result<SegmentResult> {
     let mut store = crate::storage::SegmentStorage::new(width, height);
     let mut masks = vec![false; usize::from(params.max_objects) * width * height];
     let mut bufs = store.buffers()?;
-    let report = protogist::segment::segment_with_depth_pass(
-        params,
-        &ImageView::packed(disparity, width, height)?,
-        &ImageView::packed(edges, width, height)?,
-        &mut bufs,
-        protogist::segment::Masks::Bools(&mut masks),
-        &mut (),
-    )?;
+    let mut params = *params;
+    let grey = vec![Rgb8::default(); width * height];
+    let frame = match left {
+        Some(l) => ImageView::packed(l, width, height)?,
+        None => {
+            if let Some(p) = params.depth_pass.as_mut() {
+                p.refine = None;
+            }
+            ImageView::packed(&grey, width, height)?
+        }
+    };
+    let mut row = vec![Rgb8::default(); width];
     let (dv, cv) = (
         ImageView::packed(disparity, width, height)?,
         ImageView::packed(edges, width, height)?,
     );
+    let report = protogist::segment::segment_with_depth_pass(
+        &params,
+        &dv,
+        &cv,
+        protogist::segment::LeftImage::new(&frame, &mut row)?,
+        &mut bufs,
+        protogist::segment::Masks::Bools(&mut masks),
+        &mut (),
+    )?;
     let (d_off, c_off) = (protogist::disparity::DisparityCell::OFF, EdgeCell::OFF);
     Ok(SegmentResult {
         width,

@@ -4,10 +4,10 @@
 use proptest::prelude::*;
 use protogist::conspicuity::{Conspicuity, EdgeCell};
 use protogist::disparity::{from_pixels, DisparityCell};
-use protogist::image::ImageView;
+use protogist::image::{ImageError, ImageView, Rgb8};
 use protogist::segment::{
-    segment_with_depth_pass, DepthPass, Masks, Ratio, SegmentError, SegmentParams, SegmentReport,
-    MAX_GROUND_BAND,
+    segment_with_depth_pass, DepthPass, LeftImage, Masks, Ratio, Refine, SegmentError,
+    SegmentParams, SegmentReport, MAX_GROUND_BAND,
 };
 use protogist_host::reference::segment as rf;
 use protogist_tests::SegmentStorage;
@@ -50,6 +50,27 @@ fn the_settings_are_checked() {
         },
         DepthPass {
             min_area: Ratio::new(2, 1),
+            ..DepthPass::DEFAULT
+        },
+        DepthPass {
+            refine: Some(Refine {
+                core: 9,
+                ..Refine::DEFAULT
+            }),
+            ..DepthPass::DEFAULT
+        },
+        DepthPass {
+            refine: Some(Refine {
+                reach: 9,
+                ..Refine::DEFAULT
+            }),
+            ..DepthPass::DEFAULT
+        },
+        DepthPass {
+            refine: Some(Refine {
+                ring: 0,
+                ..Refine::DEFAULT
+            }),
             ..DepthPass::DEFAULT
         },
     ];
@@ -110,19 +131,32 @@ const PASS: SegmentParams = SegmentParams {
     ..OPEN
 };
 
-/// The report and the masks.
+/// The report and the masks, the masks refined against `left` (a grey
+/// frame when `None`).
 fn run_at(
     p: &SegmentParams,
     d: &[DisparityCell],
     c: &[EdgeCell],
+    left: Option<&[Rgb8]>,
     (w, h): (usize, usize),
 ) -> Result<(SegmentReport, Vec<bool>), SegmentError> {
     let mut store = SegmentStorage::new(w, h);
     let mut masks = vec![false; usize::from(p.max_objects) * w * h];
+    let grey = vec![
+        Rgb8 {
+            r: 90,
+            g: 90,
+            b: 90
+        };
+        w * h
+    ];
+    let mut row = vec![Rgb8::default(); w];
+    let frame = ImageView::packed(left.unwrap_or(&grey), w, h).unwrap();
     let r = segment_with_depth_pass(
         p,
         &ImageView::packed(d, w, h).unwrap(),
         &ImageView::packed(c, w, h).unwrap(),
+        LeftImage::new(&frame, &mut row).unwrap(),
         &mut store.buffers().unwrap(),
         Masks::Bools(&mut masks),
         &mut (),
@@ -135,7 +169,7 @@ fn run(
     d: &[DisparityCell],
     c: &[EdgeCell],
 ) -> Result<(SegmentReport, Vec<bool>), SegmentError> {
-    run_at(p, d, c, (BW, BH))
+    run_at(p, d, c, None, (BW, BH))
 }
 
 fn mask(masks: &[bool], k: usize) -> &[bool] {
@@ -256,7 +290,139 @@ fn plain_objects_at_two_depths_are_two_objects_and_off_holes_are_filled() {
 }
 
 // ---------------------------------------------------------------------------
+// The colour refinement.
+
+/// A left image of `BW` x `BH`: `bg`, with `(x0, y0, x1, y1)` in `fg`.
+fn two_colours(bg: Rgb8, fg: Rgb8, (x0, y0, x1, y1): (usize, usize, usize, usize)) -> Vec<Rgb8> {
+    (0..BW * BH)
+        .map(|i| {
+            let (x, y) = (i % BW, i / BW);
+            if (x0..x1).contains(&x) && (y0..y1).contains(&y) {
+                fg
+            } else {
+                bg
+            }
+        })
+        .collect()
+}
+
+const GREY: Rgb8 = Rgb8 {
+    r: 100,
+    g: 100,
+    b: 100,
+};
+const TAN: Rgb8 = Rgb8 {
+    r: 118,
+    g: 104,
+    b: 92,
+};
+
+fn refined(p: &SegmentParams, d: &[DisparityCell], c: &[EdgeCell], left: &[Rgb8]) -> Vec<bool> {
+    let (r, masks) = run_at(p, d, c, Some(left), (BW, BH)).unwrap();
+    assert_eq!(r.objects.len(), 1);
+    mask(&masks, 0).to_vec()
+}
+
+#[test]
+fn the_refinement_gives_a_slice_the_border_its_colour_has() {
+    // The object is 16x14 in colour; the stereo lost a 2 px band of its
+    // border to the background's disparity, so its slice is 12x10.
+    let (d, c) = boxes(&[(12, 10, 24, 20, 12, false)]);
+    let left = two_colours(GREY, TAN, (10, 8, 26, 22));
+    let without = SegmentParams {
+        depth_pass: PASS.depth_pass.map(|p| DepthPass { refine: None, ..p }),
+        ..PASS
+    };
+    assert_eq!(
+        iou_box(&refined(&without, &d, &c, &left), (12, 10, 24, 20)),
+        1.0
+    );
+    let with = PASS;
+    assert_eq!(
+        iou_box(&refined(&with, &d, &c, &left), (10, 8, 26, 22)),
+        1.0
+    );
+    // The object's colour only: a slice 2 px too wide is trimmed to it.
+    let wide = boxes(&[(8, 6, 28, 24, 12, false)]);
+    assert_eq!(
+        iou_box(&refined(&with, &wide.0, &wide.1, &left), (10, 8, 26, 22)),
+        1.0
+    );
+    // One colour everywhere: every cell is a tie and keeps its place.
+    let grey = vec![GREY; BW * BH];
+    assert_eq!(
+        refined(&with, &d, &c, &grey),
+        refined(&without, &d, &c, &grey)
+    );
+}
+
+#[test]
+fn a_left_image_of_another_size_is_an_error() {
+    let (d, c) = boxes(&[(12, 10, 24, 20, 12, false)]);
+    let left = vec![GREY; (BW + 1) * BH];
+    let mut row = vec![Rgb8::default(); BW + 1];
+    let frame = ImageView::packed(&left, BW + 1, BH).unwrap();
+    let mut store = SegmentStorage::new(BW, BH);
+    let mut masks = vec![false; 3 * BW * BH];
+    let r = segment_with_depth_pass(
+        &PASS,
+        &ImageView::packed(&d, BW, BH).unwrap(),
+        &ImageView::packed(&c, BW, BH).unwrap(),
+        LeftImage::new(&frame, &mut row).unwrap(),
+        &mut store.buffers().unwrap(),
+        Masks::Bools(&mut masks),
+        &mut (),
+    );
+    assert!(matches!(r, Err(SegmentError::SizeMismatch { got, .. }) if got == (BW + 1, BH)));
+    let mut short = vec![Rgb8::default(); BW];
+    assert!(matches!(
+        LeftImage::new(&frame, &mut short),
+        Err(ImageError::BufferTooSmall { needed, got }) if needed == BW + 1 && got == BW
+    ));
+}
+
+// ---------------------------------------------------------------------------
 // Against the f32 reference.
+
+/// Per box a colour offset and a shift, the background colour, and noise
+/// per pixel.
+type Paint = (Vec<([i16; 3], isize, isize)>, [u8; 3], Vec<i16>);
+
+/// A left image for [`blocky`]'s boxes: a background colour, box `k` in
+/// it plus `paint.0[k].0` (close colours, so that the noise and the
+/// means decide), moved by `paint.0[k].1, .2` px, and noise.
+fn painted(
+    (w, h): (usize, usize),
+    list: &[(usize, usize, usize, usize, u8, bool)],
+    (boxes, bg, noise): &Paint,
+) -> Vec<Rgb8> {
+    let mut img = vec![*bg; w * h];
+    for (&(x0, y0, bw, bh, _, _), &(delta, dx, dy)) in list.iter().zip(boxes) {
+        let colour: [u8; 3] =
+            core::array::from_fn(|i| (i16::from(bg[i]) + delta[i]).clamp(0, 255) as u8);
+        for y in 0..h {
+            for x in 0..w {
+                let (sx, sy) = (x as isize - dx, y as isize - dy);
+                let inside = (x0 as isize..(x0 + bw) as isize).contains(&sx)
+                    && (y0 as isize..(y0 + bh) as isize).contains(&sy);
+                if inside {
+                    img[y * w + x] = colour;
+                }
+            }
+        }
+    }
+    img.iter()
+        .zip(noise)
+        .map(|(p, &n)| {
+            let c = |v: u8| (i16::from(v) + n).clamp(0, 255) as u8;
+            Rgb8 {
+                r: c(p[0]),
+                g: c(p[1]),
+                b: c(p[2]),
+            }
+        })
+        .collect()
+}
 
 /// A blocky scene: background 2 px; boxes `(x, y, w, h, d, outlined)`
 /// clipped to the frame; `off` cells OFF.
@@ -289,7 +455,7 @@ fn blocky(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    #![proptest_config(ProptestConfig::with_cases(96))]
 
     /// The pass's objects are the reference's, mask for mask: its
     /// decisions compare `U8F8` values, which `f64` holds exactly, with
@@ -312,19 +478,29 @@ proptest! {
         searches in 1u8..5,
         clearance in 0u8..4,
         den in 16u16..200,
+        refine in prop::option::weighted(0.8, (0u8..4, 0u8..5, 1u8..5)),
+        paint in (
+            prop::collection::vec((prop::array::uniform3(-40i16..41), -3isize..4, -3isize..4), 5),
+            prop::array::uniform3(40u8..216),
+            prop::collection::vec(-20i16..21, 56 * 40),
+        ),
     ) {
         let (d, c) = blocky((w, h), &list, &off);
-        let pass = DepthPass { rise, radius, closing, searches, clearance, min_area: Ratio::new(1, den) };
+        let left = painted((w, h), &list, &paint);
+        let refine = refine.map(|(core, reach, ring)| Refine { core, reach, ring });
+        let pass = DepthPass {
+            rise, radius, closing, searches, clearance, min_area: Ratio::new(1, den), refine,
+        };
         let colour_only = SegmentParams { max_objects: 4, ..OPEN };
         let p = SegmentParams { depth_pass: Some(pass), ..colour_only };
-        let (colour, cm) = run_at(&colour_only, &d, &c, (w, h)).unwrap();
-        let (r, masks) = run_at(&p, &d, &c, (w, h)).unwrap();
+        let (colour, cm) = run_at(&colour_only, &d, &c, Some(&left), (w, h)).unwrap();
+        let (r, masks) = run_at(&p, &d, &c, Some(&left), (w, h)).unwrap();
         let n = colour.objects.len();
         prop_assert_eq!(&r.objects[..n], &colour.objects[..]);
         let colour_masks: Vec<Vec<bool>> =
             (0..n).map(|k| cm[k * w * h..(k + 1) * w * h].to_vec()).collect();
         let df: Vec<rf::DispF> = d.iter().map(|v| v.get().map(f32::from)).collect();
-        let want = rf::depth_pass(&p, &df, &colour_masks, w, h);
+        let want = rf::depth_pass(&p, &df, &colour_masks, Some(&left), w, h);
         let got: Vec<Vec<bool>> =
             (n..r.objects.len()).map(|k| masks[k * w * h..(k + 1) * w * h].to_vec()).collect();
         prop_assert_eq!(got, want);

@@ -20,7 +20,9 @@
 //!    [`DepthPass::closing`] square steps, gives its largest 4-connected
 //!    component, holes filled, as the mask; the slice grown by one square
 //!    step leaves the foreground;
-//! 3. a mask is an object when it is one for the colour searches
+//! 3. with [`DepthPass::refine`], the mask's outline is moved to where the
+//!    left image's colour changes ([`Refine`], module `refine`);
+//! 4. a mask is an object when it is one for the colour searches
 //!    ([`SegmentParams::is_object`]), covers at least
 //!    [`DepthPass::min_area`] of the frame and overlaps no colour object.
 //!
@@ -35,11 +37,12 @@ use super::label::AreaReport;
 use super::label::Connectivity;
 use super::morph::Disk;
 use super::pipeline::{emit, Masks, SegmentObserver, SegmentReport, Step};
+use super::refine::{refine_mask, LeftImage, Refine};
 use super::stats::{plane, selected_bounds, DisparityRange, Slice, PLANES, STAT_FRAC_BITS};
 use super::{Ratio, SegmentError, SegmentParams};
 use crate::conspicuity::EdgeCell;
 use crate::disparity::DisparityCell;
-use crate::image::ImageView;
+use crate::image::{ImageView, RgbRows};
 
 /// The depth pass's settings ([`SegmentParams::depth_pass`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,12 +65,16 @@ pub struct DepthPass {
     /// Least mask area of an object of the pass, a fraction of the frame
     /// (at most 1).
     pub min_area: Ratio,
+    /// The colour refinement of each mask against the left image; `None`:
+    /// the slice's component is the mask.
+    pub refine: Option<Refine>,
 }
 
 impl DepthPass {
     /// Cells 3 px above their row, slices of ±1.5 px closed by 2 steps, 4
-    /// searches, 6 px of clearance around the colour objects, objects of
-    /// at least 1/64 of the frame (docs/CHOICES.md, "The depth pass").
+    /// searches, 6 px of clearance around the colour objects, masks
+    /// refined by colour ([`Refine::DEFAULT`]), objects of at least 1/64
+    /// of the frame (docs/CHOICES.md, "The depth pass").
     pub const DEFAULT: Self = Self {
         rise: 3 * 256,
         radius: 384,
@@ -75,6 +82,7 @@ impl DepthPass {
         searches: 4,
         clearance: 6,
         min_area: Ratio::new(1, 64),
+        refine: Some(Refine::DEFAULT),
     };
 
     /// Checks the settings.
@@ -100,7 +108,7 @@ impl DepthPass {
         if self.min_area.den == 0 || self.min_area.num > self.min_area.den {
             return Err(SegmentError::BadParams("depth_pass.min_area"));
         }
-        Ok(())
+        self.refine.as_ref().map_or(Ok(()), Refine::validate)
     }
 
     /// The least mask area in a `width` x `height` frame, px (rounded up).
@@ -216,19 +224,28 @@ fn slice_bits(
 
 /// The colour searches of [`segment_into`](super::segment_into), then,
 /// when `params.depth_pass` is set and they found fewer than K objects,
-/// the depth pass (module docs). Without a depth pass this is
-/// [`segment_into`](super::segment_into).
+/// the depth pass (module docs), whose colour refinement reads `left`.
+/// Without a depth pass this is [`segment_into`](super::segment_into).
 ///
 /// # Errors
-/// As [`segment_into`](super::segment_into).
-pub fn segment_with_depth_pass(
+/// As [`segment_into`](super::segment_into), and
+/// [`SegmentError::SizeMismatch`] for a `left` image of another size than
+/// the maps.
+pub fn segment_with_depth_pass<S: RgbRows>(
     params: &SegmentParams,
     disparity: &ImageView<'_, DisparityCell>,
     edges: &ImageView<'_, EdgeCell>,
+    mut left: LeftImage<'_, S>,
     bufs: &mut SegmentBuffers<'_>,
     mut masks: Masks<'_>,
     observer: &mut impl SegmentObserver,
 ) -> Result<SegmentReport, SegmentError> {
+    if left.size() != bufs.size() {
+        return Err(SegmentError::SizeMismatch {
+            expected: bufs.size(),
+            got: left.size(),
+        });
+    }
     // `segment_into` validates `params`, the pass's settings with them.
     let mut report =
         super::segment_into(params, disparity, edges, bufs, masks.reborrow(), observer)?;
@@ -305,8 +322,6 @@ pub fn segment_with_depth_pass(
             Some(r) == best
         });
         bits::fill_holes(g, bufs.filled, bufs.mask, bufs.scratch);
-        let area = bufs.mask.iter().map(|w| w.count_ones()).sum();
-        observer.step(Step::Fill);
         // The slice, grown by a step, leaves the foreground.
         bits::morph_n(
             g,
@@ -320,6 +335,11 @@ pub fn segment_with_depth_pass(
         for (f, m) in bufs.d_fg.iter_mut().zip(bufs.region.iter()) {
             *f &= !m;
         }
+        let area = match &pass.refine {
+            Some(r) => refine_mask(r, &mut left, bufs)?,
+            None => bufs.mask.iter().map(|w| w.count_ones()).sum(),
+        };
+        observer.step(Step::Fill);
         let regions = AreaReport {
             regions: u16::try_from(comps.count).unwrap_or(u16::MAX),
             kept: 1,

@@ -83,6 +83,7 @@ mod morph;
 mod parts;
 mod passes;
 mod pipeline;
+mod refine;
 mod stats;
 
 pub use bits::{bit_map_len, row_runs, run_capacity, words_per_row, BitView};
@@ -97,6 +98,7 @@ pub use pipeline::{
     bounding_box, inhibit, refine_border, segment, segment_into, segment_timed, BoundingBox,
     Detection, Masks, SegmentObserver, SegmentReport, Step,
 };
+pub use refine::{LeftImage, Refine};
 pub use stats::{
     above_mean, foreground, foreground_conspicuity, foreground_rows, in_selected_area,
     object_conspicuity, object_region, plane, select_slice, selected_area, selected_bounds,

@@ -2,6 +2,7 @@
 
 pub mod complete;
 pub mod conspicuity;
+pub mod refine;
 pub mod segment;
 pub mod shape;
 pub mod stereo;

@@ -8,6 +8,7 @@
 //! must agree with core bit for bit.
 
 use protogist::conspicuity::EdgeCell;
+use protogist::image::Rgb8;
 use protogist::segment::{Connectivity, Disk, Ratio, SegmentParams, NMS_DIRECTIONS};
 use std::collections::VecDeque;
 
@@ -439,13 +440,15 @@ pub fn inhibit_ground(line: &GroundLineF, band: f32, d_fg: &[DispF], width: usiz
 /// δ + 1, δ's own counted twice (the lowest on a tie), the foreground within `radius` px of δ,
 /// closes it by `closing` square steps, keeps its largest 4-connected
 /// component (the first in raster order on a tie) with holes filled, and
-/// takes the slice grown by one square step out of the foreground. A
-/// mask is kept when it is an object ([`SegmentParams::is_object`]), of
+/// takes the slice grown by one square step out of the foreground; with
+/// the pass's `refine` and a left image, the mask is refined by colour
+/// ([`super::refine::refine_mask`]). A mask is kept when it is an object ([`SegmentParams::is_object`]), of
 /// at least the pass's least area, and touches no colour mask.
 pub fn depth_pass(
     params: &SegmentParams,
     disparity: &[DispF],
     colour: &[Vec<bool>],
+    left: Option<&[Rgb8]>,
     w: usize,
     h: usize,
 ) -> Vec<Vec<bool>> {
@@ -504,21 +507,12 @@ pub fn depth_pass(
             .map(|i| fg[i] && disparity[i].is_some_and(|d| (f64::from(d) - delta).abs() <= r))
             .collect();
         let closed = close(Disk::Square, &slice, w, h, pass.closing);
-        let (labels, n) = label(&closed, w, h, true, Connectivity::Four);
-        let mut area = vec![0usize; usize::from(n) + 1];
-        labels.iter().for_each(|&l| area[usize::from(l)] += 1);
-        area[0] = 0;
-        let top = (1..=n).fold(0u16, |b, l| {
-            if area[usize::from(l)] > area[usize::from(b)] {
-                l
-            } else {
-                b
-            }
-        });
-        let comp: Vec<bool> = labels.iter().map(|&l| top != 0 && l == top).collect();
-        let mask = fill_holes(&comp, w, h);
+        let mut mask = largest_filled(&closed, w, h);
         let grown = dilate(Disk::Square, &slice, w, h);
         fg.iter_mut().zip(&grown).for_each(|(f, &g)| *f &= !g);
+        if let (Some(r), Some(l)) = (&pass.refine, left) {
+            mask = super::refine::refine_mask(r, &mask, l, w, h);
+        }
         let a = mask.iter().filter(|&&m| m).count();
         let (xs, ys): (Vec<usize>, Vec<usize>) = (0..w * h)
             .filter(|&i| mask[i])
@@ -541,4 +535,22 @@ pub fn depth_pass(
         }
     }
     out
+}
+
+/// The largest 4-connected component of `map` (the first label, in raster
+/// order, on a tie), holes filled; all OFF for an empty map.
+pub fn largest_filled(map: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let (labels, n) = label(map, w, h, true, Connectivity::Four);
+    let mut area = vec![0usize; usize::from(n) + 1];
+    labels.iter().for_each(|&l| area[usize::from(l)] += 1);
+    area[0] = 0;
+    let top = (1..=n).fold(0u16, |b, l| {
+        if area[usize::from(l)] > area[usize::from(b)] {
+            l
+        } else {
+            b
+        }
+    });
+    let comp: Vec<bool> = labels.iter().map(|&l| top != 0 && l == top).collect();
+    fill_holes(&comp, w, h)
 }

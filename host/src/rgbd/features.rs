@@ -385,6 +385,7 @@ pub fn frame_features(item: &Item, f: &Frame, colour3: bool) -> Result<Features>
         &protogist::segment::SegmentParams::default(),
         &disparity,
         &edges,
+        None,
         frame,
         frame,
     )?;

@@ -1,0 +1,254 @@
+//! The depth pass's colour refinement: a slice mask's outline moved to
+//! where the left image's colour changes.
+//!
+//! A slice of the stereo's map ([`super::depth`]) finds an object that has
+//! no closed contour of conspicuity edges, but its outline is the
+//! stereo's: where the disparity steps from the object to what is behind
+//! it the map is blurred over a few pixels, OFF or wrong, and the slice
+//! loses a band of the object's border (docs/RECALL.md, "The colour
+//! refinement"). The colour of an object whose contrast is too low for an
+//! edge of C still differs from its surroundings' on average. So, for a
+//! mask `M` of the pass:
+//!
+//! 1. the *core* is `M` eroded by [`Refine::core`] square steps: the cells
+//!    surely of the object;
+//! 2. the *reach* is `M` dilated by [`Refine::reach`] square steps; the
+//!    *ring* is the reach dilated by [`Refine::ring`] more steps, less the
+//!    reach: cells surely behind it;
+//! 3. the object's colour is the mean RGB of the left image over the
+//!    core, the background's the mean over the ring;
+//! 4. a cell of the reach off the core joins the object when its colour
+//!    is nearer the object's mean than the background's (squared RGB
+//!    distance), leaves it when nearer the background's, and keeps its
+//!    place in `M` on a tie;
+//! 5. the mask is the largest 4-connected component of the result (the
+//!    first in raster order on a tie), holes filled.
+//!
+//! An empty core or ring leaves `M` as it is. The comparison is exact in
+//! integers: with `n` cells of colour sum `S`, the distance of colour `c`
+//! to the mean is `Σ (n·c − S)² / n²`, and the two distances are compared
+//! by cross-multiplying (`u128`, no overflow for any frame of
+//! [`MAX_DIM`](crate::image::MAX_DIM)² pixels).
+
+use super::bits::{self, Geom};
+use super::buffers::SegmentBuffers;
+use super::label::Connectivity;
+use super::morph::Disk;
+use super::SegmentError;
+use crate::image::{ImageError, Rgb8, RgbRows};
+
+/// Settings of the colour refinement of the depth pass's masks
+/// ([`DepthPass::refine`](super::DepthPass::refine)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Refine {
+    /// Square erosion steps of the mask giving its core, whose colour is
+    /// the object's (0 to 8).
+    pub core: u8,
+    /// Square dilation steps of the mask bounding the cells the colour
+    /// decides (0 to 8).
+    pub reach: u8,
+    /// Square dilation steps beyond the reach giving the ring, whose
+    /// colour is the background's (1 to 8).
+    pub ring: u8,
+}
+
+impl Refine {
+    /// A core 2 steps in, a reach of 3 steps out and a ring of 3 more
+    /// (docs/CHOICES.md, "The colour refinement").
+    pub const DEFAULT: Self = Self {
+        core: 2,
+        reach: 3,
+        ring: 3,
+    };
+
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// [`SegmentError::BadParams`] naming the field.
+    pub fn validate(&self) -> Result<(), SegmentError> {
+        if self.core > 8 {
+            return Err(SegmentError::BadParams("depth_pass.refine.core"));
+        }
+        if self.reach > 8 {
+            return Err(SegmentError::BadParams("depth_pass.refine.reach"));
+        }
+        if !(1..=8).contains(&self.ring) {
+            return Err(SegmentError::BadParams("depth_pass.refine.ring"));
+        }
+        Ok(())
+    }
+}
+
+/// The left image the depth pass refines its masks against, and one row
+/// of scratch for reading it.
+pub struct LeftImage<'a, S: RgbRows> {
+    frame: &'a S,
+    row: &'a mut [Rgb8],
+}
+
+impl<'a, S: RgbRows> LeftImage<'a, S> {
+    /// `frame` with `row`, at least as long as the frame is wide.
+    ///
+    /// # Errors
+    /// [`ImageError::BufferTooSmall`] for a short `row`.
+    pub fn new(frame: &'a S, row: &'a mut [Rgb8]) -> Result<Self, ImageError> {
+        let (w, _) = frame.size();
+        if row.len() < w {
+            return Err(ImageError::BufferTooSmall {
+                needed: w,
+                got: row.len(),
+            });
+        }
+        Ok(Self { frame, row })
+    }
+
+    /// `(width, height)` of the frame.
+    pub fn size(&self) -> (usize, usize) {
+        self.frame.size()
+    }
+
+    /// Reads row `y` and calls `f(x, colour)` for every ON bit of `words`
+    /// (row `y` of a bit map).
+    fn each(&mut self, y: usize, words: &[u32], mut f: impl FnMut(usize, [i64; 3])) {
+        if words.iter().all(|&w| w == 0) {
+            return;
+        }
+        let (w, h) = self.frame.size();
+        let Some(row) = self.row.get_mut(..w).filter(|_| y < h) else {
+            return;
+        };
+        self.frame.rgb_row(y, row);
+        for (i, &word) in words.iter().enumerate() {
+            let mut v = word;
+            while v != 0 {
+                let x = i * 32 + v.trailing_zeros() as usize;
+                if let Some(p) = row.get(x) {
+                    f(x, [i64::from(p.r), i64::from(p.g), i64::from(p.b)]);
+                }
+                v &= v.wrapping_sub(1);
+            }
+        }
+    }
+}
+
+/// A colour sum: cells and the sum of each channel.
+#[derive(Clone, Copy, Default)]
+struct Sum {
+    n: i64,
+    s: [i64; 3],
+}
+
+impl Sum {
+    fn add(&mut self, c: [i64; 3]) {
+        self.n += 1;
+        for (s, c) in self.s.iter_mut().zip(c) {
+            *s += c;
+        }
+    }
+
+    /// `Σ (n·c − S)²`: `n²` times the squared distance of `c` to the mean.
+    fn scaled_dist(&self, c: [i64; 3]) -> u128 {
+        self.s
+            .iter()
+            .zip(c)
+            .map(|(&s, c)| {
+                let e = (self.n * c - s).unsigned_abs();
+                u128::from(e) * u128::from(e)
+            })
+            .sum()
+    }
+}
+
+/// Refines the mask in `bufs.mask` (module docs); uses `closed`, `filled`,
+/// `region` and `scratch` as scratch. Returns the new area.
+///
+/// # Errors
+/// [`SegmentError::LabelCapacity`] from the labelling.
+pub(super) fn refine_mask<S: RgbRows>(
+    refine: &Refine,
+    left: &mut LeftImage<'_, S>,
+    bufs: &mut SegmentBuffers<'_>,
+) -> Result<u32, SegmentError> {
+    let g = bufs.g;
+    let area = |m: &[u32]| m.iter().map(|w| w.count_ones()).sum::<u32>();
+    // closed = core, filled = reach, region = ring.
+    bits::copy_map(bufs.closed, bufs.mask);
+    let morph = |m: &mut [u32], s: &mut [u32], r: &mut [u32], n: u8, erode: bool| {
+        bits::morph_n(g, Disk::Square, m, s, r, n, erode);
+    };
+    morph(
+        bufs.closed,
+        bufs.scratch,
+        bufs.morph_rows,
+        refine.core,
+        true,
+    );
+    bits::copy_map(bufs.filled, bufs.mask);
+    morph(
+        bufs.filled,
+        bufs.scratch,
+        bufs.morph_rows,
+        refine.reach,
+        false,
+    );
+    bits::copy_map(bufs.region, bufs.filled);
+    morph(
+        bufs.region,
+        bufs.scratch,
+        bufs.morph_rows,
+        refine.ring,
+        false,
+    );
+    for (r, f) in bufs.region.iter_mut().zip(bufs.filled.iter()) {
+        *r &= !f;
+    }
+    // The two means.
+    let (mut object, mut behind) = (Sum::default(), Sum::default());
+    for y in 0..g.height {
+        left.each(y, row_of(g, bufs.closed, y), |_, c| object.add(c));
+        left.each(y, row_of(g, bufs.region, y), |_, c| behind.add(c));
+    }
+    if object.n == 0 || behind.n == 0 {
+        return Ok(area(bufs.mask));
+    }
+    let (no, nb) = (
+        u128::from(object.n.unsigned_abs()),
+        u128::from(behind.n.unsigned_abs()),
+    );
+    // The reach's cells off the core, decided into `closed` (the core).
+    for (f, c) in bufs.filled.iter_mut().zip(bufs.closed.iter()) {
+        *f &= !c;
+    }
+    for y in 0..g.height {
+        let span = y * g.stride..(y + 1) * g.stride;
+        let (Some(band), Some(m), Some(out)) = (
+            bufs.filled.get(span.clone()),
+            bufs.mask.get(span.clone()),
+            bufs.closed.get_mut(span),
+        ) else {
+            continue;
+        };
+        left.each(y, band, |x, c| {
+            let to_object = object.scaled_dist(c) * nb * nb;
+            let to_behind = behind.scaled_dist(c) * no * no;
+            let was = m.get(x / 32).is_some_and(|w| w >> (x % 32) & 1 == 1);
+            let joins = to_object < to_behind || (to_object == to_behind && was);
+            if let Some(w) = out.get_mut(x / 32).filter(|_| joins) {
+                *w |= 1 << (x % 32);
+            }
+        });
+    }
+    // Its largest 4-connected component, holes filled.
+    let comps = bits::components(g, bufs.closed, Connectivity::Four, bufs.rows, bufs.table)?;
+    let best = comps.largest.map(|(r, _)| r);
+    comps.select(g, bufs.closed, bufs.table, bufs.filled, |r, _| {
+        Some(r) == best
+    });
+    bits::fill_holes(g, bufs.filled, bufs.mask, bufs.scratch);
+    Ok(area(bufs.mask))
+}
+
+/// Row `y` of bit map `m` (empty past the end).
+fn row_of(g: Geom, m: &[u32], y: usize) -> &[u32] {
+    m.get(y * g.stride..(y + 1) * g.stride).unwrap_or(&[])
+}

@@ -1,0 +1,74 @@
+//! Reference of the depth pass's colour refinement
+//! ([`protogist::segment::Refine`]), on `bool` maps: the mask's core and
+//! ring by repeated square steps, the two mean colours, and each cell of
+//! the reach off the core given to the nearer mean.
+//!
+//! Core's refinement compares the distances exactly in integers; so does
+//! this one (`i128`), so the two agree mask for mask (error bound: none,
+//! docs/ERROR_BOUNDS.md 8b).
+
+use super::segment::{dilate, erode, largest_filled};
+use protogist::image::Rgb8;
+use protogist::segment::{Disk, Refine};
+
+/// `n` steps of `step` on `map`.
+fn steps(
+    step: fn(Disk, &[bool], usize, usize) -> Vec<bool>,
+    map: &[bool],
+    n: u8,
+    w: usize,
+    h: usize,
+) -> Vec<bool> {
+    (0..n).fold(map.to_vec(), |m, _| step(Disk::Square, &m, w, h))
+}
+
+/// Cells and channel sums of `left` over `on`.
+fn sum(left: &[Rgb8], on: &[bool]) -> (i128, [i128; 3]) {
+    left.iter()
+        .zip(on)
+        .filter(|(_, &o)| o)
+        .fold((0, [0; 3]), |(n, s), (p, _)| {
+            (
+                n + 1,
+                [
+                    s[0] + i128::from(p.r),
+                    s[1] + i128::from(p.g),
+                    s[2] + i128::from(p.b),
+                ],
+            )
+        })
+}
+
+/// `Σ (n·c − S)²` over the channels: `n²` times the squared distance of
+/// `p` to the mean.
+fn scaled(p: Rgb8, (n, s): (i128, [i128; 3])) -> i128 {
+    [p.r, p.g, p.b]
+        .iter()
+        .zip(s)
+        .map(|(&c, s)| (n * i128::from(c) - s).pow(2))
+        .sum()
+}
+
+/// Reference of the refinement of `mask` against the left image `left`
+/// (module docs of `protogist::segment::refine`).
+pub fn refine_mask(refine: &Refine, mask: &[bool], left: &[Rgb8], w: usize, h: usize) -> Vec<bool> {
+    let core = steps(erode, mask, refine.core, w, h);
+    let reach = steps(dilate, mask, refine.reach, w, h);
+    let outer = steps(dilate, &reach, refine.ring, w, h);
+    let ring: Vec<bool> = outer.iter().zip(&reach).map(|(&o, &r)| o && !r).collect();
+    let (object, behind) = (sum(left, &core), sum(left, &ring));
+    if object.0 == 0 || behind.0 == 0 {
+        return mask.to_vec();
+    }
+    let joined: Vec<bool> = (0..w * h)
+        .map(|i| {
+            if core[i] || !reach[i] {
+                return core[i];
+            }
+            let to_object = scaled(left[i], object) * behind.0 * behind.0;
+            let to_behind = scaled(left[i], behind) * object.0 * object.0;
+            to_object < to_behind || (to_object == to_behind && mask[i])
+        })
+        .collect();
+    largest_filled(&joined, w, h)
+}
