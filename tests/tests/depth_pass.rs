@@ -312,10 +312,21 @@ proptest! {
         searches in 1u8..5,
         clearance in 0u8..4,
         den in 16u16..200,
+        // D_fg's settings: the pass's foreground is written with D_fg, in
+        // the same sweep, whatever they are.
+        fg_high in prop_oneof![Just(100u16), 1u16..4],
+        row_background in prop::option::of(0u16..1024),
+        ground_band in prop::option::of(0u16..1024),
     ) {
         let (d, c) = blocky((w, h), &list, &off);
         let pass = DepthPass { rise, radius, closing, searches, clearance, min_area: Ratio::new(1, den) };
-        let colour_only = SegmentParams { max_objects: 4, ..OPEN };
+        let colour_only = SegmentParams {
+            max_objects: 4,
+            fg_high: Ratio::new(fg_high, 1),
+            row_background,
+            ground_band,
+            ..OPEN
+        };
         let p = SegmentParams { depth_pass: Some(pass), ..colour_only };
         let (colour, cm) = run_at(&colour_only, &d, &c, (w, h)).unwrap();
         let (r, masks) = run_at(&p, &d, &c, (w, h)).unwrap();
