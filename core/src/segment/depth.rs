@@ -12,7 +12,10 @@
 //!    dominant disparity (the rows of the ground fit, `fit_ground`), less
 //!    the colour objects' masks grown by [`DepthPass::clearance`] square
 //!    dilations (their halo in the stereo's map would otherwise come back
-//!    as rings and slivers);
+//!    as rings and slivers). The foreground is written with D_fg, in the
+//!    same sweep; the dilations are one square, row-wise then column-wise,
+//!    the latter only where the foreground has bits
+//!    ([`clear_square_bits`](super::clear_square_bits));
 //! 2. each search, at most [`DepthPass::searches`]: δ is the whole-pixel
 //!    plane with the most foreground cells within one plane of it, its
 //!    own counted twice (the lowest on a tie); the slice is the foreground within
@@ -199,23 +202,7 @@ pub fn segment_with_depth_pass(
     for i in 0..report.objects.len() {
         masks.or_into(i, chunk, g, bufs.mask);
     }
-    bits::morph_n(
-        g,
-        Disk::Square,
-        bufs.mask,
-        bufs.scratch,
-        bufs.morph_rows,
-        pass.clearance,
-        false,
-    );
-    for ((f, r), m) in bufs
-        .d_fg
-        .iter_mut()
-        .zip(bufs.rise.iter())
-        .zip(bufs.mask.iter())
-    {
-        *f = r & !m;
-    }
+    bits::clear_square(g, bufs.d_fg, bufs.rise, bufs.mask, pass.clearance);
     observer.step(Step::Foreground);
     let union = Union {
         min_area: pass.least_area(w, h),
