@@ -334,18 +334,19 @@ pub fn run_segment(
     let mut store = crate::storage::SegmentStorage::new(width, height);
     let mut masks = vec![false; usize::from(params.max_objects) * width * height];
     let mut bufs = store.buffers()?;
-    let report = protogist::segment::segment_with_depth_pass(
-        params,
-        &ImageView::packed(disparity, width, height)?,
-        &ImageView::packed(edges, width, height)?,
-        &mut bufs,
-        protogist::segment::Masks::Bools(&mut masks),
-        &mut (),
-    )?;
+    // One view of each input, for the call and for the panels.
     let (dv, cv) = (
         ImageView::packed(disparity, width, height)?,
         ImageView::packed(edges, width, height)?,
     );
+    let report = protogist::segment::segment_with_depth_pass(
+        params,
+        &dv,
+        &cv,
+        &mut bufs,
+        protogist::segment::Masks::Bools(&mut masks),
+        &mut (),
+    )?;
     let (d_off, c_off) = (protogist::disparity::DisparityCell::OFF, EdgeCell::OFF);
     Ok(SegmentResult {
         width,
