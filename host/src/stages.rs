@@ -349,6 +349,7 @@ pub fn run_segment(
         }
     };
     let mut row = vec![Rgb8::default(); width];
+    // One view of each input, for the call and for the panels.
     let (dv, cv) = (
         ImageView::packed(disparity, width, height)?,
         ImageView::packed(edges, width, height)?,

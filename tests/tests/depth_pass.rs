@@ -484,6 +484,13 @@ proptest! {
             prop::array::uniform3(40u8..216),
             prop::collection::vec(-20i16..21, 56 * 40),
         ),
+        // D_fg's settings: the pass's foreground is written with D_fg, in
+        // the same sweep, whatever they are.
+        (fg_high, row_background, ground_band) in (
+            prop_oneof![Just(100u16), 1u16..4],
+            prop::option::of(0u16..1024),
+            prop::option::of(0u16..1024),
+        ),
     ) {
         let (d, c) = blocky((w, h), &list, &off);
         let left = painted((w, h), &list, &paint);
@@ -491,7 +498,13 @@ proptest! {
         let pass = DepthPass {
             rise, radius, closing, searches, clearance, min_area: Ratio::new(1, den), refine,
         };
-        let colour_only = SegmentParams { max_objects: 4, ..OPEN };
+        let colour_only = SegmentParams {
+            max_objects: 4,
+            fg_high: Ratio::new(fg_high, 1),
+            row_background,
+            ground_band,
+            ..OPEN
+        };
         let p = SegmentParams { depth_pass: Some(pass), ..colour_only };
         let (colour, cm) = run_at(&colour_only, &d, &c, Some(&left), (w, h)).unwrap();
         let (r, masks) = run_at(&p, &d, &c, Some(&left), (w, h)).unwrap();

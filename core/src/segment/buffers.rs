@@ -11,8 +11,10 @@ use super::SegmentError;
 use crate::image::ImageError;
 
 /// Bit maps [`SegmentBuffers`] holds: D_fg, D_ObjReg, C_ObjReg, the refined
-/// region, C_Obj, C_Obj^M, F_Obj, the filled map, the mask and a scratch map.
-pub const BIT_MAPS: usize = 11;
+/// region, C_Obj, C_Obj^M, F_Obj, the filled map, the mask, the interiors,
+/// a scratch map and the depth pass's foreground (written with D_fg, kept
+/// for the pass).
+pub const BIT_MAPS: usize = 12;
 
 /// `u32` words of the `maps` buffer of [`SegmentBuffers`]: [`BIT_MAPS`] bit
 /// maps, two rows of runs for the labelling and two rows of words for the
@@ -53,6 +55,7 @@ pub struct SegmentBuffers<'a> {
     pub(super) mask: &'a mut [u32],
     pub(super) interiors: &'a mut [u32],
     pub(super) scratch: &'a mut [u32],
+    pub(super) rise: &'a mut [u32],
     pub(super) rows: &'a mut [u32],
     pub(super) morph_rows: &'a mut [u32],
     pub(super) ground_rows: &'a mut [u32],
@@ -103,6 +106,7 @@ impl<'a> SegmentBuffers<'a> {
             mask: take(len),
             interiors: take(len),
             scratch: take(len),
+            rise: take(len),
             rows: take(4 * row_runs(width)),
             morph_rows: take(morph_rows_len(width)),
             ground_rows: take(ground_rows_len(height)),
@@ -123,6 +127,7 @@ impl<'a> SegmentBuffers<'a> {
             &mut self.filled,
             &mut self.mask,
             &mut self.interiors,
+            &mut self.rise,
         ] {
             m.fill(0);
         }

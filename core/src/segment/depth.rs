@@ -12,7 +12,10 @@
 //!    dominant disparity (the rows of the ground fit, `fit_ground`), less
 //!    the colour objects' masks grown by [`DepthPass::clearance`] square
 //!    dilations (their halo in the stereo's map would otherwise come back
-//!    as rings and slivers);
+//!    as rings and slivers). The foreground is written with D_fg, in the
+//!    same sweep; the dilations are one square, row-wise then column-wise,
+//!    the latter only where the foreground has bits
+//!    ([`clear_square_bits`](super::clear_square_bits));
 //! 2. each search, at most [`DepthPass::searches`]: δ is the whole-pixel
 //!    plane with the most foreground cells within one plane of it, its
 //!    own counted twice (the lowest on a tie); the slice is the foreground within
@@ -38,7 +41,7 @@ use super::label::Connectivity;
 use super::morph::Disk;
 use super::pipeline::{emit, Masks, SegmentObserver, SegmentReport, Step};
 use super::refine::{refine_mask, LeftImage, Refine};
-use super::stats::{plane, selected_bounds, DisparityRange, Slice, PLANES, STAT_FRAC_BITS};
+use super::stats::{plane, DisparityRange, Slice, PLANES, STAT_FRAC_BITS};
 use super::{Ratio, SegmentError, SegmentParams};
 use crate::conspicuity::EdgeCell;
 use crate::disparity::DisparityCell;
@@ -120,55 +123,6 @@ impl DepthPass {
         );
         u32::try_from((frame * n).div_ceil(d)).unwrap_or(u32::MAX)
     }
-}
-
-/// The pass's foreground as bits into `fg`: the ON cells of the selected
-/// area at least `rise` bits nearer than their row's dominant disparity
-/// (`rows`: per row the disparity bits + 1, 0 for none, as `fit_ground`
-/// writes them). Returns the count.
-fn rise_foreground(
-    params: &SegmentParams,
-    d: &ImageView<'_, DisparityCell>,
-    rows: &[u32],
-    rise: u16,
-    g: Geom,
-    fg: &mut [u32],
-) -> u32 {
-    fg.fill(0);
-    let (x0, y0, y1) = selected_bounds(params, g.width, g.height);
-    let mut n = 0;
-    let cells = d.rows().zip(fg.chunks_exact_mut(g.stride.max(1)));
-    for (y, (row, out)) in cells.enumerate().take(y1).skip(y0) {
-        // b >= (r − 1) + rise, r the row's estimate + 1.
-        let Some(lo) = rows
-            .get(y)
-            .filter(|&&r| r > 0)
-            .map(|&r| r - 1 + u32::from(rise))
-        else {
-            continue;
-        };
-        // 32 cells a word, without branches; the cells left of `x0` are
-        // cleared after. OFF is `u16::MAX`, above every threshold: tested
-        // apart.
-        for (word, cells) in out.iter_mut().zip(row.chunks(32)) {
-            let mut bits = 0u32;
-            for (i, c) in cells.iter().enumerate() {
-                let b = c.raw().to_bits();
-                bits |= u32::from((u32::from(b) >= lo) & (b != u16::MAX)) << (i % 32);
-            }
-            *word = bits;
-        }
-        for (i, word) in out.iter_mut().enumerate().take(x0.div_ceil(32)) {
-            let first = 32 * i;
-            if x0 >= first + 32 {
-                *word = 0;
-            } else if x0 > first {
-                *word &= u32::MAX << ((x0 - first) % 32);
-            }
-        }
-        n += out.iter().map(|w| w.count_ones()).sum::<u32>();
-    }
-    n
 }
 
 /// The densest whole-pixel plane of the foreground: the plane δ with the
@@ -258,25 +212,14 @@ pub fn segment_with_depth_pass<S: RgbRows>(
     }
     let g = bufs.g;
     let (w, h) = bufs.size();
-    rise_foreground(params, disparity, bufs.ground_rows, pass.rise, g, bufs.d_fg);
-    // The colour objects, grown by the clearance, leave the foreground.
+    // The colour objects, grown by the clearance, leave the foreground
+    // (`bufs.rise`, written with D_fg by `segment_into`).
     let chunk = masks.chunk(g);
     bufs.mask.fill(0);
     for i in 0..report.objects.len() {
         masks.or_into(i, chunk, g, bufs.mask);
     }
-    bits::morph_n(
-        g,
-        Disk::Square,
-        bufs.mask,
-        bufs.scratch,
-        bufs.morph_rows,
-        pass.clearance,
-        false,
-    );
-    for (f, m) in bufs.d_fg.iter_mut().zip(bufs.mask.iter()) {
-        *f &= !m;
-    }
+    bits::clear_square(g, bufs.d_fg, bufs.rise, bufs.mask, pass.clearance);
     observer.step(Step::Foreground);
     let union = Union {
         min_area: pass.least_area(w, h),

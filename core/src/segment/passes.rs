@@ -26,17 +26,164 @@ fn bits_at(d: &ImageView<'_, DisparityCell>, x: usize, y: usize) -> Option<u16> 
     d.get(x, y).and_then(|c| c.get()).map(|v| v.to_bits())
 }
 
+/// The depth pass's foreground, written by [`foreground`] in the same
+/// sweep: `rows` the rows' estimates as `fit_ground` writes them (the
+/// disparity bits + 1, 0 for none), `rise` the least height above them
+/// ([`DepthPass::rise`](super::DepthPass::rise)), `fg` its bit map.
+pub(super) struct Rise<'a> {
+    pub rows: &'a [u32],
+    pub rise: u16,
+    pub fg: &'a mut [u32],
+}
+
+/// The cells `c` of a row's word (at most 32, cell `i` at bit `i`) with
+/// `lo <= c < lo + span` (wrapping), `c` the raw bits (OFF is `u16::MAX`),
+/// in the first word for `a = (lo, span)`, in the second for `b` (0
+/// without `TWO`).
+fn band_words<const TWO: bool>(
+    cells: &[DisparityCell],
+    (a_lo, a_span): (u32, u32),
+    (b_lo, b_span): (u32, u32),
+) -> (u32, u32) {
+    let (mut a, mut b) = (0u32, 0u32);
+    for (i, c) in cells.iter().enumerate().take(32) {
+        let raw = u32::from(c.raw().to_bits());
+        a |= u32::from(raw.wrapping_sub(a_lo) < a_span) << (i % 32);
+        if TWO {
+            b |= u32::from(raw.wrapping_sub(b_lo) < b_span) << (i % 32);
+        }
+    }
+    (a, b)
+}
+
+/// [`band_words`] for a whole word of cells, written out cell by cell: a
+/// constant bit per cell, set by one conditional instruction (the
+/// compiler unrolls the loop only in part, and shifts by the cell's index
+/// cost more than the test). Each half word of cells builds one word, the
+/// first map's bits in its low half and the second's in its high half:
+/// one chain of tests, cell after cell, keeps every cell in a register.
+#[inline(always)]
+fn band_words_32<const TWO: bool>(
+    cells: &[DisparityCell; 32],
+    (a_lo, a_span): (u32, u32),
+    (b_lo, b_span): (u32, u32),
+) -> (u32, u32) {
+    macro_rules! half {
+        ($($c:ident $k:literal)*) => {{
+            let mut w = 0u32;
+            $(
+                let raw = u32::from($c.raw().to_bits());
+                if raw.wrapping_sub(a_lo) < a_span {
+                    w |= 1 << $k;
+                }
+                if TWO && raw.wrapping_sub(b_lo) < b_span {
+                    w |= 1 << (16 + $k);
+                }
+            )*
+            w
+        }};
+    }
+    let [c0, c1, c2, c3, c4, c5, c6, c7, c8, c9, c10, c11, c12, c13, c14, c15, c16, c17, c18, c19, c20, c21, c22, c23, c24, c25, c26, c27, c28, c29, c30, c31] =
+        *cells;
+    let lo = half!(
+        c0 0 c1 1 c2 2 c3 3 c4 4 c5 5 c6 6 c7 7
+        c8 8 c9 9 c10 10 c11 11 c12 12 c13 13 c14 14 c15 15
+    );
+    let hi = half!(
+        c16 0 c17 1 c18 2 c19 3 c20 4 c21 5 c22 6 c23 7
+        c24 8 c25 9 c26 10 c27 11 c28 12 c29 13 c30 14 c31 15
+    );
+    ((lo & 0xFFFF) | hi << 16, lo >> 16 | (hi & 0xFFFF_0000))
+}
+
+/// The D_fg and rise words of a row (see [`foreground`]).
+#[inline(always)]
+fn row_words<const TWO: bool>(
+    row: &[DisparityCell],
+    a: (u32, u32),
+    b: (u32, u32),
+    x0: usize,
+    out: &mut [u32],
+    mut out_b: Option<&mut [u32]>,
+) -> u32 {
+    let mut n = 0;
+    for (i, (o, cells)) in out.iter_mut().zip(row.chunks(32)).enumerate() {
+        let (mut wa, mut wb) = match <&[DisparityCell; 32]>::try_from(cells) {
+            Ok(cells) => band_words_32::<TWO>(cells, a, b),
+            Err(_) => band_words::<TWO>(cells, a, b),
+        };
+        // Columns left of S.
+        let first = i * 32;
+        if x0 > first {
+            let keep = u32::MAX.checked_shl((x0 - first) as u32).unwrap_or(0);
+            wa &= keep;
+            wb &= keep;
+        }
+        *o = wa;
+        n += wa.count_ones();
+        if let Some(w) = out_b.as_deref_mut().and_then(|m| m.get_mut(i)) {
+            *w = wb;
+        }
+    }
+    n
+}
+
+/// [`row_words`] when the second band lies within the first: its cells
+/// are among the first's, so only those are tested, one by one.
+fn row_words_within(
+    row: &[DisparityCell],
+    a: (u32, u32),
+    (b_lo, b_span): (u32, u32),
+    x0: usize,
+    out: &mut [u32],
+    out_b: &mut [u32],
+) -> u32 {
+    let mut n = 0;
+    let words = out.iter_mut().zip(out_b.iter_mut()).zip(row.chunks(32));
+    for (i, ((o, ob), cells)) in words.enumerate() {
+        let (mut wa, _) = match <&[DisparityCell; 32]>::try_from(cells) {
+            Ok(cells) => band_words_32::<false>(cells, a, (0, 0)),
+            Err(_) => band_words::<false>(cells, a, (0, 0)),
+        };
+        // Columns left of S.
+        let first = i * 32;
+        if x0 > first {
+            wa &= u32::MAX.checked_shl((x0 - first) as u32).unwrap_or(0);
+        }
+        *o = wa;
+        n += wa.count_ones();
+        let (mut wb, mut rest) = (0u32, wa);
+        while rest != 0 {
+            let k = rest.trailing_zeros();
+            let rises = cells
+                .get(k as usize)
+                .is_some_and(|c| u32::from(c.raw().to_bits()).wrapping_sub(b_lo) < b_span);
+            if rises {
+                wb |= 1 << (k % 32);
+            }
+            rest &= rest - 1;
+        }
+        *ob = wb;
+    }
+    n
+}
+
 /// D_fg as bits: valid D inside S with `low < D < high`, or `D < high`
 /// and nearer than the row's background by the band
 /// ([`foreground_rows`](super::foreground_rows)), and, with a ground line,
-/// `D > d_g(y) + band` ([`inhibit_ground`](super::inhibit_ground)). Returns
-/// the count.
+/// `D > d_g(y) + band` ([`inhibit_ground`](super::inhibit_ground)). With
+/// `rise`, its map gets in the same sweep the depth pass's foreground:
+/// the ON cells inside S at least `rise.rise` bits nearer than their
+/// row's estimate (b >= r − 1 + rise, none in rows without one). Returns
+/// the count of D_fg.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn foreground(
     params: &SegmentParams,
     d: &ImageView<'_, DisparityCell>,
     t: &Thresholds,
     ground: Option<(&GroundLine, u16)>,
     rows: Option<(&[u32], u16)>,
+    mut rise: Option<Rise<'_>>,
     g: Geom,
     fg: &mut [u32],
 ) -> u32 {
@@ -47,9 +194,13 @@ pub(super) fn foreground(
     // decides both.
     let lo = (t.low >> EXTRA) + 1;
     let hi = t.high.div_ceil(1 << EXTRA).min(u32::from(u16::MAX));
+    let off = u32::from(u16::MAX);
+    let stride = g.stride.max(1);
     let mut n = 0;
-    let cells = d.rows().zip(fg.chunks_exact_mut(g.stride.max(1)));
-    for (y, (row, out)) in cells.enumerate().take(y1).skip(y0) {
+    for (y, row) in d.rows().enumerate().take(y1).skip(y0) {
+        let Some(out) = fg.get_mut(y * stride..(y + 1) * stride) else {
+            break;
+        };
         // Nearer than the row's background: b > r − 1 + band  <=>
         // b >= r + band, r the row's estimate + 1 (0: none).
         let lo = rows.map_or(lo, |(r, band)| match r.get(y) {
@@ -61,23 +212,35 @@ pub(super) fn foreground(
             let above = l.at(y).saturating_add(i64::from(band) + 1);
             lo.max(u32::try_from(above.max(0)).unwrap_or(u32::MAX))
         });
-        let span = hi.saturating_sub(lo);
-        for (i, (cells, o)) in row.chunks(32).zip(out.iter_mut()).enumerate() {
-            let mut word = 0u32;
-            for (b, c) in cells.iter().enumerate() {
-                let raw = c
-                    .get()
-                    .map_or(u32::from(u16::MAX), |v| u32::from(v.to_bits()));
-                word |= u32::from(raw.wrapping_sub(lo) < span) << b;
+        let a = (lo, hi.saturating_sub(lo));
+        // The rise: b >= (r − 1) + rise and not OFF  <=>
+        // lo' <= b < u16::MAX; rows without an estimate get no bit.
+        n += match rise.as_mut() {
+            Some(p) => {
+                let lo_b = match p.rows.get(y) {
+                    Some(&r) if r > 0 => r - 1 + u32::from(p.rise),
+                    _ => off,
+                };
+                let span = off.saturating_sub(lo_b);
+                let out_b = p.fg.get_mut(y * stride..(y + 1) * stride);
+                if span == 0 {
+                    // No cell of the row rises: D_fg alone.
+                    if let Some(o) = out_b {
+                        o.fill(0);
+                    }
+                    row_words::<false>(row, a, (off, 0), x0, out, None)
+                } else {
+                    // The rise's band within D_fg's (lo <= lo' and the same
+                    // top, u16::MAX): only D_fg's cells can rise.
+                    let within = lo_b >= a.0 && u64::from(a.0) + u64::from(a.1) >= u64::from(off);
+                    match out_b {
+                        Some(ob) if within => row_words_within(row, a, (lo_b, span), x0, out, ob),
+                        out_b => row_words::<true>(row, a, (lo_b, span), x0, out, out_b),
+                    }
+                }
             }
-            // Columns left of S.
-            let first = i * 32;
-            if x0 > first {
-                word &= u32::MAX.checked_shl((x0 - first) as u32).unwrap_or(0);
-            }
-            *o = word;
-            n += word.count_ones();
-        }
+            None => row_words::<false>(row, a, (off, 0), x0, out, None),
+        };
     }
     n
 }

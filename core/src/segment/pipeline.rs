@@ -324,7 +324,14 @@ pub fn segment_into(
     }
     let ground = report.ground.as_ref().zip(params.ground_band);
     let rows = params.row_background.map(|b| (&*bufs.ground_rows, b));
-    report.foreground = passes::foreground(params, disparity, &t, ground, rows, g, bufs.d_fg);
+    // The depth pass's foreground is written in the same sweep and kept
+    // in `bufs.rise` until the pass runs.
+    let rise = params.depth_pass.map(|pass| passes::Rise {
+        rows: &*bufs.ground_rows,
+        rise: pass.rise,
+        fg: &mut *bufs.rise,
+    });
+    report.foreground = passes::foreground(params, disparity, &t, ground, rows, rise, g, bufs.d_fg);
     observer.step(Step::Foreground);
     let searches = if params.every_mask_is_an_object() {
         k

@@ -139,21 +139,26 @@ pub fn selected_stats(
 ) -> Option<SelectedStats> {
     let (w, h) = disparity.size();
     let (x0, y0, y1) = selected_bounds(params, w, h);
-    let (mut n, mut sum, mut sum2) = (0u64, 0u64, 0u64);
+    let (mut n, mut sum, mut sum2, mut off) = (0u64, 0u64, 0u64, 0u64);
     for row in disparity.rows().take(y1).skip(y0) {
-        let (mut rn, mut rsum) = (0u32, 0u32);
-        for d in row.get(x0..).unwrap_or(&[]) {
-            if let Some(d) = d.get() {
-                let b = u32::from(d.to_bits());
-                rn += 1;
-                // A row is under 2^13 cells of under 2^16: no overflow.
-                rsum += b;
-                sum2 += u64::from(b) * u64::from(b);
-            }
+        // Every cell is summed, OFF (u16::MAX) too, and the OFF cells
+        // counted, then taken out: no branch per cell. A row is under 2^13
+        // cells of at most 2^16 − 1: no overflow.
+        let cells = row.get(x0..).unwrap_or(&[]);
+        let (mut rsum, mut roff) = (0u32, 0u32);
+        for c in cells {
+            let b = u32::from(c.raw().to_bits());
+            rsum += b;
+            roff += (b + 1) >> 16;
+            sum2 += u64::from(b) * u64::from(b);
         }
-        n += u64::from(rn);
-        sum += u64::from(rsum);
+        let len = u32::try_from(cells.len()).unwrap_or(u32::MAX);
+        n += u64::from(len - roff);
+        sum += u64::from(rsum - roff * u32::from(u16::MAX));
+        off += u64::from(roff);
     }
+    let max = u64::from(u16::MAX);
+    sum2 -= off * max * max;
     // At most 2^26 pixels, so `2n` and `2n²` are 0 only when `n` is.
     let two_n = NonZeroU64::new(2 * n)?;
     let mean = ((sum << (EXTRA + 1)) + n) / two_n;
