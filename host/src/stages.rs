@@ -348,7 +348,6 @@ pub fn run_segment(
             ImageView::packed(&grey, width, height)?
         }
     };
-    let mut row = vec![Rgb8::default(); width];
     // One view of each input, for the call and for the panels.
     let (dv, cv) = (
         ImageView::packed(disparity, width, height)?,
@@ -358,7 +357,7 @@ pub fn run_segment(
         &params,
         &dv,
         &cv,
-        protogist::segment::LeftImage::new(&frame, &mut row)?,
+        &frame,
         &mut bufs,
         protogist::segment::Masks::Bools(&mut masks),
         &mut (),

@@ -101,14 +101,11 @@ pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) 
         }
 }
 
-/// Bytes of segmentation (its maps, its table and a row of the left
-/// image for the depth pass's colour refinement) and of the classifier's
-/// activations.
+/// Bytes of segmentation and of the classifier's activations.
 pub const fn object_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
     let m = &params.model;
     bytes(maps_len(width, height), 4)
         + bytes(table_len(width, height), 4)
-        + bytes(width, size_of::<Rgb8>())
         + bytes(mlp::packed_len(SHAPE_LEN, m.hidden as usize), 4)
         + bytes(mlp::hidden_len(m.hidden as usize), 1)
         + bytes(mlp::output_len(m.classes as usize), 2)

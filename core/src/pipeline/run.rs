@@ -14,8 +14,8 @@ use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, Ranked, Scratch};
 use crate::segment::{
-    bit_map_len, maps_len, segment_with_depth_pass, table_len, BitView, LeftImage, Masks,
-    SegmentBuffers, SegmentObserver,
+    bit_map_len, maps_len, segment_with_depth_pass, table_len, BitView, Masks, SegmentBuffers,
+    SegmentObserver,
 };
 use crate::shape::{shape_vector_bits, RadialProfile, ShapeError, ShapeVector, SHAPE_LEN};
 use crate::stereo::c2f::{self, C2fBuffers};
@@ -214,7 +214,6 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
     let mut seg = SegmentBuffers::new(w, h, s.take(maps_len(w, h))?, s.take(table_len(w, h))?)?;
     let edges: &'w [EdgeCell] = edges;
     let edges_v = ImageView::packed(edges, w, h)?;
-    let left = LeftImage::new(left, s.take(w)?)?;
     let report = segment_with_depth_pass(
         &params.segment,
         &disparity_v,

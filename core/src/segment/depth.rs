@@ -40,7 +40,7 @@ use super::label::AreaReport;
 use super::label::Connectivity;
 use super::morph::Disk;
 use super::pipeline::{emit, Masks, SegmentObserver, SegmentReport, Step};
-use super::refine::{refine_mask, LeftImage, Refine};
+use super::refine::{refine_mask, Refine};
 use super::stats::{plane, DisparityRange, Slice, PLANES, STAT_FRAC_BITS};
 use super::{Ratio, SegmentError, SegmentParams};
 use crate::conspicuity::EdgeCell;
@@ -189,7 +189,7 @@ pub fn segment_with_depth_pass<S: RgbRows>(
     params: &SegmentParams,
     disparity: &ImageView<'_, DisparityCell>,
     edges: &ImageView<'_, EdgeCell>,
-    mut left: LeftImage<'_, S>,
+    left: &S,
     bufs: &mut SegmentBuffers<'_>,
     mut masks: Masks<'_>,
     observer: &mut impl SegmentObserver,
@@ -279,7 +279,7 @@ pub fn segment_with_depth_pass<S: RgbRows>(
             *f &= !m;
         }
         let area = match &pass.refine {
-            Some(r) => refine_mask(r, &mut left, bufs)?,
+            Some(r) => refine_mask(r, left, bufs)?,
             None => bufs.mask.iter().map(|w| w.count_ones()).sum(),
         };
         observer.step(Step::Fill);

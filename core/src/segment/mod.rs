@@ -98,7 +98,7 @@ pub use pipeline::{
     bounding_box, inhibit, refine_border, segment, segment_into, segment_timed, BoundingBox,
     Detection, Masks, SegmentObserver, SegmentReport, Step,
 };
-pub use refine::{LeftImage, Refine};
+pub use refine::Refine;
 pub use stats::{
     above_mean, foreground, foreground_conspicuity, foreground_rows, in_selected_area,
     object_conspicuity, object_region, plane, select_slice, selected_area, selected_bounds,

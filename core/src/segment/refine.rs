@@ -35,7 +35,7 @@ use super::buffers::SegmentBuffers;
 use super::label::Connectivity;
 use super::morph::Disk;
 use super::SegmentError;
-use crate::image::{ImageError, Rgb8, RgbRows};
+use crate::image::{Rgb8, RgbRows};
 
 /// Settings of the colour refinement of the depth pass's masks
 /// ([`DepthPass::refine`](super::DepthPass::refine)).
@@ -79,54 +79,31 @@ impl Refine {
     }
 }
 
-/// The left image the depth pass refines its masks against, and one row
-/// of scratch for reading it.
-pub struct LeftImage<'a, S: RgbRows> {
-    frame: &'a S,
-    row: &'a mut [Rgb8],
-}
-
-impl<'a, S: RgbRows> LeftImage<'a, S> {
-    /// `frame` with `row`, at least as long as the frame is wide.
-    ///
-    /// # Errors
-    /// [`ImageError::BufferTooSmall`] for a short `row`.
-    pub fn new(frame: &'a S, row: &'a mut [Rgb8]) -> Result<Self, ImageError> {
-        let (w, _) = frame.size();
-        if row.len() < w {
-            return Err(ImageError::BufferTooSmall {
-                needed: w,
-                got: row.len(),
-            });
-        }
-        Ok(Self { frame, row })
+/// Reads row `y` of `frame` into `row` and calls `f(x, colour)` for every
+/// ON bit of `words` (row `y` of a bit map); nothing for an empty row.
+fn each<S: RgbRows>(
+    frame: &S,
+    row: &mut [Rgb8],
+    y: usize,
+    words: &[u32],
+    mut f: impl FnMut(usize, [i64; 3]),
+) {
+    if words.iter().all(|&w| w == 0) {
+        return;
     }
-
-    /// `(width, height)` of the frame.
-    pub fn size(&self) -> (usize, usize) {
-        self.frame.size()
-    }
-
-    /// Reads row `y` and calls `f(x, colour)` for every ON bit of `words`
-    /// (row `y` of a bit map).
-    fn each(&mut self, y: usize, words: &[u32], mut f: impl FnMut(usize, [i64; 3])) {
-        if words.iter().all(|&w| w == 0) {
-            return;
-        }
-        let (w, h) = self.frame.size();
-        let Some(row) = self.row.get_mut(..w).filter(|_| y < h) else {
-            return;
-        };
-        self.frame.rgb_row(y, row);
-        for (i, &word) in words.iter().enumerate() {
-            let mut v = word;
-            while v != 0 {
-                let x = i * 32 + v.trailing_zeros() as usize;
-                if let Some(p) = row.get(x) {
-                    f(x, [i64::from(p.r), i64::from(p.g), i64::from(p.b)]);
-                }
-                v &= v.wrapping_sub(1);
+    let (w, h) = frame.size();
+    let Some(row) = row.get_mut(..w).filter(|_| y < h) else {
+        return;
+    };
+    frame.rgb_row(y, row);
+    for (i, &word) in words.iter().enumerate() {
+        let mut v = word;
+        while v != 0 {
+            let x = i * 32 + v.trailing_zeros() as usize;
+            if let Some(p) = row.get(x) {
+                f(x, [i64::from(p.r), i64::from(p.g), i64::from(p.b)]);
             }
+            v &= v.wrapping_sub(1);
         }
     }
 }
@@ -159,14 +136,17 @@ impl Sum {
     }
 }
 
-/// Refines the mask in `bufs.mask` (module docs); uses `closed`, `filled`,
-/// `region` and `scratch` as scratch. Returns the new area.
+/// Refines the mask in `bufs.mask` (module docs) against `left`, a frame
+/// of the maps' size; uses `closed`, `filled`, `region` and `scratch` as
+/// scratch, and the labelling's run rows (`rows`, at least 8 bytes a
+/// column) for one row of `left`. Returns the new area.
 ///
 /// # Errors
 /// [`SegmentError::LabelCapacity`] from the labelling.
+#[inline(never)]
 pub(super) fn refine_mask<S: RgbRows>(
     refine: &Refine,
-    left: &mut LeftImage<'_, S>,
+    left: &S,
     bufs: &mut SegmentBuffers<'_>,
 ) -> Result<u32, SegmentError> {
     let g = bufs.g;
@@ -202,11 +182,24 @@ pub(super) fn refine_mask<S: RgbRows>(
     for (r, f) in bufs.region.iter_mut().zip(bufs.filled.iter()) {
         *r &= !f;
     }
+    // One row of `left` in the run rows, which the labelling below
+    // overwrites.
+    let Some(row) = bytemuck::try_cast_slice_mut::<u32, u8>(bufs.rows)
+        .ok()
+        .and_then(|b| b.get_mut(..3 * g.width))
+        .and_then(|b| bytemuck::try_cast_slice_mut::<u8, Rgb8>(b).ok())
+    else {
+        return Ok(area(bufs.mask));
+    };
     // The two means.
     let (mut object, mut behind) = (Sum::default(), Sum::default());
     for y in 0..g.height {
-        left.each(y, row_of(g, bufs.closed, y), |_, c| object.add(c));
-        left.each(y, row_of(g, bufs.region, y), |_, c| behind.add(c));
+        each(left, row, y, row_of(g, bufs.closed, y), |_, c| {
+            object.add(c)
+        });
+        each(left, row, y, row_of(g, bufs.region, y), |_, c| {
+            behind.add(c)
+        });
     }
     if object.n == 0 || behind.n == 0 {
         return Ok(area(bufs.mask));
@@ -228,7 +221,7 @@ pub(super) fn refine_mask<S: RgbRows>(
         ) else {
             continue;
         };
-        left.each(y, band, |x, c| {
+        each(left, row, y, band, |x, c| {
             let to_object = object.scaled_dist(c) * nb * nb;
             let to_behind = behind.scaled_dist(c) * no * no;
             let was = m.get(x / 32).is_some_and(|w| w >> (x % 32) & 1 == 1);
