@@ -79,23 +79,26 @@ impl Refine {
     }
 }
 
-/// Reads row `y` of `frame` into `row` and calls `f(x, colour)` for every
-/// ON bit of `words` (row `y` of a bit map); nothing for an empty row.
-fn each<S: RgbRows>(
+/// Row `y` of `frame`, read into `row`, when one of `maps` (rows `y` of
+/// bit maps) has a bit in it.
+fn read<'r, S: RgbRows>(
     frame: &S,
-    row: &mut [Rgb8],
+    row: &'r mut [Rgb8],
     y: usize,
-    words: &[u32],
-    mut f: impl FnMut(usize, [i64; 3]),
-) {
-    if words.iter().all(|&w| w == 0) {
-        return;
+    maps: &[&[u32]],
+) -> Option<&'r [Rgb8]> {
+    if maps.iter().all(|m| m.iter().all(|&w| w == 0)) {
+        return None;
     }
     let (w, h) = frame.size();
-    let Some(row) = row.get_mut(..w).filter(|_| y < h) else {
-        return;
-    };
+    let row = row.get_mut(..w).filter(|_| y < h)?;
     frame.rgb_row(y, row);
+    Some(row)
+}
+
+/// Calls `f(x, colour)` for every ON bit `x` of `words` (a row of a bit
+/// map) with `row`'s pixel there.
+fn each(row: &[Rgb8], words: &[u32], mut f: impl FnMut(usize, [i64; 3])) {
     for (i, &word) in words.iter().enumerate() {
         let mut v = word;
         while v != 0 {
@@ -194,12 +197,11 @@ pub(super) fn refine_mask<S: RgbRows>(
     // The two means.
     let (mut object, mut behind) = (Sum::default(), Sum::default());
     for y in 0..g.height {
-        each(left, row, y, row_of(g, bufs.closed, y), |_, c| {
-            object.add(c)
-        });
-        each(left, row, y, row_of(g, bufs.region, y), |_, c| {
-            behind.add(c)
-        });
+        let (core, ring) = (row_of(g, bufs.closed, y), row_of(g, bufs.region, y));
+        if let Some(px) = read(left, row, y, &[core, ring]) {
+            each(px, core, |_, c| object.add(c));
+            each(px, ring, |_, c| behind.add(c));
+        }
     }
     if object.n == 0 || behind.n == 0 {
         return Ok(area(bufs.mask));
@@ -221,7 +223,10 @@ pub(super) fn refine_mask<S: RgbRows>(
         ) else {
             continue;
         };
-        each(left, row, y, band, |x, c| {
+        let Some(px) = read(left, row, y, &[band]) else {
+            continue;
+        };
+        each(px, band, |x, c| {
             let to_object = object.scaled_dist(c) * nb * nb;
             let to_behind = behind.scaled_dist(c) * no * no;
             let was = m.get(x / 32).is_some_and(|w| w >> (x % 32) & 1 == 1);
