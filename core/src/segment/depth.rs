@@ -259,12 +259,7 @@ pub fn segment_with_depth_pass<S: RgbRows>(
             pass.closing,
         );
         observer.step(Step::Close);
-        let comps = bits::components(g, bufs.closed, Connectivity::Four, bufs.rows, bufs.table)?;
-        let (best, largest) = comps.largest.map_or((None, 0), |(r, a)| (Some(r), a));
-        comps.select(g, bufs.closed, bufs.table, bufs.filled, |r, _| {
-            Some(r) == best
-        });
-        bits::fill_holes(g, bufs.filled, bufs.mask, bufs.scratch);
+        let (count, largest) = largest_filled(bufs)?;
         // The slice, grown by a step, leaves the foreground.
         bits::morph_n(
             g,
@@ -284,7 +279,7 @@ pub fn segment_with_depth_pass<S: RgbRows>(
         };
         observer.step(Step::Fill);
         let regions = AreaReport {
-            regions: u16::try_from(comps.count).unwrap_or(u16::MAX),
+            regions: u16::try_from(count).unwrap_or(u16::MAX),
             kept: 1,
             largest,
             area,
@@ -304,6 +299,23 @@ pub fn segment_with_depth_pass<S: RgbRows>(
         observer.step(Step::Mask);
     }
     Ok(report)
+}
+
+/// `bufs.mask` = the largest 4-connected component of `bufs.closed` (the
+/// first in raster order on a tie), holes filled; `filled` and `scratch`
+/// are scratch. Returns the components and the largest's area.
+///
+/// # Errors
+/// [`SegmentError::LabelCapacity`] from the labelling.
+pub(super) fn largest_filled(bufs: &mut SegmentBuffers<'_>) -> Result<(u32, u32), SegmentError> {
+    let g = bufs.g;
+    let comps = bits::components(g, bufs.closed, Connectivity::Four, bufs.rows, bufs.table)?;
+    let (best, largest) = comps.largest.map_or((None, 0), |(r, a)| (Some(r), a));
+    comps.select(g, bufs.closed, bufs.table, bufs.filled, |r, _| {
+        Some(r) == best
+    });
+    bits::fill_holes(g, bufs.filled, bufs.mask, bufs.scratch);
+    Ok((comps.count, largest))
 }
 
 /// What the depth pass keeps: objects of at least `min_area` px that

@@ -30,9 +30,9 @@
 //! by cross-multiplying (`u128`, no overflow for any frame of
 //! [`MAX_DIM`](crate::image::MAX_DIM)² pixels).
 
-use super::bits::{self, Geom};
+use super::bits;
 use super::buffers::SegmentBuffers;
-use super::label::Connectivity;
+use super::depth::largest_filled;
 use super::morph::Disk;
 use super::SegmentError;
 use crate::image::{Rgb8, RgbRows};
@@ -197,7 +197,8 @@ pub(super) fn refine_mask<S: RgbRows>(
     // The two means.
     let (mut object, mut behind) = (Sum::default(), Sum::default());
     for y in 0..g.height {
-        let (core, ring) = (row_of(g, bufs.closed, y), row_of(g, bufs.region, y));
+        let row_of = |m| g.row(m, y).unwrap_or(&[]);
+        let (core, ring) = (row_of(bufs.closed), row_of(bufs.region));
         if let Some(px) = read(left, row, y, &[core, ring]) {
             each(px, core, |_, c| object.add(c));
             each(px, ring, |_, c| behind.add(c));
@@ -237,16 +238,6 @@ pub(super) fn refine_mask<S: RgbRows>(
         });
     }
     // Its largest 4-connected component, holes filled.
-    let comps = bits::components(g, bufs.closed, Connectivity::Four, bufs.rows, bufs.table)?;
-    let best = comps.largest.map(|(r, _)| r);
-    comps.select(g, bufs.closed, bufs.table, bufs.filled, |r, _| {
-        Some(r) == best
-    });
-    bits::fill_holes(g, bufs.filled, bufs.mask, bufs.scratch);
+    largest_filled(bufs)?;
     Ok(area(bufs.mask))
-}
-
-/// Row `y` of bit map `m` (empty past the end).
-fn row_of(g: Geom, m: &[u32], y: usize) -> &[u32] {
-    m.get(y * g.stride..(y + 1) * g.stride).unwrap_or(&[])
 }

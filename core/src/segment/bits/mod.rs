@@ -84,7 +84,8 @@ impl Geom {
         m.chunks_exact_mut(self.stride.max(1))
     }
 
-    fn row<'m>(&self, m: &'m [u32], y: usize) -> Option<&'m [u32]> {
+    /// Row `y` of bit map `m`; `None` past its end.
+    pub(in crate::segment) fn row<'m>(&self, m: &'m [u32], y: usize) -> Option<&'m [u32]> {
         m.get(y * self.stride..(y + 1) * self.stride)
     }
 
