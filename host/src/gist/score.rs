@@ -112,8 +112,9 @@ pub struct SceneScore {
     pub found: Vec<Found>,
 }
 
-/// One detection as scored: where it is and what it overlaps.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+/// One detection as scored: where it is, what it overlaps and what it is
+/// called.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Found {
     /// Its box.
     pub bbox: BoxPx,
@@ -123,6 +124,10 @@ pub struct Found {
     pub object: Option<usize>,
     /// Its best class's cosine score (`None` without a shape).
     pub score: Option<f32>,
+    /// Its best class, known or not (`None` without a shape).
+    pub class: Option<String>,
+    /// The class of the object it is matched to.
+    pub truth: Option<String>,
 }
 
 /// Scores one scene's detections against its truth.
@@ -153,11 +158,16 @@ pub fn score_scene(scene: &Scene, dets: &[Detection], ms: f64) -> SceneScore {
     s.found = dets
         .iter()
         .enumerate()
-        .map(|(k, d)| Found {
-            bbox: d.bbox,
-            best_iou: gt.iter().map(|b| d.bbox.iou(b)).fold(0.0, f64::max),
-            object: matches.iter().find(|m| m.detection == k).map(|m| m.object),
-            score: d.top5.first().map(|t| t.1),
+        .map(|(k, d)| {
+            let object = matches.iter().find(|m| m.detection == k).map(|m| m.object);
+            Found {
+                bbox: d.bbox,
+                best_iou: gt.iter().map(|b| d.bbox.iou(b)).fold(0.0, f64::max),
+                object,
+                score: d.top5.first().map(|t| t.1),
+                class: d.top5.first().map(|t| t.0.clone()),
+                truth: object.and_then(|o| truth.get(o)).map(|o| o.class.clone()),
+            }
         })
         .collect();
     let claims = dets.iter().filter(|d| d.category().is_some()).count();
@@ -375,6 +385,25 @@ mod tests {
         assert!(found[2].1 < MIN_IOU, "{found:?}");
         assert_eq!(sc.found[0].bbox, b(0, 0, 4, 4));
         assert_eq!(sc.found[0].score, Some(0.9));
+        // Each names its best class and, when matched, its object's class.
+        let names: Vec<_> = sc
+            .found
+            .iter()
+            .map(|f| (f.class.as_deref(), f.truth.as_deref()))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                (Some("a"), Some("a")),
+                (Some("b"), Some("b")),
+                (Some("d"), None)
+            ]
+        );
+        let sc = score_scene(&s, &second, 0.0);
+        assert_eq!(
+            (sc.found[0].class.as_deref(), sc.found[0].truth.as_deref()),
+            (Some("c"), Some("a"))
+        );
         extra[2].known = true;
         assert!(!score_scene(&s, &extra, 0.0).gist);
 
