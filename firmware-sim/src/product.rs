@@ -93,7 +93,7 @@ pub struct StageTicks(pub [u64; 7]);
 /// The steps of the stereo and figure-ground stages, as the report names
 /// them. `stereo-readout` includes the phase refinement, which runs on
 /// each row the read-out emits.
-pub const STEPS: [&str; 13] = [
+pub const STEPS: [&str; 14] = [
     "stereo-pyramid",
     "stereo-filters",
     "stereo-energies",
@@ -107,6 +107,7 @@ pub const STEPS: [&str; 13] = [
     "seg-close",
     "seg-fill",
     "seg-mask",
+    "seg-holes",
 ];
 
 fn stereo_step_index(s: StereoStep) -> usize {
@@ -129,13 +130,14 @@ fn segment_step_index(s: SegmentStep) -> usize {
         SegmentStep::Close => 5,
         SegmentStep::Fill => 6,
         SegmentStep::Mask => 7,
+        SegmentStep::Holes => 8,
     }
 }
 
 /// Ticks per step of one frame ([`STEPS`] order). A stage's steps need not
 /// add up to it: its set-up between steps is in none.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct StepTicks(pub [u64; 13]);
+pub struct StepTicks(pub [u64; 14]);
 
 /// Times the pipeline's stages as it enters them, and the steps of stereo
 /// (told as they start) and figure-ground (told as they end).

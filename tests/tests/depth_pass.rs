@@ -6,9 +6,10 @@ use protogist::conspicuity::{Conspicuity, EdgeCell};
 use protogist::disparity::{from_pixels, DisparityCell};
 use protogist::image::{ImageView, Rgb8};
 use protogist::segment::{
-    segment_with_depth_pass, DepthPass, Masks, Ratio, Refine, SegmentError, SegmentParams,
-    SegmentReport, MAX_GROUND_BAND,
+    self as sg, segment_with_depth_pass, DepthPass, Holes, Masks, Ratio, Refine, SegmentError,
+    SegmentParams, SegmentReport, MAX_GROUND_BAND,
 };
+use protogist_host::reference::refine as rfr;
 use protogist_host::reference::segment as rf;
 use protogist_tests::SegmentStorage;
 
@@ -74,6 +75,44 @@ fn the_settings_are_checked() {
             ..DepthPass::DEFAULT
         },
     ];
+    let holes = [
+        Holes {
+            band: 0,
+            ..Holes::DEFAULT
+        },
+        Holes {
+            band: 9,
+            ..Holes::DEFAULT
+        },
+        Holes {
+            gap: 9,
+            ..Holes::DEFAULT
+        },
+        Holes {
+            ring: 0,
+            ..Holes::DEFAULT
+        },
+        Holes {
+            ring: 9,
+            ..Holes::DEFAULT
+        },
+        Holes {
+            opening: 5,
+            ..Holes::DEFAULT
+        },
+        Holes {
+            min_area: Ratio::new(1, 0),
+            ..Holes::DEFAULT
+        },
+        Holes {
+            min_area: Ratio::new(2, 1),
+            ..Holes::DEFAULT
+        },
+    ];
+    let bad = bad.into_iter().chain(holes.map(|h| DepthPass {
+        holes: Some(h),
+        ..DepthPass::DEFAULT
+    }));
     for b in bad {
         assert!(
             matches!(b.validate(), Err(SegmentError::BadParams(_))),
@@ -379,7 +418,7 @@ fn a_left_image_of_another_size_is_an_error() {
 
 /// Per box a colour offset and a shift, the background colour, and noise
 /// per pixel.
-type Paint = (Vec<([i16; 3], isize, isize)>, [u8; 3], Vec<i16>);
+type Paint = (Vec<([i16; 3], isize, isize, bool)>, [u8; 3], Vec<i16>);
 
 /// A left image for [`blocky`]'s boxes: a background colour, box `k` in
 /// it plus `paint.0[k].0` (close colours, so that the noise and the
@@ -390,7 +429,7 @@ fn painted(
     (boxes, bg, noise): &Paint,
 ) -> Vec<Rgb8> {
     let mut img = vec![*bg; w * h];
-    for (&(x0, y0, bw, bh, _, _), &(delta, dx, dy)) in list.iter().zip(boxes) {
+    for (&(x0, y0, bw, bh, _, _), &(delta, dx, dy, window)) in list.iter().zip(boxes) {
         let colour: [u8; 3] =
             core::array::from_fn(|i| (i16::from(bg[i]) + delta[i]).clamp(0, 255) as u8);
         for y in 0..h {
@@ -398,7 +437,11 @@ fn painted(
                 let (sx, sy) = (x as isize - dx, y as isize - dy);
                 let inside = (x0 as isize..(x0 + bw) as isize).contains(&sx)
                     && (y0 as isize..(y0 + bh) as isize).contains(&sy);
-                if inside {
+                // A window: the middle third shows the background.
+                let (ox, oy) = (3 * (sx - x0 as isize), 3 * (sy - y0 as isize));
+                let middle = (bw as isize..2 * bw as isize).contains(&ox)
+                    && (bh as isize..2 * bh as isize).contains(&oy);
+                if inside && !(window && middle) {
                     img[y * w + x] = colour;
                 }
             }
@@ -472,8 +515,12 @@ proptest! {
         clearance in 0u8..4,
         den in 16u16..200,
         refine in prop::option::weighted(0.8, (0u8..4, 0u8..5, 1u8..5)),
+        holes in prop::option::weighted(0.8, (1u8..5, 0u8..3, 1u8..5, 0u8..3, 4u16..40)),
         paint in (
-            prop::collection::vec((prop::array::uniform3(-40i16..41), -3isize..4, -3isize..4), 5),
+            prop::collection::vec(
+                (prop::array::uniform3(-40i16..41), -3isize..4, -3isize..4, any::<bool>()),
+                5,
+            ),
             prop::array::uniform3(40u8..216),
             prop::collection::vec(-20i16..21, 56 * 40),
         ),
@@ -488,7 +535,11 @@ proptest! {
         let (d, c) = blocky((w, h), &list, &off);
         let left = painted((w, h), &list, &paint);
         let refine = refine.map(|(core, reach, ring)| Refine { core, reach, ring });
+        let holes = holes.map(|(band, gap, ring, opening, den)| Holes {
+            band, gap, ring, opening, min_area: Ratio::new(1, den),
+        });
         let pass = DepthPass {
+            holes,
             rise, radius, closing, searches, clearance, min_area: Ratio::new(1, den), refine,
         };
         let colour_only = SegmentParams {
@@ -502,13 +553,82 @@ proptest! {
         let (colour, cm) = run_at(&colour_only, &d, &c, Some(&left), (w, h)).unwrap();
         let (r, masks) = run_at(&p, &d, &c, Some(&left), (w, h)).unwrap();
         let n = colour.objects.len();
-        prop_assert_eq!(&r.objects[..n], &colour.objects[..]);
         let colour_masks: Vec<Vec<bool>> =
             (0..n).map(|k| cm[k * w * h..(k + 1) * w * h].to_vec()).collect();
         let df: Vec<rf::DispF> = d.iter().map(|v| v.get().map(f32::from)).collect();
-        let want = rf::depth_pass(&p, &df, &colour_masks, Some(&left), w, h);
+        // The pass sees the colour masks filled; then every mask loses
+        // its holes.
+        let pass_masks = rf::depth_pass(&p, &df, &colour_masks, Some(&left), w, h);
+        let holed = |m: &Vec<bool>| match &holes {
+            Some(hs) => rfr::open_holes(hs, m, &left, w, h),
+            None => m.clone(),
+        };
+        let want: Vec<Vec<bool>> = colour_masks.iter().chain(&pass_masks).map(holed).collect();
         let got: Vec<Vec<bool>> =
-            (n..r.objects.len()).map(|k| masks[k * w * h..(k + 1) * w * h].to_vec()).collect();
-        prop_assert_eq!(got, want);
+            (0..r.objects.len()).map(|k| masks[k * w * h..(k + 1) * w * h].to_vec()).collect();
+        prop_assert_eq!(&got, &want);
+        // The colour objects' reports, with the areas of their masks.
+        for (k, (a, b)) in r.objects.iter().zip(&colour.objects).enumerate() {
+            let area = want[k].iter().filter(|&&m| m).count() as u32;
+            prop_assert_eq!(a, &sg::Detection { area, ..*b });
+        }
+        prop_assert_eq!(r.objects.len(), n + pass_masks.len());
+    }
+}
+
+#[test]
+fn a_ring_gets_its_hole_back_and_a_solid_box_stays_whole() {
+    // Two outlined boxes of 18x18 at 12 and 20 px, of one colour; the
+    // first shows the background through a window, its middle third.
+    let (d, c) = boxes(&[(4, 8, 22, 26, 12, true), (26, 8, 44, 26, 20, true)]);
+    let list = [(4, 8, 18, 18, 12, true), (26, 8, 18, 18, 20, true)];
+    let paint: Paint = (
+        vec![([60, -40, 20], 0, 0, true), ([60, -40, 20], 0, 0, false)],
+        [90, 120, 90],
+        vec![0; BW * BH],
+    );
+    let left = painted((BW, BH), &list, &paint);
+    let filled = SegmentParams {
+        depth_pass: PASS.depth_pass.map(|p| DepthPass { holes: None, ..p }),
+        ..PASS
+    };
+    let (r0, m0) = run_at(&filled, &d, &c, Some(&left), (BW, BH)).unwrap();
+    // The window is a ninth of the box; the mask is larger than the box.
+    let holed = SegmentParams {
+        depth_pass: PASS.depth_pass.map(|p| DepthPass {
+            holes: Some(Holes {
+                min_area: Ratio::new(1, 20),
+                ..Holes::DEFAULT
+            }),
+            ..p
+        }),
+        ..PASS
+    };
+    let (r1, m1) = run_at(&holed, &d, &c, Some(&left), (BW, BH)).unwrap();
+    assert_eq!(r0.objects.len(), 2, "{:?}", r0.objects);
+    assert_eq!(r1.objects.len(), 2, "{:?}", r1.objects);
+    let window = |i: usize| (10..16).contains(&(i % BW)) && (14..20).contains(&(i / BW));
+    for k in 0..2 {
+        let (before, after) = (mask(&m0, k), mask(&m1, k));
+        let ring = r0.objects[k].delta == 12;
+        // Filled, the ring covers its window.
+        let outline = if ring {
+            (4, 8, 22, 26)
+        } else {
+            (26, 8, 44, 26)
+        };
+        assert!(iou_box(before, outline) > 0.8);
+        assert!((0..BW * BH)
+            .filter(|&i| ring && window(i))
+            .all(|i| before[i]));
+        for (i, (&b, &a)) in before.iter().zip(after).enumerate() {
+            assert_eq!(a, b && !(ring && window(i)), "object {k}, cell {i}");
+        }
+        let area = after.iter().filter(|&&m| m).count() as u32;
+        assert_eq!(r1.objects[k].area, area);
+        assert_eq!(
+            r1.objects[k].area + if ring { 36 } else { 0 },
+            r0.objects[k].area
+        );
     }
 }

@@ -36,6 +36,7 @@
 
 use super::bits::{self, for_each_on, Geom};
 use super::buffers::SegmentBuffers;
+use super::holes::{open_holes, Holes};
 use super::label::AreaReport;
 use super::label::Connectivity;
 use super::morph::Disk;
@@ -71,6 +72,10 @@ pub struct DepthPass {
     /// The colour refinement of each mask against the left image; `None`:
     /// the slice's component is the mask.
     pub refine: Option<Refine>,
+    /// Holes by colour, taken out of every mask, the colour searches' and
+    /// the pass's, once all are found ([`Holes`]); `None`: every mask is
+    /// filled.
+    pub holes: Option<Holes>,
 }
 
 impl DepthPass {
@@ -86,6 +91,7 @@ impl DepthPass {
         clearance: 6,
         min_area: Ratio::new(1, 64),
         refine: Some(Refine::DEFAULT),
+        holes: Some(Holes::DEFAULT),
     };
 
     /// Checks the settings.
@@ -111,7 +117,8 @@ impl DepthPass {
         if self.min_area.den == 0 || self.min_area.num > self.min_area.den {
             return Err(SegmentError::BadParams("depth_pass.min_area"));
         }
-        self.refine.as_ref().map_or(Ok(()), Refine::validate)
+        self.refine.as_ref().map_or(Ok(()), Refine::validate)?;
+        self.holes.as_ref().map_or(Ok(()), Holes::validate)
     }
 
     /// The least mask area in a `width` x `height` frame, px (rounded up).
@@ -206,9 +213,46 @@ pub fn segment_with_depth_pass<S: RgbRows>(
     let Some(pass) = params.depth_pass else {
         return Ok(report);
     };
+    depth_searches(
+        &pass,
+        params,
+        disparity,
+        left,
+        bufs,
+        masks.reborrow(),
+        &mut report,
+        observer,
+    )?;
+    if let Some(holes) = &pass.holes {
+        let g = bufs.g;
+        let chunk = masks.chunk(g);
+        for (i, det) in report.objects.iter_mut().enumerate() {
+            bufs.mask.fill(0);
+            masks.or_into(i, chunk, g, bufs.mask);
+            det.area = open_holes(holes, left, bufs)?;
+            masks.write(i, chunk, g, bufs.mask);
+        }
+        observer.step(Step::Holes);
+    }
+    Ok(report)
+}
+
+/// The depth pass's searches (module docs, steps 1 to 4), when the colour
+/// searches of `report` found fewer than K objects.
+#[allow(clippy::too_many_arguments)]
+fn depth_searches<S: RgbRows>(
+    pass: &DepthPass,
+    params: &SegmentParams,
+    disparity: &ImageView<'_, DisparityCell>,
+    left: &S,
+    bufs: &mut SegmentBuffers<'_>,
+    mut masks: Masks<'_>,
+    report: &mut SegmentReport,
+    observer: &mut impl SegmentObserver,
+) -> Result<(), SegmentError> {
     let k = usize::from(params.max_objects);
     if report.objects.len() >= k || report.stats.is_none() {
-        return Ok(report);
+        return Ok(());
     }
     let g = bufs.g;
     let (w, h) = bufs.size();
@@ -292,13 +336,13 @@ pub fn segment_with_depth_pass<S: RgbRows>(
             range,
             regions,
             bufs,
-            &mut report,
+            report,
             observer,
             Some(union),
         );
         observer.step(Step::Mask);
     }
-    Ok(report)
+    Ok(())
 }
 
 /// `bufs.mask` = the largest 4-connected component of `bufs.closed` (the

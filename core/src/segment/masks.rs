@@ -46,6 +46,39 @@ impl Masks<'_> {
         }
     }
 
+    /// Writes the bit map `src` into slot `i`.
+    pub(super) fn write(&mut self, i: usize, chunk: usize, g: Geom, src: &[u32]) {
+        let span = i * chunk..(i + 1) * chunk;
+        match self {
+            Masks::Bits(m) => {
+                if let Some(m) = m.get_mut(span) {
+                    super::bits::copy_map(m, src);
+                }
+            }
+            Masks::Bools(m) => {
+                let Some(mask) = m.get_mut(span) else {
+                    return;
+                };
+                let w = g.width;
+                // Rows by index: a zip of two `chunks_exact` is not always
+                // inlined, and its size hint links a division panic.
+                for y in 0..g.height {
+                    let (Some(out), Some(words)) = (
+                        mask.get_mut(y * w..(y + 1) * w),
+                        src.get(y * g.stride..(y + 1) * g.stride),
+                    ) else {
+                        break;
+                    };
+                    for (o, b) in out.chunks_mut(32).zip(words) {
+                        for (i, o) in o.iter_mut().enumerate() {
+                            *o = b >> i & 1 != 0;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// The same masks, borrowed again for a shorter time.
     pub fn reborrow(&mut self) -> Masks<'_> {
         match self {

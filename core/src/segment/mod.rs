@@ -77,6 +77,7 @@ mod bits;
 mod buffers;
 mod depth;
 mod ground;
+mod holes;
 mod label;
 mod masks;
 mod morph;
@@ -90,6 +91,7 @@ pub use bits::{bit_map_len, clear_square_bits, row_runs, run_capacity, words_per
 pub use buffers::{maps_len, scratch_bytes, table_len, SegmentBuffers, BIT_MAPS};
 pub use depth::{segment_with_depth_pass, DepthPass};
 pub use ground::{fit_ground, ground_rows_len, inhibit_ground, GroundLine, MAX_SLOPE, MIN_SLOPE};
+pub use holes::Holes;
 pub use label::{area_filter, fill_holes, label_capacity, AreaReport, Connectivity, Labeller};
 pub use morph::{
     close, dilate, dilate_n, erode, erode_n, non_max_suppression, Disk, NMS_DIRECTIONS,

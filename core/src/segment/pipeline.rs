@@ -219,6 +219,8 @@ pub enum Step {
     Fill,
     /// Area filter, mask output, bounding box and inhibition.
     Mask,
+    /// Holes by colour ([`Holes`](super::Holes)), over every mask.
+    Holes,
 }
 
 /// [`segment`], calling `probe(step)` after each [`Step`] (for per-step

@@ -81,7 +81,7 @@ impl Refine {
 
 /// Row `y` of `frame`, read into `row`, when one of `maps` (rows `y` of
 /// bit maps) has a bit in it.
-fn read<'r, S: RgbRows>(
+pub(super) fn read<'r, S: RgbRows>(
     frame: &S,
     row: &'r mut [Rgb8],
     y: usize,
@@ -98,7 +98,7 @@ fn read<'r, S: RgbRows>(
 
 /// Calls `f(x, colour)` for every ON bit `x` of `words` (a row of a bit
 /// map) with `row`'s pixel there.
-fn each(row: &[Rgb8], words: &[u32], mut f: impl FnMut(usize, [i64; 3])) {
+pub(super) fn each(row: &[Rgb8], words: &[u32], mut f: impl FnMut(usize, [i64; 3])) {
     for (i, &word) in words.iter().enumerate() {
         let mut v = word;
         while v != 0 {
@@ -111,15 +111,24 @@ fn each(row: &[Rgb8], words: &[u32], mut f: impl FnMut(usize, [i64; 3])) {
     }
 }
 
+/// One row of `width` pixels in the labelling's run rows (`rows`, at
+/// least 8 bytes a column), which a labelling overwrites.
+pub(super) fn rgb_row(rows: &mut [u32], width: usize) -> Option<&mut [Rgb8]> {
+    bytemuck::try_cast_slice_mut::<u32, u8>(rows)
+        .ok()
+        .and_then(|b| b.get_mut(..3 * width))
+        .and_then(|b| bytemuck::try_cast_slice_mut::<u8, Rgb8>(b).ok())
+}
+
 /// A colour sum: cells and the sum of each channel.
 #[derive(Clone, Copy, Default)]
-struct Sum {
-    n: i64,
+pub(super) struct Sum {
+    pub(super) n: i64,
     s: [i64; 3],
 }
 
 impl Sum {
-    fn add(&mut self, c: [i64; 3]) {
+    pub(super) fn add(&mut self, c: [i64; 3]) {
         self.n += 1;
         for (s, c) in self.s.iter_mut().zip(c) {
             *s += c;
@@ -127,7 +136,7 @@ impl Sum {
     }
 
     /// `Σ (n·c − S)²`: `n²` times the squared distance of `c` to the mean.
-    fn scaled_dist(&self, c: [i64; 3]) -> u128 {
+    pub(super) fn scaled_dist(&self, c: [i64; 3]) -> u128 {
         self.s
             .iter()
             .zip(c)
@@ -187,11 +196,7 @@ pub(super) fn refine_mask<S: RgbRows>(
     }
     // One row of `left` in the run rows, which the labelling below
     // overwrites.
-    let Some(row) = bytemuck::try_cast_slice_mut::<u32, u8>(bufs.rows)
-        .ok()
-        .and_then(|b| b.get_mut(..3 * g.width))
-        .and_then(|b| bytemuck::try_cast_slice_mut::<u8, Rgb8>(b).ok())
-    else {
+    let Some(row) = rgb_row(bufs.rows, g.width) else {
         return Ok(area(bufs.mask));
     };
     // The two means.

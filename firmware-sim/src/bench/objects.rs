@@ -50,7 +50,7 @@ pub struct ObjectBuffers<'a> {
 }
 
 /// The segmentation steps timed one by one, in [`Step`] order.
-pub const SEGMENT_STEPS: [(Step, &str); 8] = [
+pub const SEGMENT_STEPS: [(Step, &str); 9] = [
     (Step::Foreground, "seg-foreground"),
     (Step::Slice, "seg-slice"),
     (Step::Region, "seg-region"),
@@ -59,6 +59,7 @@ pub const SEGMENT_STEPS: [(Step, &str); 8] = [
     (Step::Close, "seg-close"),
     (Step::Fill, "seg-fill"),
     (Step::Mask, "seg-mask"),
+    (Step::Holes, "seg-holes"),
 ];
 
 /// What the object stages found in one frame.

@@ -1,15 +1,16 @@
-//! Reference of the depth pass's colour refinement
-//! ([`protogist::segment::Refine`]), on `bool` maps: the mask's core and
-//! ring by repeated square steps, the two mean colours, and each cell of
-//! the reach off the core given to the nearer mean.
+//! References of the depth pass's colour refinement
+//! ([`protogist::segment::Refine`]) and of the holes by colour
+//! ([`protogist::segment::Holes`]), on `bool` maps: masks, bands and rings
+//! by repeated square steps, mean colours, and each cell given to the
+//! nearer mean.
 //!
-//! Core's refinement compares the distances exactly in integers; so does
-//! this one (`i128`), so the two agree mask for mask (error bound: none,
-//! docs/ERROR_BOUNDS.md 8b).
+//! Core compares the distances exactly in integers; so do these (`i128`),
+//! so the two agree mask for mask (error bound: none, docs/ERROR_BOUNDS.md
+//! 8b).
 
-use super::segment::{dilate, erode, largest_filled};
+use super::segment::{dilate, erode, label, largest_filled};
 use protogist::image::Rgb8;
-use protogist::segment::{Disk, Refine};
+use protogist::segment::{Connectivity, Disk, Holes, Refine};
 
 /// `n` steps of `step` on `map`.
 fn steps(
@@ -71,4 +72,38 @@ pub fn refine_mask(refine: &Refine, mask: &[bool], left: &[Rgb8], w: usize, h: u
         })
         .collect();
     largest_filled(&joined, w, h)
+}
+
+/// Reference of the holes by colour of `mask` against the left image
+/// `left` (module docs of `protogist::segment::holes`): `mask` less its
+/// holes.
+pub fn open_holes(holes: &Holes, mask: &[bool], left: &[Rgb8], w: usize, h: usize) -> Vec<bool> {
+    let inside = steps(erode, mask, holes.band, w, h);
+    let band: Vec<bool> = mask.iter().zip(&inside).map(|(&m, &i)| m && !i).collect();
+    let near = steps(dilate, mask, holes.gap, w, h);
+    let outer = steps(dilate, &near, holes.ring, w, h);
+    let ring: Vec<bool> = outer.iter().zip(&near).map(|(&o, &n)| o && !n).collect();
+    let (object, around) = (sum(left, &band), sum(left, &ring));
+    if !inside.contains(&true) || object.0 == 0 || around.0 == 0 {
+        return mask.to_vec();
+    }
+    let candidates: Vec<bool> = (0..w * h)
+        .map(|i| {
+            let to_object = scaled(left[i], object) * around.0 * around.0;
+            let to_around = scaled(left[i], around) * object.0 * object.0;
+            inside[i] && 2 * to_around < to_object
+        })
+        .collect();
+    let opened = steps(erode, &candidates, holes.opening, w, h);
+    let opened = steps(dilate, &opened, holes.opening, w, h);
+    let opened: Vec<bool> = opened.iter().zip(&inside).map(|(&o, &i)| o && i).collect();
+    let (labels, n) = label(&opened, w, h, true, Connectivity::Four);
+    let mut area = vec![0u64; usize::from(n) + 1];
+    labels.iter().for_each(|&l| area[usize::from(l)] += 1);
+    let before = mask.iter().filter(|&&m| m).count() as u64;
+    let (num, den) = (u64::from(holes.min_area.num), u64::from(holes.min_area.den));
+    mask.iter()
+        .zip(&labels)
+        .map(|(&m, &l)| m && !(l != 0 && area[usize::from(l)] * den >= before * num))
+        .collect()
 }

@@ -1,0 +1,207 @@
+//! Holes by colour: a mask's interior that shows what is behind the
+//! object (a ring's hole) taken out of the mask.
+//!
+//! Figure-ground fills every mask's holes: the stereo's map inside a
+//! small hole is the object's own disparity (its support spans the hole's
+//! edges), and a hole filled by the conspicuity contour is part of the
+//! object. A ring then has a disc's shape vector and is named a circle
+//! (docs/CHOICES.md, "Holes by colour"). The left image still shows the
+//! hole: what is seen through it has the colour of what surrounds the
+//! object. So, for a mask `M`:
+//!
+//! 1. the *inside* is `M` eroded by [`Holes::band`] square steps; the
+//!    *band*, `M` less its inside, has the object's colour;
+//! 2. the *ring* is `M` dilated by [`Holes::gap`] + [`Holes::ring`] square
+//!    steps less `M` dilated by [`Holes::gap`]: the colour around it;
+//! 3. a cell of the inside is a hole candidate when its squared RGB
+//!    distance to the ring's mean is less than half its distance to the
+//!    band's mean (the object's colour is a mix of object and background
+//!    at the outline, so the margin keeps a solid object's inside whole);
+//! 4. the candidates are opened by [`Holes::opening`] square steps (a
+//!    texture's speck is no hole); each 4-connected component of them
+//!    that covers at least [`Holes::min_area`] of `M` is a hole and
+//!    leaves `M`.
+//!
+//! An empty inside, band or ring leaves `M` as it is. The comparison is
+//! exact in integers, as the refinement's (module `refine`): with `n`
+//! cells of colour sum `S`, `n²` times the squared distance of colour `c`
+//! to the mean is `Σ (n·c − S)²`, and the distances are compared by
+//! cross-multiplying in `u128`.
+
+use super::bits;
+use super::buffers::SegmentBuffers;
+use super::label::Connectivity;
+use super::morph::Disk;
+use super::refine::{each, read, rgb_row, Sum};
+use super::{Ratio, SegmentError};
+use crate::image::RgbRows;
+
+/// Settings of the holes by colour
+/// ([`DepthPass::holes`](super::DepthPass::holes)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Holes {
+    /// Square erosion steps of the mask giving its inside; the band they
+    /// take off gives the object's colour (1 to 8).
+    pub band: u8,
+    /// Square dilation steps of the mask before the ring starts (0 to 8).
+    pub gap: u8,
+    /// Square dilation steps of the ring, whose colour is the
+    /// surroundings' (1 to 8).
+    pub ring: u8,
+    /// Square opening steps of the hole candidates (0 to 4).
+    pub opening: u8,
+    /// Least area of a hole, a fraction of the mask's area (at most 1).
+    pub min_area: Ratio,
+}
+
+impl Holes {
+    /// A band of 3 steps, a ring from 1 to 4 steps out, candidates opened
+    /// by one step, holes of at least a tenth of the mask
+    /// (docs/CHOICES.md, "Holes by colour").
+    pub const DEFAULT: Self = Self {
+        band: 3,
+        gap: 1,
+        ring: 3,
+        opening: 1,
+        min_area: Ratio::new(1, 10),
+    };
+
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// [`SegmentError::BadParams`] naming the field.
+    pub fn validate(&self) -> Result<(), SegmentError> {
+        if !(1..=8).contains(&self.band) {
+            return Err(SegmentError::BadParams("depth_pass.holes.band"));
+        }
+        if self.gap > 8 {
+            return Err(SegmentError::BadParams("depth_pass.holes.gap"));
+        }
+        if !(1..=8).contains(&self.ring) {
+            return Err(SegmentError::BadParams("depth_pass.holes.ring"));
+        }
+        if self.opening > 4 {
+            return Err(SegmentError::BadParams("depth_pass.holes.opening"));
+        }
+        if self.min_area.den == 0 || self.min_area.num > self.min_area.den {
+            return Err(SegmentError::BadParams("depth_pass.holes.min_area"));
+        }
+        Ok(())
+    }
+}
+
+/// Takes the holes of the mask in `bufs.mask` (module docs) out of it,
+/// against `left`, a frame of the maps' size; uses `closed`, `filled`,
+/// `region` and `scratch` as scratch, and the labelling's run rows for
+/// one row of `left`. Returns the new area.
+///
+/// # Errors
+/// [`SegmentError::LabelCapacity`] from the labelling.
+#[inline(never)]
+pub(super) fn open_holes<S: RgbRows>(
+    holes: &Holes,
+    left: &S,
+    bufs: &mut SegmentBuffers<'_>,
+) -> Result<u32, SegmentError> {
+    let g = bufs.g;
+    let area = |m: &[u32]| m.iter().map(|w| w.count_ones()).sum::<u32>();
+    let before = area(bufs.mask);
+    let morph = |m: &mut [u32], s: &mut [u32], r: &mut [u32], n: u8, erode: bool| {
+        bits::morph_n(g, Disk::Square, m, s, r, n, erode);
+    };
+    // closed = inside; filled = M grown by the gap; region = the ring.
+    bits::copy_map(bufs.closed, bufs.mask);
+    morph(bufs.closed, bufs.scratch, bufs.morph_rows, holes.band, true);
+    if bufs.closed.iter().all(|&w| w == 0) {
+        return Ok(before);
+    }
+    bits::copy_map(bufs.filled, bufs.mask);
+    morph(bufs.filled, bufs.scratch, bufs.morph_rows, holes.gap, false);
+    bits::copy_map(bufs.region, bufs.filled);
+    morph(
+        bufs.region,
+        bufs.scratch,
+        bufs.morph_rows,
+        holes.ring,
+        false,
+    );
+    for (r, f) in bufs.region.iter_mut().zip(bufs.filled.iter()) {
+        *r &= !f;
+    }
+    // filled = the band, M less its inside.
+    for ((f, m), c) in bufs
+        .filled
+        .iter_mut()
+        .zip(bufs.mask.iter())
+        .zip(bufs.closed.iter())
+    {
+        *f = m & !c;
+    }
+    let Some(row) = rgb_row(bufs.rows, g.width) else {
+        return Ok(before);
+    };
+    let (mut object, mut around) = (Sum::default(), Sum::default());
+    for y in 0..g.height {
+        let row_of = |m| g.row(m, y).unwrap_or(&[]);
+        let (band, ring) = (row_of(bufs.filled), row_of(bufs.region));
+        if let Some(px) = read(left, row, y, &[band, ring]) {
+            each(px, band, |_, c| object.add(c));
+            each(px, ring, |_, c| around.add(c));
+        }
+    }
+    if object.n == 0 || around.n == 0 {
+        return Ok(before);
+    }
+    let (no, na) = (
+        u128::from(object.n.unsigned_abs()),
+        u128::from(around.n.unsigned_abs()),
+    );
+    // The candidates, into `region`: cells of the inside nearer the
+    // surroundings' colour by the margin.
+    bufs.region.fill(0);
+    for y in 0..g.height {
+        let span = y * g.stride..(y + 1) * g.stride;
+        let (Some(inside), Some(out)) = (bufs.closed.get(span.clone()), bufs.region.get_mut(span))
+        else {
+            continue;
+        };
+        let Some(px) = read(left, row, y, &[inside]) else {
+            continue;
+        };
+        each(px, inside, |x, c| {
+            let to_object = object.scaled_dist(c) * na * na;
+            let to_around = around.scaled_dist(c) * no * no;
+            if let Some(w) = out.get_mut(x / 32).filter(|_| 2 * to_around < to_object) {
+                *w |= 1 << (x % 32);
+            }
+        });
+    }
+    morph(
+        bufs.region,
+        bufs.scratch,
+        bufs.morph_rows,
+        holes.opening,
+        true,
+    );
+    morph(
+        bufs.region,
+        bufs.scratch,
+        bufs.morph_rows,
+        holes.opening,
+        false,
+    );
+    for (r, c) in bufs.region.iter_mut().zip(bufs.closed.iter()) {
+        *r &= c;
+    }
+    // The large components are holes.
+    let comps = bits::components(g, bufs.region, Connectivity::Four, bufs.rows, bufs.table)?;
+    let (num, den) = (u64::from(holes.min_area.num), u64::from(holes.min_area.den));
+    let least = |a: u32| u64::from(a) * den >= u64::from(before) * num;
+    let taken = comps.select(g, bufs.region, bufs.table, bufs.filled, |_, a| least(a));
+    if taken > 0 {
+        for (m, f) in bufs.mask.iter_mut().zip(bufs.filled.iter()) {
+            *m &= !f;
+        }
+    }
+    Ok(before.saturating_sub(taken))
+}
