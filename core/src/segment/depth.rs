@@ -27,7 +27,10 @@
 //!    left image's colour changes ([`Refine`], module `refine`);
 //! 4. a mask is an object when it is one for the colour searches
 //!    ([`SegmentParams::is_object`]), covers at least
-//!    [`DepthPass::min_area`] of the frame and overlaps no colour object.
+//!    [`DepthPass::min_area`] of the frame and overlaps no colour object;
+//! 5. with [`DepthPass::holes`], once every object is found, each mask,
+//!    the colour searches' too, loses its holes by colour ([`Holes`],
+//!    module `holes`), and its area with them.
 //!
 //! No contour is needed: the slice's own component is the mask. The
 //! stereo's halo around a near object is where the clearance takes it

@@ -517,34 +517,8 @@ pub(super) fn emit(
     let box_size = bbox.map_or((0, 0), |(x0, y0, x1, y1)| (x1 + 1 - x0, y1 + 1 - y0));
     let object = params.is_object(area, box_size, (w, h))
         && union.is_none_or(|u| u.keeps(g, area, bufs.mask, masks, chunk));
-    let span = index * chunk..(index + 1) * chunk;
-    match masks {
-        _ if !object => {}
-        Masks::Bools(m) => {
-            if let (Some((_, y0, _, y1)), Some(mask)) = (bbox, m.get_mut(span)) {
-                // Rows by index: a zip of two `chunks_exact` is not
-                // always inlined, and its size hint links a division
-                // panic.
-                for y in y0..=y1 {
-                    let (Some(out), Some(words)) = (
-                        mask.get_mut(y * w..(y + 1) * w),
-                        bufs.mask.get(y * g.stride..(y + 1) * g.stride),
-                    ) else {
-                        break;
-                    };
-                    for (o, b) in out.chunks_mut(32).zip(words) {
-                        for (i, o) in o.iter_mut().enumerate() {
-                            *o = b >> i & 1 != 0;
-                        }
-                    }
-                }
-            }
-        }
-        Masks::Bits(m) => {
-            if let Some(mask) = m.get_mut(span) {
-                bits::copy_map(mask, bufs.mask);
-            }
-        }
+    if object {
+        masks.write(index, chunk, g, bufs.mask);
     }
     let det = Detection {
         index,

@@ -32,8 +32,8 @@ pub struct SegmentResult {
 }
 
 /// Runs the core segmentation stage on a disparity map and the edge map C;
-/// the depth pass refines its masks against `left` (the left image), and
-/// does not refine them without one.
+/// the depth pass refines its masks and takes their holes by colour
+/// against `left` (the left image), and does neither without one.
 ///
 /// # Errors
 /// The stage's [`SegmentError`](protogist::segment::SegmentError).
@@ -55,6 +55,7 @@ pub fn run_segment(
         None => {
             if let Some(p) = params.depth_pass.as_mut() {
                 p.refine = None;
+                p.holes = None;
             }
             ImageView::packed(&grey, width, height)?
         }
