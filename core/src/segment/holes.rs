@@ -22,11 +22,12 @@
 //!    that covers at least [`Holes::min_area`] of `M` is a hole and
 //!    leaves `M`.
 //!
-//! An empty inside, band or ring leaves `M` as it is. The comparison is
-//! exact in integers, as the refinement's (module `refine`): with `n`
-//! cells of colour sum `S`, `n²` times the squared distance of colour `c`
-//! to the mean is `Σ (n·c − S)²`, and the distances are compared by
-//! cross-multiplying in `u128`.
+//! An empty inside, band or ring leaves `M` as it is. The means are kept
+//! to 1/16 of a level, `m = ⌊(16·S + n/2) / n⌋` per channel for `n`
+//! cells of colour sum `S`, and a cell of colour `c` is decided on
+//! `Σ (16·c − m)²` in 32-bit integers (at most 3·4080², no overflow): a
+//! few instructions a cell on the board, and the same integers in the
+//! reference.
 
 use super::bits;
 use super::buffers::SegmentBuffers;
@@ -90,6 +91,19 @@ impl Holes {
     }
 }
 
+/// `Σ (16·c − m)²` over the channels: 256 times the squared distance of
+/// `c` to the mean `m` (1/16 of a level).
+fn dist_q4(c: [i64; 3], m: [i32; 3]) -> u32 {
+    c.iter()
+        .zip(m)
+        .map(|(&c, m)| {
+            // 16·c ≤ 4080 and m ≤ 4080: at most 3·4080² in all.
+            let e = (16 * c as i32 - m).unsigned_abs();
+            e * e
+        })
+        .sum()
+}
+
 /// Takes the holes of the mask in `bufs.mask` (module docs) out of it,
 /// against `left`, a frame of the maps' size; uses `closed`, `filled`,
 /// `region` and `scratch` as scratch, and the labelling's run rows for
@@ -149,13 +163,9 @@ pub(super) fn open_holes<S: RgbRows>(
             each(px, ring, |_, c| around.add(c));
         }
     }
-    if object.n == 0 || around.n == 0 {
+    let (Some(object), Some(around)) = (object.mean_q4(), around.mean_q4()) else {
         return Ok(before);
-    }
-    let (no, na) = (
-        u128::from(object.n.unsigned_abs()),
-        u128::from(around.n.unsigned_abs()),
-    );
+    };
     // The candidates, into `region`: cells of the inside nearer the
     // surroundings' colour by the margin.
     bufs.region.fill(0);
@@ -169,9 +179,10 @@ pub(super) fn open_holes<S: RgbRows>(
             continue;
         };
         each(px, inside, |x, c| {
-            let to_object = object.scaled_dist(c) * na * na;
-            let to_around = around.scaled_dist(c) * no * no;
-            if let Some(w) = out.get_mut(x / 32).filter(|_| 2 * to_around < to_object) {
+            if let Some(w) = out
+                .get_mut(x / 32)
+                .filter(|_| 2 * dist_q4(c, around) < dist_q4(c, object))
+            {
                 *w |= 1 << (x % 32);
             }
         });

@@ -135,6 +135,16 @@ impl Sum {
         }
     }
 
+    /// The mean to 1/16 of a level, `⌊(16·S + n/2) / n⌋` per channel;
+    /// `None` without cells.
+    pub(super) fn mean_q4(&self) -> Option<[i32; 3]> {
+        let n = self.n;
+        (n > 0).then(|| {
+            self.s
+                .map(|s| i32::try_from((16 * s + n / 2) / n).unwrap_or(i32::MAX))
+        })
+    }
+
     /// `Σ (n·c − S)²`: `n²` times the squared distance of `c` to the mean.
     pub(super) fn scaled_dist(&self, c: [i64; 3]) -> u128 {
         self.s

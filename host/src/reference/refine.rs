@@ -4,8 +4,9 @@
 //! by repeated square steps, mean colours, and each cell given to the
 //! nearer mean.
 //!
-//! Core compares the distances exactly in integers; so do these (`i128`),
-//! so the two agree mask for mask (error bound: none, docs/ERROR_BOUNDS.md
+//! Core compares the distances exactly in integers (the holes' to means
+//! kept to 1/16 of a level); so do these (`i128`), so the two agree mask
+//! for mask (error bound: none, docs/ERROR_BOUNDS.md
 //! 8b).
 
 use super::segment::{dilate, erode, label, largest_filled};
@@ -87,12 +88,18 @@ pub fn open_holes(holes: &Holes, mask: &[bool], left: &[Rgb8], w: usize, h: usiz
     if !inside.contains(&true) || object.0 == 0 || around.0 == 0 {
         return mask.to_vec();
     }
+    // Means to 1/16 of a level, rounded half up; distances in sixteenths.
+    let mean = |(n, s): (i128, [i128; 3])| s.map(|s| (16 * s + n / 2).div_euclid(n));
+    let (object, around) = (mean(object), mean(around));
+    let dist = |p: Rgb8, m: [i128; 3]| -> i128 {
+        [p.r, p.g, p.b]
+            .iter()
+            .zip(m)
+            .map(|(&c, m)| (16 * i128::from(c) - m).pow(2))
+            .sum()
+    };
     let candidates: Vec<bool> = (0..w * h)
-        .map(|i| {
-            let to_object = scaled(left[i], object) * around.0 * around.0;
-            let to_around = scaled(left[i], around) * object.0 * object.0;
-            inside[i] && 2 * to_around < to_object
-        })
+        .map(|i| inside[i] && 2 * dist(left[i], around) < dist(left[i], object))
         .collect();
     let opened = steps(erode, &candidates, holes.opening, w, h);
     let opened = steps(dilate, &opened, holes.opening, w, h);
