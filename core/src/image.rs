@@ -308,6 +308,16 @@ pub trait RgbRows {
     /// Row `y` (`y < height`) into `out` (`width` long).
     fn rgb_row(&self, y: usize, out: &mut [Rgb8]);
 
+    /// Pixels `xs` of row `y` (`y < height`) into the same places of
+    /// `out` (`width` long); the rest of `out` may be left as it was. The
+    /// default reads the whole row; a frame that converts its pixels (the
+    /// firmware's RGB565) converts only these, with the same bits.
+    #[inline]
+    fn rgb_part(&self, y: usize, xs: core::ops::Range<usize>, out: &mut [Rgb8]) {
+        let _ = xs;
+        self.rgb_row(y, out);
+    }
+
     /// Row `y` (`y < height`) as CIELUV into `out` (`width` long), for the
     /// conspicuity stage; `rgb` (`width` long) is scratch. The default
     /// reads [`rgb_row`](Self::rgb_row) and converts each pixel with

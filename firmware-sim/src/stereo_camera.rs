@@ -143,6 +143,18 @@ impl RgbRows for Rgb565View<'_> {
         }
     }
 
+    /// Only the pixels `xs`: the same bits as [`Self::rgb_row`] there.
+    fn rgb_part(&self, y: usize, xs: core::ops::Range<usize>, out: &mut [Rgb8]) {
+        let Some(row) = self.0.row(y) else {
+            return;
+        };
+        if let (Some(o), Some(r)) = (out.get_mut(xs.clone()), row.get(xs)) {
+            for (o, &p) in o.iter_mut().zip(r) {
+                *o = expand_rgb565(p);
+            }
+        }
+    }
+
     /// From the RGB565 pixels ([`mean_rgb565`]): the default's values.
     fn half_row(&self, j: usize, out: &mut [Rgb8], _scratch: &mut [Rgb8]) {
         let (Some(a), Some(b)) = (self.0.row(2 * j), self.0.row(2 * j + 1)) else {

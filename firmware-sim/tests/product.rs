@@ -498,3 +498,25 @@ fn every_stage_and_step_is_timed() {
         "stereo's steps are within the stage"
     );
 }
+
+#[test]
+fn rgb565_row_parts_are_the_rows_there() {
+    let (frame, layout) = demo_frame();
+    let (left, _) = layout.views(&frame).unwrap();
+    let mut whole = vec![Rgb8::default(); WIDTH];
+    let marker = Rgb8::new(1, 2, 3);
+    for (y, xs) in [
+        (0, 0..WIDTH),
+        (40, 32..96),
+        (HEIGHT - 1, 100..WIDTH),
+        (7, 5..5),
+    ] {
+        left.rgb_row(y, &mut whole);
+        let mut part = vec![marker; WIDTH];
+        left.rgb_part(y, xs.clone(), &mut part);
+        for x in 0..WIDTH {
+            let want = if xs.contains(&x) { whole[x] } else { marker };
+            assert_eq!(part[x], want, "row {y}, x {x}");
+        }
+    }
+}

@@ -79,20 +79,27 @@ impl Refine {
     }
 }
 
-/// Row `y` of `frame`, read into `row`, when one of `maps` (rows `y` of
-/// bit maps) has a bit in it.
+/// Row `y` of `frame`, read into `row` over the words where one of
+/// `maps` (rows `y` of bit maps) has a bit, when one has.
 pub(super) fn read<'r, S: RgbRows>(
     frame: &S,
     row: &'r mut [Rgb8],
     y: usize,
     maps: &[&[u32]],
 ) -> Option<&'r [Rgb8]> {
-    if maps.iter().all(|m| m.iter().all(|&w| w == 0)) {
+    let (mut first, mut last) = (usize::MAX, 0);
+    for m in maps {
+        if let Some(a) = m.iter().position(|&w| w != 0) {
+            first = first.min(a);
+            last = last.max(m.iter().rposition(|&w| w != 0).unwrap_or(a));
+        }
+    }
+    if first == usize::MAX {
         return None;
     }
     let (w, h) = frame.size();
     let row = row.get_mut(..w).filter(|_| y < h)?;
-    frame.rgb_row(y, row);
+    frame.rgb_part(y, first * 32..(32 * (last + 1)).min(w), row);
     Some(row)
 }
 
