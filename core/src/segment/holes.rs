@@ -187,6 +187,9 @@ pub(super) fn open_holes<S: RgbRows>(
             }
         });
     }
+    if bufs.region.iter().all(|&w| w == 0) {
+        return Ok(before);
+    }
     morph(
         bufs.region,
         bufs.scratch,
