@@ -219,3 +219,39 @@ pub(super) fn open_holes<S: RgbRows>(
     }
     Ok(before.saturating_sub(taken))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::refine::Sum;
+    use super::dist_q4;
+
+    #[test]
+    fn means_round_half_up_to_a_sixteenth() {
+        let mut s = Sum::default();
+        for c in [[1, 2, 0], [0, 0, 0], [0, 0, 1]] {
+            s.add(c);
+        }
+        // 16/3 = 5.33 → 5, 32/3 = 10.67 → 11, 16/3 → 5.
+        assert_eq!(s.mean_q4(), Some([5, 11, 5]));
+        let mut half = Sum::default();
+        half.add([0, 1, 255]);
+        half.add([0, 0, 255]);
+        // Exact means stay: 16/2 = 8, 16·255 = 4080.
+        assert_eq!(half.mean_q4(), Some([0, 8, 4080]));
+        let mut odd = Sum::default();
+        for c in [[1, 0, 0]; 32] {
+            odd.add(c);
+        }
+        odd.add([0, 0, 0]);
+        // 512/33 = 15.52 → 16; floor would give 15.
+        assert_eq!(odd.mean_q4(), Some([16, 0, 0]));
+        assert_eq!(Sum::default().mean_q4(), None);
+    }
+
+    #[test]
+    fn distances_are_in_sixteenths_squared() {
+        assert_eq!(dist_q4([1, 2, 3], [16, 32, 48]), 0);
+        assert_eq!(dist_q4([255, 0, 0], [0, 0, 0]), 4080 * 4080);
+        assert_eq!(dist_q4([0, 0, 0], [4080, 4080, 4080]), 3 * 4080 * 4080);
+    }
+}
