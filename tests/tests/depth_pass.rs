@@ -1,5 +1,5 @@
-//! The depth pass (`protogist::segment::depth`): by hand, its settings,
-//! and against the f32 reference.
+//! The depth pass (`protogist::segment::depth`): by hand and against the
+//! f32 reference (its settings' checks: `depth_pass_settings.rs`).
 
 use proptest::prelude::*;
 use protogist::conspicuity::{Conspicuity, EdgeCell};
@@ -7,122 +7,11 @@ use protogist::disparity::{from_pixels, DisparityCell};
 use protogist::image::{ImageView, Rgb8};
 use protogist::segment::{
     self as sg, segment_with_depth_pass, DepthPass, Holes, Masks, Ratio, Refine, SegmentError,
-    SegmentParams, SegmentReport, MAX_GROUND_BAND,
+    SegmentParams, SegmentReport,
 };
 use protogist_host::reference::refine as rfr;
 use protogist_host::reference::segment as rf;
 use protogist_tests::SegmentStorage;
-
-#[test]
-fn the_settings_are_checked() {
-    assert!(DepthPass::DEFAULT.validate().is_ok());
-    let bad = [
-        DepthPass {
-            rise: 0,
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            rise: MAX_GROUND_BAND + 1,
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            radius: MAX_GROUND_BAND + 1,
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            closing: 9,
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            searches: 0,
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            searches: 17,
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            clearance: 17,
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            min_area: Ratio::new(1, 0),
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            min_area: Ratio::new(2, 1),
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            refine: Some(Refine {
-                core: 9,
-                ..Refine::DEFAULT
-            }),
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            refine: Some(Refine {
-                reach: 9,
-                ..Refine::DEFAULT
-            }),
-            ..DepthPass::DEFAULT
-        },
-        DepthPass {
-            refine: Some(Refine {
-                ring: 0,
-                ..Refine::DEFAULT
-            }),
-            ..DepthPass::DEFAULT
-        },
-    ];
-    let holes = [
-        Holes {
-            band: 0,
-            ..Holes::DEFAULT
-        },
-        Holes {
-            band: 9,
-            ..Holes::DEFAULT
-        },
-        Holes {
-            gap: 9,
-            ..Holes::DEFAULT
-        },
-        Holes {
-            ring: 0,
-            ..Holes::DEFAULT
-        },
-        Holes {
-            ring: 9,
-            ..Holes::DEFAULT
-        },
-        Holes {
-            opening: 5,
-            ..Holes::DEFAULT
-        },
-        Holes {
-            min_area: Ratio::new(1, 0),
-            ..Holes::DEFAULT
-        },
-        Holes {
-            min_area: Ratio::new(2, 1),
-            ..Holes::DEFAULT
-        },
-    ];
-    let bad = bad.into_iter().chain(holes.map(|h| DepthPass {
-        holes: Some(h),
-        ..DepthPass::DEFAULT
-    }));
-    for b in bad {
-        assert!(
-            matches!(b.validate(), Err(SegmentError::BadParams(_))),
-            "{b:?}"
-        );
-    }
-    // 1/64 of 160x120 is 300 px; of 7x7, 49/64 rounded up.
-    assert_eq!(DepthPass::DEFAULT.least_area(160, 120), 300);
-    assert_eq!(DepthPass::DEFAULT.least_area(7, 7), 1);
-}
 
 // ---------------------------------------------------------------------------
 // The pass in figure-ground.

@@ -232,8 +232,10 @@ pub fn segment_with_depth_pass<S: RgbRows>(
         for (i, det) in report.objects.iter_mut().enumerate() {
             bufs.mask.fill(0);
             masks.or_into(i, chunk, g, bufs.mask);
-            det.area = open_holes(holes, left, bufs)?;
-            masks.write(i, chunk, g, bufs.mask);
+            if let Some(area) = open_holes(holes, left, bufs)? {
+                det.area = area;
+                masks.write(i, chunk, g, bufs.mask);
+            }
         }
         observer.step(Step::Holes);
     }

@@ -33,7 +33,7 @@ use super::bits;
 use super::buffers::SegmentBuffers;
 use super::label::Connectivity;
 use super::morph::Disk;
-use super::refine::{each, read, rgb_row, Sum};
+use super::refine::{each, inside_and_ring, read, rgb_row, two_sums};
 use super::{Ratio, SegmentError};
 use crate::image::RgbRows;
 
@@ -107,7 +107,8 @@ fn dist_q4(c: [i64; 3], m: [i32; 3]) -> u32 {
 /// Takes the holes of the mask in `bufs.mask` (module docs) out of it,
 /// against `left`, a frame of the maps' size; uses `closed`, `filled`,
 /// `region` and `scratch` as scratch, and the labelling's run rows for
-/// one row of `left`. Returns the new area.
+/// one row of `left`. Returns the new area when it took a hole, `None`
+/// when the mask is as it was.
 ///
 /// # Errors
 /// [`SegmentError::LabelCapacity`] from the labelling.
@@ -116,7 +117,7 @@ pub(super) fn open_holes<S: RgbRows>(
     holes: &Holes,
     left: &S,
     bufs: &mut SegmentBuffers<'_>,
-) -> Result<u32, SegmentError> {
+) -> Result<Option<u32>, SegmentError> {
     let g = bufs.g;
     let area = |m: &[u32]| m.iter().map(|w| w.count_ones()).sum::<u32>();
     let before = area(bufs.mask);
@@ -124,23 +125,9 @@ pub(super) fn open_holes<S: RgbRows>(
         bits::morph_n(g, Disk::Square, m, s, r, n, erode);
     };
     // closed = inside; filled = M grown by the gap; region = the ring.
-    bits::copy_map(bufs.closed, bufs.mask);
-    morph(bufs.closed, bufs.scratch, bufs.morph_rows, holes.band, true);
+    inside_and_ring(bufs, holes.band, holes.gap, holes.ring);
     if bufs.closed.iter().all(|&w| w == 0) {
-        return Ok(before);
-    }
-    bits::copy_map(bufs.filled, bufs.mask);
-    morph(bufs.filled, bufs.scratch, bufs.morph_rows, holes.gap, false);
-    bits::copy_map(bufs.region, bufs.filled);
-    morph(
-        bufs.region,
-        bufs.scratch,
-        bufs.morph_rows,
-        holes.ring,
-        false,
-    );
-    for (r, f) in bufs.region.iter_mut().zip(bufs.filled.iter()) {
-        *r &= !f;
+        return Ok(None);
     }
     // filled = the band, M less its inside.
     for ((f, m), c) in bufs
@@ -152,19 +139,11 @@ pub(super) fn open_holes<S: RgbRows>(
         *f = m & !c;
     }
     let Some(row) = rgb_row(bufs.rows, g.width) else {
-        return Ok(before);
+        return Ok(None);
     };
-    let (mut object, mut around) = (Sum::default(), Sum::default());
-    for y in 0..g.height {
-        let row_of = |m| g.row(m, y).unwrap_or(&[]);
-        let (band, ring) = (row_of(bufs.filled), row_of(bufs.region));
-        if let Some(px) = read(left, row, y, &[band, ring]) {
-            each(px, band, |_, c| object.add(c));
-            each(px, ring, |_, c| around.add(c));
-        }
-    }
+    let (object, around) = two_sums(left, row, g, bufs.filled, bufs.region);
     let (Some(object), Some(around)) = (object.mean_q4(), around.mean_q4()) else {
-        return Ok(before);
+        return Ok(None);
     };
     // The candidates, into `region`: cells of the inside nearer the
     // surroundings' colour by the margin.
@@ -188,7 +167,7 @@ pub(super) fn open_holes<S: RgbRows>(
         });
     }
     if bufs.region.iter().all(|&w| w == 0) {
-        return Ok(before);
+        return Ok(None);
     }
     morph(
         bufs.region,
@@ -212,12 +191,13 @@ pub(super) fn open_holes<S: RgbRows>(
     let (num, den) = (u64::from(holes.min_area.num), u64::from(holes.min_area.den));
     let least = |a: u32| u64::from(a) * den >= u64::from(before) * num;
     let taken = comps.select(g, bufs.region, bufs.table, bufs.filled, |_, a| least(a));
-    if taken > 0 {
-        for (m, f) in bufs.mask.iter_mut().zip(bufs.filled.iter()) {
-            *m &= !f;
-        }
+    if taken == 0 {
+        return Ok(None);
     }
-    Ok(before.saturating_sub(taken))
+    for (m, f) in bufs.mask.iter_mut().zip(bufs.filled.iter()) {
+        *m &= !f;
+    }
+    Ok(Some(before.saturating_sub(taken)))
 }
 
 #[cfg(test)]

@@ -165,6 +165,46 @@ impl Sum {
     }
 }
 
+/// From the mask in `bufs.mask`: `closed` = it eroded by `inner` square
+/// steps; `filled` = it dilated by `near`; `region` = `filled` dilated by
+/// `ring` more, less `filled`. `scratch` is scratch.
+pub(super) fn inside_and_ring(bufs: &mut SegmentBuffers<'_>, inner: u8, near: u8, ring: u8) {
+    let g = bufs.g;
+    let morph = |m: &mut [u32], s: &mut [u32], r: &mut [u32], n: u8, erode: bool| {
+        bits::morph_n(g, Disk::Square, m, s, r, n, erode);
+    };
+    bits::copy_map(bufs.closed, bufs.mask);
+    morph(bufs.closed, bufs.scratch, bufs.morph_rows, inner, true);
+    bits::copy_map(bufs.filled, bufs.mask);
+    morph(bufs.filled, bufs.scratch, bufs.morph_rows, near, false);
+    bits::copy_map(bufs.region, bufs.filled);
+    morph(bufs.region, bufs.scratch, bufs.morph_rows, ring, false);
+    for (r, f) in bufs.region.iter_mut().zip(bufs.filled.iter()) {
+        *r &= !f;
+    }
+}
+
+/// The colour sums of `left` over the bit maps `a` and `b`, read a row
+/// at a time into `row`.
+pub(super) fn two_sums<S: RgbRows>(
+    left: &S,
+    row: &mut [Rgb8],
+    g: bits::Geom,
+    a: &[u32],
+    b: &[u32],
+) -> (Sum, Sum) {
+    let (mut sa, mut sb) = (Sum::default(), Sum::default());
+    for y in 0..g.height {
+        let row_of = |m| g.row(m, y).unwrap_or(&[]);
+        let (ra, rb) = (row_of(a), row_of(b));
+        if let Some(px) = read(left, row, y, &[ra, rb]) {
+            each(px, ra, |_, c| sa.add(c));
+            each(px, rb, |_, c| sb.add(c));
+        }
+    }
+    (sa, sb)
+}
+
 /// Refines the mask in `bufs.mask` (module docs) against `left`, a frame
 /// of the maps' size; uses `closed`, `filled`, `region` and `scratch` as
 /// scratch, and the labelling's run rows (`rows`, at least 8 bytes a
@@ -181,51 +221,14 @@ pub(super) fn refine_mask<S: RgbRows>(
     let g = bufs.g;
     let area = |m: &[u32]| m.iter().map(|w| w.count_ones()).sum::<u32>();
     // closed = core, filled = reach, region = ring.
-    bits::copy_map(bufs.closed, bufs.mask);
-    let morph = |m: &mut [u32], s: &mut [u32], r: &mut [u32], n: u8, erode: bool| {
-        bits::morph_n(g, Disk::Square, m, s, r, n, erode);
-    };
-    morph(
-        bufs.closed,
-        bufs.scratch,
-        bufs.morph_rows,
-        refine.core,
-        true,
-    );
-    bits::copy_map(bufs.filled, bufs.mask);
-    morph(
-        bufs.filled,
-        bufs.scratch,
-        bufs.morph_rows,
-        refine.reach,
-        false,
-    );
-    bits::copy_map(bufs.region, bufs.filled);
-    morph(
-        bufs.region,
-        bufs.scratch,
-        bufs.morph_rows,
-        refine.ring,
-        false,
-    );
-    for (r, f) in bufs.region.iter_mut().zip(bufs.filled.iter()) {
-        *r &= !f;
-    }
+    inside_and_ring(bufs, refine.core, refine.reach, refine.ring);
     // One row of `left` in the run rows, which the labelling below
     // overwrites.
     let Some(row) = rgb_row(bufs.rows, g.width) else {
         return Ok(area(bufs.mask));
     };
     // The two means.
-    let (mut object, mut behind) = (Sum::default(), Sum::default());
-    for y in 0..g.height {
-        let row_of = |m| g.row(m, y).unwrap_or(&[]);
-        let (core, ring) = (row_of(bufs.closed), row_of(bufs.region));
-        if let Some(px) = read(left, row, y, &[core, ring]) {
-            each(px, core, |_, c| object.add(c));
-            each(px, ring, |_, c| behind.add(c));
-        }
-    }
+    let (object, behind) = two_sums(left, row, g, bufs.closed, bufs.region);
     if object.n == 0 || behind.n == 0 {
         return Ok(area(bufs.mask));
     }
