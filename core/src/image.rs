@@ -395,6 +395,14 @@ impl RgbRows for ImageView<'_, Rgb8> {
             }
         }
     }
+
+    fn rgb_part(&self, y: usize, xs: core::ops::Range<usize>, out: &mut [Rgb8]) {
+        if let (Some(o), Some(r)) = (out.get_mut(xs.clone()), self.row(y).and_then(|r| r.get(xs))) {
+            for (o, &p) in o.iter_mut().zip(r) {
+                *o = p;
+            }
+        }
+    }
 }
 
 impl<'a, P> ImageViewMut<'a, P> {

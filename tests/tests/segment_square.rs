@@ -1,9 +1,10 @@
 //! `clear_square_bits` (the depth pass's clearance: a map less another
 //! grown by `n` square dilations, the dilation row-wise then column-wise)
-//! against `n` steps of the `bool` dilation by the 3x3 square, bit for
-//! bit, on random maps of random sizes (widths on both sides of the word
-//! boundaries, a word's width among them); a full first map gives the
-//! whole dilation.
+//! and `square_bits` (the holes' and the refinement's insides and rings:
+//! `n` square erosions or dilations in one pass) against `n` steps of the
+//! `bool` erosion or dilation by the 3x3 square, bit for bit, on random
+//! maps of random sizes (widths on both sides of the word boundaries, a
+//! word's width among them); a full first map gives the whole dilation.
 
 use proptest::prelude::*;
 use protogist::image::ImageViewMut;
@@ -73,9 +74,39 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1024))]
+
+    #[test]
+    fn a_square_is_n_square_steps(
+        (full, map, w, h) in maps(),
+        n in prop_oneof![0u8..=17, 18u8..=80],
+        erode in any::<bool>(),
+    ) {
+        // Erosions need dense maps to leave anything: the full-ish one.
+        let src = if erode { full } else { map };
+        let mut words = pack(&src, w, h);
+        let mut out = vec![u32::MAX; words.len()];
+        sg::square_bits(&mut out, &mut words, w, h, n, erode).unwrap();
+        let mut want = src.clone();
+        let mut scratch = vec![false; w * h];
+        let mut m = ImageViewMut::packed(&mut want, w, h).unwrap();
+        let mut sc = ImageViewMut::packed(&mut scratch, w, h).unwrap();
+        if erode {
+            sg::erode_n(Disk::Square, &mut m, &mut sc, n).unwrap();
+        } else {
+            sg::dilate_n(Disk::Square, &mut m, &mut sc, n).unwrap();
+        }
+        prop_assert_eq!(&out, &pack(&want, w, h));
+    }
+}
+
 #[test]
 fn short_buffers_are_an_error() {
     let (mut a, b, mut c) = (vec![0u32; 4], vec![0u32; 4], vec![0u32; 3]);
     assert!(sg::clear_square_bits(&mut a, &b, &mut c, 40, 2, 1).is_err());
     assert!(sg::clear_square_bits(&mut a, &b, &mut c, 40, 1, 1).is_ok());
+    let (mut o, mut m) = (vec![0u32; 4], vec![0u32; 3]);
+    assert!(sg::square_bits(&mut o, &mut m, 40, 2, 1, true).is_err());
+    assert!(sg::square_bits(&mut o, &mut m, 40, 1, 1, false).is_ok());
 }

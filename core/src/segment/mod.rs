@@ -87,7 +87,9 @@ mod pipeline;
 mod refine;
 mod stats;
 
-pub use bits::{bit_map_len, clear_square_bits, row_runs, run_capacity, words_per_row, BitView};
+pub use bits::{
+    bit_map_len, clear_square_bits, row_runs, run_capacity, square_bits, words_per_row, BitView,
+};
 pub use buffers::{maps_len, scratch_bytes, table_len, SegmentBuffers, BIT_MAPS};
 pub use depth::{segment_with_depth_pass, DepthPass};
 pub use ground::{fit_ground, ground_rows_len, inhibit_ground, GroundLine, MAX_SLOPE, MIN_SLOPE};

@@ -33,7 +33,6 @@
 use super::bits;
 use super::buffers::SegmentBuffers;
 use super::depth::largest_filled;
-use super::morph::Disk;
 use super::SegmentError;
 use crate::image::{Rgb8, RgbRows};
 
@@ -79,28 +78,53 @@ impl Refine {
     }
 }
 
-/// Row `y` of `frame`, read into `row` over the words where one of
-/// `maps` (rows `y` of bit maps) has a bit, when one has.
+/// Row `y` of `frame`, read into `row` over the runs of pixels where one
+/// of `maps` (rows `y` of bit maps) has a bit, when one has; the other
+/// pixels of `row` are left as they were.
 pub(super) fn read<'r, S: RgbRows>(
     frame: &S,
     row: &'r mut [Rgb8],
     y: usize,
     maps: &[&[u32]],
 ) -> Option<&'r [Rgb8]> {
-    let (mut first, mut last) = (usize::MAX, 0);
-    for m in maps {
-        if let Some(a) = m.iter().position(|&w| w != 0) {
-            first = first.min(a);
-            last = last.max(m.iter().rposition(|&w| w != 0).unwrap_or(a));
-        }
-    }
-    if first == usize::MAX {
-        return None;
-    }
     let (w, h) = frame.size();
     let row = row.get_mut(..w).filter(|_| y < h)?;
-    frame.rgb_part(y, first * 32..(32 * (last + 1)).min(w), row);
-    Some(row)
+    let words = maps.iter().map(|m| m.len()).max().unwrap_or(0);
+    let mut any = false;
+    // The start of the run the scan is in, across word boundaries.
+    let mut start: Option<usize> = None;
+    for i in 0..words {
+        let u = maps
+            .iter()
+            .fold(0u32, |a, m| a | m.get(i).copied().unwrap_or(0));
+        let mut pos = 0u32;
+        while pos < 32 {
+            let rest = u >> pos;
+            match start {
+                Some(s) => {
+                    // The run's ones from `pos`; the shifted-in zeros end it.
+                    pos += (!rest).trailing_zeros();
+                    if pos >= 32 {
+                        break;
+                    }
+                    frame.rgb_part(y, s..(32 * i + pos as usize).min(w), row);
+                    start = None;
+                }
+                None => {
+                    if rest == 0 {
+                        break;
+                    }
+                    pos += rest.trailing_zeros();
+                    start = Some(32 * i + pos as usize);
+                    any = true;
+                }
+            }
+        }
+    }
+    if let Some(s) = start {
+        frame.rgb_part(y, s..(32 * words).min(w), row);
+    }
+    any.then_some(&*row)
 }
 
 /// Calls `f(x, colour)` for every ON bit `x` of `words` (a row of a bit
@@ -170,15 +194,20 @@ impl Sum {
 /// `ring` more, less `filled`. `scratch` is scratch.
 pub(super) fn inside_and_ring(bufs: &mut SegmentBuffers<'_>, inner: u8, near: u8, ring: u8) {
     let g = bufs.g;
-    let morph = |m: &mut [u32], s: &mut [u32], r: &mut [u32], n: u8, erode: bool| {
-        bits::morph_n(g, Disk::Square, m, s, r, n, erode);
-    };
-    bits::copy_map(bufs.closed, bufs.mask);
-    morph(bufs.closed, bufs.scratch, bufs.morph_rows, inner, true);
-    bits::copy_map(bufs.filled, bufs.mask);
-    morph(bufs.filled, bufs.scratch, bufs.morph_rows, near, false);
-    bits::copy_map(bufs.region, bufs.filled);
-    morph(bufs.region, bufs.scratch, bufs.morph_rows, ring, false);
+    // Each a square of its own size from the mask, in one pass: `near`
+    // then `ring` dilations are `near + ring` of them.
+    bits::copy_map(bufs.scratch, bufs.mask);
+    bits::square(g, bufs.closed, bufs.scratch, inner, true);
+    bits::copy_map(bufs.scratch, bufs.mask);
+    bits::square(g, bufs.filled, bufs.scratch, near, false);
+    bits::copy_map(bufs.scratch, bufs.mask);
+    bits::square(
+        g,
+        bufs.region,
+        bufs.scratch,
+        near.saturating_add(ring),
+        false,
+    );
     for (r, f) in bufs.region.iter_mut().zip(bufs.filled.iter()) {
         *r &= !f;
     }

@@ -18,8 +18,8 @@ mod components;
 mod square;
 
 pub(super) use components::{components, Components};
-pub(super) use square::clear_square;
-pub use square::clear_square_bits;
+pub(super) use square::{clear_square, square};
+pub use square::{clear_square_bits, square_bits};
 
 /// `u32` words per row of a bit map `width` pixels wide.
 pub const fn words_per_row(width: usize) -> usize {

@@ -1,6 +1,7 @@
-//! A map less another grown by `n` square dilations: the depth pass's
-//! clearance, row-wise then column-wise, the column-wise part only where
-//! the first map has bits.
+//! A map less another grown by `n` square dilations (the depth pass's
+//! clearance), and a map after `n` square erosions or dilations (the
+//! holes' and the refinement's insides and rings): row-wise then
+//! column-wise, in one pass each.
 //!
 //! `n` dilations by the 3x3 square with the outside OFF give, at a pixel,
 //! the OR of the map over the (2n + 1)-square around it clipped to the
@@ -82,6 +83,138 @@ fn spread_rows(g: Geom, map: &mut [u32], n: u8) {
             *l &= g.last;
         }
     }
+}
+
+/// Every row of `map` with bits, in place: the AND of its pixels
+/// `x − n ..= x + n` at `x`, those outside the row counted ON (the bits
+/// past the width are set for the spreads and cleared after). The AND of
+/// a row, like the OR, composes by doubling.
+fn shrink_rows(g: Geom, map: &mut [u32], n: u8) {
+    let mut ks = [0u32; 16];
+    let ks = steps(n, &mut ks);
+    if ks.is_empty() {
+        return;
+    }
+    for row in g.rows_mut(map).take(g.height) {
+        if row.iter().all(|&w| w == 0) {
+            continue;
+        }
+        if let Some(l) = row.last_mut() {
+            *l |= !g.last;
+        }
+        // Towards higher x: bit x keeps bit x − k, ON before the row.
+        for &k in ks {
+            let mut prev = u32::MAX;
+            for w in row.iter_mut() {
+                let old = *w;
+                *w = old & (old << (k % 32) | prev >> ((32 - k) % 32));
+                prev = old;
+            }
+        }
+        // Towards lower x: bit x keeps bit x + k, ON past the row.
+        for &k in ks {
+            let mut next = u32::MAX;
+            for w in row.iter_mut().rev() {
+                let old = *w;
+                *w = old & (old >> (k % 32) | next << ((32 - k) % 32));
+                next = old;
+            }
+        }
+        if let Some(l) = row.last_mut() {
+            *l &= g.last;
+        }
+    }
+}
+
+/// First and last rows of `m` with a bit.
+fn row_extent(g: Geom, m: &[u32]) -> Option<(usize, usize)> {
+    let mut r: Option<(usize, usize)> = None;
+    for (y, row) in g.rows(m).take(g.height).enumerate() {
+        if row.iter().any(|&w| w != 0) {
+            r = Some(r.map_or((y, y), |(a, _)| (a, y)));
+        }
+    }
+    r
+}
+
+/// `out` = `src` after `n` erosions (`erode`, outside ON) or dilations
+/// (outside OFF) by the 3x3 square, what [`morph_n`](super::morph_n)
+/// gives, in one pass: the rows, then the columns (module docs; an
+/// erosion is the complement's dilation). `src` is overwritten (shrunk
+/// or spread along its rows). Only the rows the result can reach are
+/// computed: an eroded row needs its own bits, a dilated one a row with
+/// bits within `n`.
+pub(in crate::segment) fn square(g: Geom, out: &mut [u32], src: &mut [u32], n: u8, erode: bool) {
+    if erode {
+        shrink_rows(g, src, n);
+    } else {
+        spread_rows(g, src, n);
+    }
+    let Some((a, b)) = row_extent(g, src) else {
+        out.fill(0);
+        return;
+    };
+    let (s, n) = (g.stride.max(1), usize::from(n));
+    let last = g.height.saturating_sub(1);
+    let (y0, y1) = if erode {
+        (a, b)
+    } else {
+        (a.saturating_sub(n), (b + n).min(last))
+    };
+    for (y, o) in g.rows_mut(out).take(g.height).enumerate() {
+        if y < y0 || y > y1 {
+            o.fill(0);
+            continue;
+        }
+        // The rows y − n ..= y + n that exist; those outside are ON for
+        // an erosion and OFF for a dilation, neutral either way.
+        let lo = y.saturating_sub(n);
+        let count = (y + n).min(last) + 1 - lo;
+        for (j, o) in o.iter_mut().enumerate() {
+            let mut i = lo * s + j;
+            let mut m = if erode { u32::MAX } else { 0 };
+            for _ in 0..count {
+                let w = src.get(i).copied().unwrap_or(0);
+                m = if erode { m & w } else { m | w };
+                i += s;
+            }
+            *o = m;
+        }
+    }
+}
+
+/// `out` = `map` after `n` erosions (`erode`) or dilations by the 3x3
+/// square, as [`erode_n`](crate::segment::erode_n) and
+/// [`dilate_n`](crate::segment::dilate_n) with
+/// [`Disk::Square`](crate::segment::Disk::Square) give them; all are
+/// `width` x `height` maps in the layout of
+/// [`BitView`](crate::segment::BitView), bits past the width 0; `map` is
+/// overwritten. The holes' and the refinement's insides and rings.
+///
+/// # Errors
+/// [`SegmentError::Image`] for a bad size or too few words.
+pub fn square_bits(
+    out: &mut [u32],
+    map: &mut [u32],
+    width: usize,
+    height: usize,
+    n: u8,
+    erode: bool,
+) -> Result<(), SegmentError> {
+    crate::image::buffer_len(width, height, width)?;
+    let g = Geom::new(width, height);
+    let got = out.len().min(map.len());
+    if got < g.len() {
+        return Err(crate::image::ImageError::BufferTooSmall {
+            needed: g.len(),
+            got,
+        }
+        .into());
+    }
+    if let (Some(out), Some(map)) = (out.get_mut(..g.len()), map.get_mut(..g.len())) {
+        square(g, out, map, n, erode);
+    }
+    Ok(())
 }
 
 /// `out` = `fg` less `taken` grown by `n` square dilations (module
