@@ -126,12 +126,15 @@ fn shrink_rows(g: Geom, map: &mut [u32], n: u8) {
     }
 }
 
-/// First and last rows of `m` with a bit.
-fn row_extent(g: Geom, m: &[u32]) -> Option<(usize, usize)> {
-    let mut r: Option<(usize, usize)> = None;
+/// First and last rows, and first and last words of a row, of `m` with a
+/// bit.
+fn extent(g: Geom, m: &[u32]) -> Option<(usize, usize, usize, usize)> {
+    let mut r: Option<(usize, usize, usize, usize)> = None;
     for (y, row) in g.rows(m).take(g.height).enumerate() {
-        if row.iter().any(|&w| w != 0) {
-            r = Some(r.map_or((y, y), |(a, _)| (a, y)));
+        for (i, &w) in row.iter().enumerate() {
+            if w != 0 {
+                r = Some(r.map_or((y, y, i, i), |(a, _, c, d)| (a, y, c.min(i), d.max(i))));
+            }
         }
     }
     r
@@ -141,22 +144,30 @@ fn row_extent(g: Geom, m: &[u32]) -> Option<(usize, usize)> {
 /// (outside OFF) by the 3x3 square, what [`morph_n`](super::morph_n)
 /// gives, in one pass: the rows, then the columns (module docs; an
 /// erosion is the complement's dilation). `src` is overwritten (shrunk
-/// or spread along its rows). Only the rows the result can reach are
-/// computed: an eroded row needs its own bits, a dilated one a row with
-/// bits within `n`.
+/// or spread along its rows). Only the rows and words the result can
+/// reach are computed: an eroded row needs its own bits, a dilated one a
+/// row with bits within `n`; the rows spread, no word outside them can
+/// get a bit.
 pub(in crate::segment) fn square(g: Geom, out: &mut [u32], src: &mut [u32], n: u8, erode: bool) {
     if erode {
         shrink_rows(g, src, n);
+        columns::<true>(g, out, src, n);
     } else {
         spread_rows(g, src, n);
+        columns::<false>(g, out, src, n);
     }
-    let Some((a, b)) = row_extent(g, src) else {
+}
+
+/// `out` row `y` = the AND (`E`) or OR of the rows `y − n ..= y + n` of
+/// `src` that exist (those outside are neutral).
+fn columns<const E: bool>(g: Geom, out: &mut [u32], src: &[u32], n: u8) {
+    let Some((a, b, c0, c1)) = extent(g, src) else {
         out.fill(0);
         return;
     };
     let (s, n) = (g.stride.max(1), usize::from(n));
     let last = g.height.saturating_sub(1);
-    let (y0, y1) = if erode {
+    let (y0, y1) = if E {
         (a, b)
     } else {
         (a.saturating_sub(n), (b + n).min(last))
@@ -166,19 +177,16 @@ pub(in crate::segment) fn square(g: Geom, out: &mut [u32], src: &mut [u32], n: u
             o.fill(0);
             continue;
         }
-        // The rows y − n ..= y + n that exist; those outside are ON for
-        // an erosion and OFF for a dilation, neutral either way.
         let lo = y.saturating_sub(n);
-        let count = (y + n).min(last) + 1 - lo;
+        let rows = src.get(lo * s..((y + n).min(last) + 1) * s).unwrap_or(&[]);
         for (j, o) in o.iter_mut().enumerate() {
-            let mut i = lo * s + j;
-            let mut m = if erode { u32::MAX } else { 0 };
-            for _ in 0..count {
-                let w = src.get(i).copied().unwrap_or(0);
-                m = if erode { m & w } else { m | w };
-                i += s;
-            }
-            *o = m;
+            *o = if j < c0 || j > c1 {
+                0
+            } else if E {
+                rows.iter().skip(j).step_by(s).fold(u32::MAX, |m, &w| m & w)
+            } else {
+                rows.iter().skip(j).step_by(s).fold(0, |m, &w| m | w)
+            };
         }
     }
 }
