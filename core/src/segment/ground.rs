@@ -79,32 +79,32 @@ impl RowPlanes {
 
 /// One row's dominant disparity, bits, when at least a quarter of its
 /// cells lie within a plane of its most common whole-pixel plane.
+/// `planes` is all zero on entry and is left so.
 fn row_disparity(row: &[DisparityCell], planes: &mut RowPlanes) -> Option<u32> {
-    planes.count.fill(0);
-    planes.sum.fill(0);
-    // The mode as the histogram fills: the most common plane, the lowest
-    // on a tie (a plane reaching the leader's count later wins only if it
-    // is lower), so no pass over all the planes is needed. Each plane's
-    // sum of bits fills in the same pass, so the mean around the mode
-    // needs no second pass over the row. The counts saturate at 65,535 and
-    // the sums are `u32`, as before: exact for rows of up to 65,535 cells.
-    let (mut top, mut mode) = (0u16, 0u16);
+    // Each plane's count and sum of bits in one pass over the row, and
+    // the lowest and highest plane it touches: only those are searched
+    // and cleared after. The counts saturate at 65,535 and the sums are
+    // `u32`: exact for rows of up to 65,535 cells.
+    let (mut lo, mut hi) = (PLANES, 0);
     for d in row.iter().filter_map(|c| c.get()) {
         let b = d.to_bits();
-        let p = plane(b);
-        if let (Some(k), Some(s)) = (
-            planes.count.get_mut(usize::from(p)),
-            planes.sum.get_mut(usize::from(p)),
-        ) {
+        let p = usize::from(plane(b));
+        if let (Some(k), Some(s)) = (planes.count.get_mut(p), planes.sum.get_mut(p)) {
             *k = k.saturating_add(1);
             *s += u32::from(b);
-            if *k > top || (*k == top && p < mode) {
-                (top, mode) = (*k, p);
-            }
+            (lo, hi) = (lo.min(p), hi.max(p));
+        }
+    }
+    let counts = planes.count.get(lo..=hi)?;
+    // The mode: the most common plane, the lowest on a tie.
+    let (mut top, mut mode) = (0u16, lo);
+    for (p, &k) in (lo..).zip(counts) {
+        if k > top {
+            (top, mode) = (k, p);
         }
     }
     // The planes within one of the mode.
-    let near = usize::from(mode.saturating_sub(1))..=(usize::from(mode) + 1).min(PLANES - 1);
+    let near = mode.saturating_sub(1)..=(mode + 1).min(PLANES - 1);
     let n: u32 = planes
         .count
         .get(near.clone())
@@ -113,6 +113,10 @@ fn row_disparity(row: &[DisparityCell], planes: &mut RowPlanes) -> Option<u32> {
         .map(|&k| u32::from(k))
         .sum();
     let sum: u32 = planes.sum.get(near).unwrap_or(&[]).iter().sum();
+    if let (Some(k), Some(s)) = (planes.count.get_mut(lo..=hi), planes.sum.get_mut(lo..=hi)) {
+        k.fill(0);
+        s.fill(0);
+    }
     let need = u32::try_from(row.len().div_ceil(4))
         .unwrap_or(u32::MAX)
         .max(1);
@@ -298,6 +302,11 @@ mod tests {
         // Under a quarter of the row agrees: no disparity.
         let row = cells(&[1, 9, 20, 30]);
         assert_eq!(row_disparity(&row, &mut hist), None);
+        // Each row counts afresh: the rows before left nothing behind
+        // (9 and 12 led them; here 20 does, alone).
+        let row = cells(&[20, 20, 9, 12]);
+        assert_eq!(row_disparity(&row, &mut hist), Some(20 * 256));
+        assert!(hist.count.iter().all(|&k| k == 0) && hist.sum.iter().all(|&s| s == 0));
         // The top plane (256: bits from 65,408 to 65,534) and the one below it.
         let top = |bits: u16| DisparityCell::on(Disparity::from_bits(bits)).unwrap();
         let mut row = [DisparityCell::OFF; 8];
