@@ -82,23 +82,26 @@ impl RowPlanes {
 /// `planes` is all zero on entry and is left so.
 fn row_disparity(row: &[DisparityCell], planes: &mut RowPlanes) -> Option<u32> {
     // Each plane's count and sum of bits in one pass over the row, and
-    // the lowest and highest plane it touches: only those are searched
+    // the highest plane it touches: only the planes up to it are searched
     // and cleared after. The counts saturate at 65,535 and the sums are
     // `u32`: exact for rows of up to 65,535 cells.
-    let (mut lo, mut hi) = (PLANES, 0);
-    for d in row.iter().filter_map(|c| c.get()) {
+    let mut hi = 0;
+    for c in row {
+        let Some(d) = c.get() else {
+            continue;
+        };
         let b = d.to_bits();
         let p = usize::from(plane(b));
         if let (Some(k), Some(s)) = (planes.count.get_mut(p), planes.sum.get_mut(p)) {
             *k = k.saturating_add(1);
             *s += u32::from(b);
-            (lo, hi) = (lo.min(p), hi.max(p));
+            hi = hi.max(p);
         }
     }
-    let counts = planes.count.get(lo..=hi)?;
-    // The mode: the most common plane, the lowest on a tie.
-    let (mut top, mut mode) = (0u16, lo);
-    for (p, &k) in (lo..).zip(counts) {
+    // The mode: the most common plane, the lowest on a tie (a row
+    // without an estimate has every count 0, and no disparity below).
+    let (mut top, mut mode) = (0u16, 0);
+    for (p, &k) in planes.count.iter().enumerate().take(hi + 1) {
         if k > top {
             (top, mode) = (k, p);
         }
@@ -113,7 +116,7 @@ fn row_disparity(row: &[DisparityCell], planes: &mut RowPlanes) -> Option<u32> {
         .map(|&k| u32::from(k))
         .sum();
     let sum: u32 = planes.sum.get(near).unwrap_or(&[]).iter().sum();
-    if let (Some(k), Some(s)) = (planes.count.get_mut(lo..=hi), planes.sum.get_mut(lo..=hi)) {
+    if let (Some(k), Some(s)) = (planes.count.get_mut(..=hi), planes.sum.get_mut(..=hi)) {
         k.fill(0);
         s.fill(0);
     }
