@@ -15,7 +15,7 @@
 //! pixel and its target, so inside the row, and nothing is lost where
 //! the words end.
 
-use super::Geom;
+use super::{extent, Geom};
 use crate::segment::SegmentError;
 
 /// The shifts of a one-sided spread over 0..=n by doubling, none over
@@ -124,20 +124,6 @@ fn shrink_rows(g: Geom, map: &mut [u32], n: u8) {
             *l &= g.last;
         }
     }
-}
-
-/// First and last rows, and first and last words of a row, of `m` with a
-/// bit.
-fn extent(g: Geom, m: &[u32]) -> Option<(usize, usize, usize, usize)> {
-    let mut r: Option<(usize, usize, usize, usize)> = None;
-    for (y, row) in g.rows(m).take(g.height).enumerate() {
-        for (i, &w) in row.iter().enumerate() {
-            if w != 0 {
-                r = Some(r.map_or((y, y, i, i), |(a, _, c, d)| (a, y, c.min(i), d.max(i))));
-            }
-        }
-    }
-    r
 }
 
 /// `out` = `src` after `n` erosions (`erode`, outside ON) or dilations
