@@ -177,6 +177,24 @@ fn columns<const E: bool>(g: Geom, out: &mut [u32], src: &[u32], n: u8) {
     }
 }
 
+/// The geometry of `width` x `height` bit maps whose shortest buffer has
+/// `got` words.
+///
+/// # Errors
+/// [`SegmentError::Image`] for a bad size or too few words.
+fn checked(width: usize, height: usize, got: usize) -> Result<Geom, SegmentError> {
+    crate::image::buffer_len(width, height, width)?;
+    let g = Geom::new(width, height);
+    if got < g.len() {
+        return Err(crate::image::ImageError::BufferTooSmall {
+            needed: g.len(),
+            got,
+        }
+        .into());
+    }
+    Ok(g)
+}
+
 /// `out` = `map` after `n` erosions (`erode`) or dilations by the 3x3
 /// square, as [`erode_n`](crate::segment::erode_n) and
 /// [`dilate_n`](crate::segment::dilate_n) with
@@ -195,16 +213,7 @@ pub fn square_bits(
     n: u8,
     erode: bool,
 ) -> Result<(), SegmentError> {
-    crate::image::buffer_len(width, height, width)?;
-    let g = Geom::new(width, height);
-    let got = out.len().min(map.len());
-    if got < g.len() {
-        return Err(crate::image::ImageError::BufferTooSmall {
-            needed: g.len(),
-            got,
-        }
-        .into());
-    }
+    let g = checked(width, height, out.len().min(map.len()))?;
     if let (Some(out), Some(map)) = (out.get_mut(..g.len()), map.get_mut(..g.len())) {
         square(g, out, map, n, erode);
     }
@@ -261,19 +270,7 @@ pub fn clear_square_bits(
     height: usize,
     n: u8,
 ) -> Result<(), SegmentError> {
-    crate::image::buffer_len(width, height, width)?;
-    let g = Geom::new(width, height);
-    let got = [out.len(), fg.len(), taken.len()]
-        .into_iter()
-        .min()
-        .unwrap_or(0);
-    if got < g.len() {
-        return Err(crate::image::ImageError::BufferTooSmall {
-            needed: g.len(),
-            got,
-        }
-        .into());
-    }
+    let g = checked(width, height, out.len().min(fg.len()).min(taken.len()))?;
     let (out, fg) = (out.get_mut(..g.len()), fg.get(..g.len()));
     if let (Some(out), Some(fg), Some(taken)) = (out, fg, taken.get_mut(..g.len())) {
         clear_square(g, out, fg, taken, n);
