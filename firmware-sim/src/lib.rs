@@ -20,5 +20,13 @@ pub mod ticks;
 
 pub use protogist as pg;
 
+/// Bytes at a 4-byte-aligned address: a model blob's weight rows are then
+/// word-aligned (docs/MODEL_FORMAT.md), which the `SMLAD` kernel's `ldrd`
+/// needs, and a decoder table's biases halfword-aligned, which the
+/// read-out's cost kernel needs. The kernels check, and fall back to the
+/// portable code on other addresses.
+#[repr(C, align(4))]
+pub struct Aligned<T: ?Sized>(pub T);
+
 pub use camera::{Camera, CameraError, CameraErrorKind, SimCamera, SimCameraError};
 pub use ticks::{write_ipp, NoTicks, Ticks};

@@ -25,6 +25,7 @@ use crate::pg::segment::{Step as SegmentStep, STAT_FRAC_BITS};
 use crate::pg::stereo::phase::{PhaseKernel, SafePhase};
 use crate::pg::stereo::Step as StereoStep;
 use crate::stereo_camera::{pair_len, StereoCamera};
+use crate::Aligned;
 use crate::Ticks;
 
 /// Frame width the product runs: 160 on the mps2-an386 build, 128 (the
@@ -53,14 +54,15 @@ pub const FRAME_LEN: usize = pair_len(WIDTH, HEIGHT);
 /// The coarse-to-fine engine's decoder tables at the pipeline's point
 /// (`half-narrow`: kernels of radius 2), level 0 first
 /// (`data/dem_c2f_narrow_l{0,1,2}.bin`, written by `protogist train-dem
-/// --levels 1 --max-disp 31 | 16 | 8 --radius 2`).
+/// --levels 1 --max-disp 31 | 16 | 8 --radius 2`), each at an aligned
+/// address ([`Aligned`]).
 pub const TABLES: [&[u8]; 3] = [
-    include_bytes!("../data/dem_c2f_narrow_l0.bin"),
-    include_bytes!("../data/dem_c2f_narrow_l1.bin"),
-    include_bytes!("../data/dem_c2f_narrow_l2.bin"),
+    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l0.bin")).0,
+    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l1.bin")).0,
+    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l2.bin")).0,
 ];
-/// The shipped classifier (`host/data/shapes_model.bin`).
-pub const MODEL: &[u8] = include_bytes!("../../host/data/shapes_model.bin");
+/// The shipped classifier (`host/data/shapes_model.bin`), word-aligned.
+pub const MODEL: &[u8] = &Aligned(*include_bytes!("../../host/data/shapes_model.bin")).0;
 
 /// The stages of a frame, as the report names them: the capture, then
 /// the pipeline's.

@@ -22,13 +22,7 @@ use crate::pg::mlp::{
 use crate::pg::rng::SplitMix64;
 use crate::pg::shape::{shape_vector, RadialProfile, ShapeElem, ShapeError, SHAPE_LEN};
 use crate::pg::synth::{ObjectSpec, Shape};
-use crate::Ticks;
-
-/// Bytes at a 4-byte-aligned address: the blob's weight rows are then
-/// word-aligned (docs/MODEL_FORMAT.md), which the `SMLAD` kernel's `ldrd`
-/// needs.
-#[repr(C, align(4))]
-pub struct Aligned<T: ?Sized>(pub T);
+use crate::{Aligned, Ticks};
 
 /// The shipped model.
 pub static SHIPPED: &[u8] = &Aligned(*include_bytes!("../../../host/data/shapes_model.bin")).0;

@@ -6,6 +6,7 @@
 //! networks ([`mlp_run`]).
 
 pub mod app;
+pub mod costs_check;
 pub mod mlp_run;
 pub mod objects;
 pub mod stereo_run;

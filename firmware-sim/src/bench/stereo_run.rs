@@ -25,7 +25,7 @@ use crate::pg::stereo::filters::Z;
 use crate::pg::stereo::phase::{self, PhaseKernel, PhaseParams};
 use crate::pg::stereo::{DemTable, Probe, Step, StereoError, StereoReport};
 use crate::pg::synth::SceneSpec;
-use crate::Ticks;
+use crate::{Aligned, Ticks};
 
 /// Frame width.
 pub const WIDTH: usize = 160;
@@ -71,11 +71,11 @@ const _: () = {
     }
 };
 
-/// The decoder tables of levels 0, 1 and 2.
+/// The decoder tables of levels 0, 1 and 2 ([`Aligned`]).
 pub const TABLES: [&[u8]; 3] = [
-    include_bytes!("../../data/dem_c2f_l0.bin"),
-    include_bytes!("../../data/dem_c2f_l1.bin"),
-    include_bytes!("../../data/dem_c2f_l2.bin"),
+    &Aligned(*include_bytes!("../../data/dem_c2f_l0.bin")).0,
+    &Aligned(*include_bytes!("../../data/dem_c2f_l1.bin")).0,
+    &Aligned(*include_bytes!("../../data/dem_c2f_l2.bin")).0,
 ];
 
 /// Buffer lengths at [`WIDTH`] x [`HEIGHT`] for [`PARAMS`].

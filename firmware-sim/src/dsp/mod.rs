@@ -1,11 +1,13 @@
 //! The Cortex-M4 assembly kernels: the phase step of the stereo stage's
-//! refinement and its SGM path steps ([`PhaseAsm`], in `phase.rs`, with the
-//! 16-bit lane kernels in `sgm.rs`) and the `SMLAD` dot-product kernel of
+//! refinement, its SGM path steps and the read-out's costs of a window of
+//! 5 ([`PhaseAsm`], in `phase.rs`, with the 16-bit lane kernels in `sgm.rs`
+//! and the costs in `costs.rs`) and the `SMLAD` dot-product kernel of
 //! the classifier ([`SmladKernel`], in `mlp.rs`, which describes it), which
 //! [`PhaseAsm`] also runs for the product's classifier.
 
 #![allow(unsafe_code)]
 
+mod costs;
 mod mlp;
 mod phase;
 mod sgm;

@@ -1,9 +1,11 @@
 //! The phase step of the stereo stage's refinement and its SGM path steps
 //! in assembly: [`PhaseAsm`].
 
+use super::costs::costs5_asm;
 use super::sgm::{min16, sgm_lanes, sgm_settle, uadd16, uqadd16, usub16};
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::stereo::phase::{phase_row3, x_pass5, Half, PhaseKernel, TAP_FRAC, Z_FRAC};
+use firmware_sim::pg::stereo::DemTable;
 
 // The phase step of the full-resolution refinement (pool 1), bit for bit
 // the portable `phase_row3`; r0 = &mut PhaseArgs (offsets 0..28). Per ON
@@ -159,6 +161,11 @@ extern "C" {
 pub struct PhaseAsm;
 
 impl PhaseKernel for PhaseAsm {
+    #[inline]
+    fn costs5(raw: &mut [i64], total: i64, table: &DemTable<'_>, lo: usize, out: &mut [u16]) {
+        costs5_asm(raw, total, table, lo, out);
+    }
+
     #[inline]
     fn x_pass5(v: &[i32], ch: &Half, sh: &Half, out: &mut [[i16; 2]]) {
         if !x_pass5_smlad(v, ch, sh, out) {

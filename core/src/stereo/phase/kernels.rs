@@ -6,6 +6,7 @@ use super::{Half, MAX_TURN, TAP_FRAC, Z_FRAC};
 use crate::disparity::DisparityCell;
 use crate::fixed::U8F8;
 use crate::image::{Rgb8, RgbRows};
+use crate::stereo::DemTable;
 
 /// The phase step of a row with 3-pixel pooling (the default `pool` 1),
 /// replaceable by a target's kernel, as [`crate::mlp::MacKernel`]: the
@@ -84,6 +85,19 @@ pub trait PhaseKernel {
         acc: &mut [u32; 9],
     ) -> [u16; 9] {
         crate::stereo::sgm::sgm_step(c, p, pad, pen, acc)
+    }
+
+    /// The read-out's third hot step: one pixel's `Q8` costs from its
+    /// window of 5 scores, every candidate valid
+    /// ([`crate::stereo::c2f::costs5`], the portable default; the engine's
+    /// windows of 5 at its finer levels).
+    ///
+    /// Contract: `raw[..5]` are the window's scores and `raw[..5]` may be
+    /// left with any values; `total > 0`; `out` has 5 entries. Any kernel
+    /// must write the same `out` as the default.
+    #[inline(always)]
+    fn costs5(raw: &mut [i64], total: i64, table: &DemTable<'_>, lo: usize, out: &mut [u16]) {
+        crate::stereo::c2f::costs5(raw, total, table, lo, out);
     }
 }
 

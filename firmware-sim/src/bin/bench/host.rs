@@ -199,6 +199,10 @@ fn run_stereo() -> Result<(), firmware_sim::pg::stereo::StereoError> {
     let _ = stereo_run::write_kernel_check(&mut out, stereo_run::kernel_check::<SafePhase>());
     let _ =
         stereo_run::write_sgm_kernel_check(&mut out, stereo_run::sgm_kernel_check::<SafePhase>());
+    let _ = firmware_sim::bench::costs_check::write_costs_kernel_check(
+        &mut out,
+        firmware_sim::bench::costs_check::costs_kernel_check::<SafePhase>(),
+    );
     print!("{out}");
     Ok(())
 }

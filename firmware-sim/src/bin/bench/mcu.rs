@@ -161,6 +161,11 @@ fn run_stereo(
         .map_err(|_| "semihosting write failed")?;
     stereo_run::write_sgm_kernel_check(out, stereo_run::sgm_kernel_check::<crate::dsp::PhaseAsm>())
         .map_err(|_| "semihosting write failed")?;
+    firmware_sim::bench::costs_check::write_costs_kernel_check(
+        out,
+        firmware_sim::bench::costs_check::costs_kernel_check::<crate::dsp::PhaseAsm>(),
+    )
+    .map_err(|_| "semihosting write failed")?;
     Ok(())
 }
 
