@@ -34,7 +34,7 @@ fn craft(buf: &mut [u8; CRAFT_LEN], wf: u8, bf: u8, mut bias: impl FnMut() -> i1
 }
 
 /// The cost kernel's self-test: [`COSTS_STEPS`] random pixels through
-/// `K::costs5`, their costs folded into a checksum. Half of them use the
+/// `K::costs` with windows of 5 and 9, their costs folded into a checksum. Half of them use the
 /// decoder tables of levels 1 and 2 of the product's point and of the
 /// bench's, the other half tables of the self-test's own (renewed every 64
 /// pixels) with any fraction bits and biases all equal, small or of any
@@ -74,8 +74,9 @@ pub fn costs_kernel_check<K: PhaseKernel>() -> u32 {
         let Some(table) = table else {
             continue;
         };
+        let n = if step % 4 < 2 { 5 } else { 9 };
         let cands = (table.bias_bytes().len() / 2) as u64;
-        let lo = rng.below(cands.saturating_sub(4).max(1)) as usize;
+        let lo = rng.below(cands.saturating_sub(n as u64 - 1).max(1)) as usize;
         let bits = 1 + rng.below(48) as u32;
         let total = ((rng.next_u64() >> (64 - bits)) | 1 << (bits - 1)) as i64;
         let bound = total * (1 << 14) + (1 << 27);
@@ -89,14 +90,15 @@ pub fn costs_kernel_check<K: PhaseKernel>() -> u32 {
         } else {
             bound.min(1 << (rng.below(62) as u32))
         };
-        let mut raw = [0i64; 6];
-        for r in raw.iter_mut().take(5) {
+        let mut raw = [0i64; 10];
+        for r in raw.iter_mut().take(n) {
             *r = (base + signed(&mut rng, spread)).clamp(-bound, bound);
         }
-        raw[5] = total;
-        let mut out = [0u16; 5];
-        K::costs5(&mut raw, total, &table, lo, &mut out);
-        for c in out {
+        raw[n] = total;
+        let mut out = [0u16; 9];
+        let out = &mut out[..n];
+        K::costs(&mut raw, total, &table, lo, out);
+        for c in out.iter() {
             hash.write(&c.to_le_bytes());
         }
     }

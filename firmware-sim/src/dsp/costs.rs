@@ -1,5 +1,5 @@
-//! The read-out's costs of a window of 5 candidates in assembly
-//! (`pg_costs5`), bit for bit core's portable [`costs5`] for the
+//! The read-out's costs of a pixel's window in assembly (`pg_costs`), bit
+//! for bit core's portable [`costs`] for the
 //! firmware's tables (`bias_frac >= weight_frac`) and totals below 2^61;
 //! anything else goes to the portable step.
 //!
@@ -8,9 +8,10 @@
 //! cleared and one `SMLAL`, written over `raw`, and the largest and
 //! smallest score; the span's bit length `L` picks the gaps' shift (right
 //! by `L − 15`, or left by `min(m, 15 − L)`: no gap is truncated); then
-//! each cost `(gap·1280 + G/2) / G` with `G` the gaps' sum.
+//! each cost `(gap·256n + G/2) / G` with `G` the gaps' sum and `n` the
+//! window's candidates.
 
-use firmware_sim::pg::stereo::c2f::costs5;
+use firmware_sim::pg::stereo::c2f::costs;
 use firmware_sim::pg::stereo::DemTable;
 
 // r0 = &CostsArgs. Returns 1 when it wrote `out` (and the scores over
@@ -20,11 +21,11 @@ use firmware_sim::pg::stereo::DemTable;
 // r9:r10 the largest score, r11:r12 the smallest, lr the end of `raw`.
 core::arch::global_asm!(
     ".syntax unified",
-    ".section .text.pg_costs5,\"ax\",%progbits",
-    ".global pg_costs5",
-    ".type pg_costs5,%function",
+    ".section .text.pg_costs,\"ax\",%progbits",
+    ".global pg_costs",
+    ".type pg_costs,%function",
     ".thumb_func",
-    "pg_costs5:",
+    "pg_costs:",
     "push {{r4-r11, lr}}",
     "sub sp, #4",
     "str r0, [sp]",
@@ -49,8 +50,9 @@ core::arch::global_asm!(
     "rsb r5, r6, #0",
     "ldr r6, [r0, #16]",
     "ldr r1, [r0, #12]",
+    "ldr r7, [r0, #28]",
     "ldr r0, [r0, #0]",
-    "add lr, r0, #40",
+    "add lr, r0, r7, lsl #3",
     "mov r9, #0",
     "mov r10, #0x80000000",
     "mvn r11, #0",
@@ -145,7 +147,8 @@ core::arch::global_asm!(
     "rsb r3, r2, #32",
     "sub r11, r2, #32",
     "ldr r1, [r5, #24]",
-    "sub r0, r0, #40",
+    "ldr r6, [r5, #28]",
+    "sub r0, r0, r6, lsl #3",
     "movs r12, #0",
     "6:",
     "ldrd r6, r7, [r0], #8",
@@ -161,15 +164,16 @@ core::arch::global_asm!(
     "add r12, r12, r6",
     "cmp r0, lr",
     "bne 6b",
-    // Costs (g·1280 + G/2) / G, G the gaps' sum; with G = 0 every gap,
+    // Costs (g·256n + G/2) / G, G the gaps' sum; with G = 0 every gap,
     // and so every cost, is 0 already.
     "movs r0, #1",
     "cmp r12, #0",
     "beq 9f",
-    "sub r1, r1, #10",
-    "add lr, r1, #10",
+    "ldr r6, [r5, #28]",
+    "sub r1, r1, r6, lsl #1",
+    "add lr, r1, r6, lsl #1",
     "lsr r3, r12, #1",
-    "movw r8, #1280",
+    "lsl r8, r6, #8",
     "7:",
     "ldrh r6, [r1]",
     "mla r6, r6, r8, r3",
@@ -183,48 +187,52 @@ core::arch::global_asm!(
     "9:",
     "add sp, #4",
     "pop {{r4-r11, pc}}",
-    ".size pg_costs5, . - pg_costs5",
+    ".size pg_costs, . - pg_costs",
 );
 
-/// The arguments of `pg_costs5` (offsets in bytes: 0, 4, 12, 16, 20, 24).
+/// The arguments of `pg_costs` (offsets in bytes: 0, 4, 12, 16, 20, 24,
+/// 28).
 #[repr(C)]
 struct CostsArgs {
-    /// The window's 5 scores (overwritten with the scores `n(d)`).
+    /// The window's `n` scores (overwritten with the scores `n(d)`).
     raw: *mut i64,
     /// The total, low word then high word.
     total: [u32; 2],
-    /// The window's 5 biases, little-endian `i16` (halfword-aligned).
+    /// The window's `n` biases, little-endian `i16` (halfword-aligned).
     bias: *const u8,
     /// `bias_frac − weight_frac`.
     kb: u32,
     /// `weight_frac`.
     m: u32,
-    /// The 5 costs (out).
+    /// The `n` costs (out).
     out: *mut u16,
+    /// `n`, the window's candidates (at least 1).
+    n: u32,
 }
 
 extern "C" {
     /// One pixel's costs; see [`CostsArgs`]. Returns 1 when done.
-    fn pg_costs5(args: *const CostsArgs) -> u32;
+    fn pg_costs(args: *const CostsArgs) -> u32;
 }
 
-/// [`costs5`] in assembly where the case is the common one, else the
+/// [`costs`] in assembly where the case is the common one, else the
 /// portable step: the same `out` either way.
 #[inline]
-pub(super) fn costs5_asm(
+pub(super) fn costs_asm(
     raw: &mut [i64],
     total: i64,
     table: &DemTable<'_>,
     lo: usize,
     out: &mut [u16],
 ) {
+    let n = out.len();
     let (wf, bf) = (u32::from(table.weight_frac), u32::from(table.bias_frac));
-    let bias = table.bias_bytes().get(2 * lo..2 * lo + 10);
-    if let Some(bias) = bias {
+    let bias = table.bias_bytes().get(2 * lo..2 * (lo + n));
+    if let (Some(bias), Ok(n32)) = (bias, u32::try_from(n)) {
         if wf <= bf
             && total > 0
-            && raw.len() >= 5
-            && out.len() == 5
+            && (1..=256).contains(&n)
+            && raw.len() >= n
             && bias.as_ptr() as usize % 2 == 0
         {
             let args = CostsArgs {
@@ -234,16 +242,17 @@ pub(super) fn costs5_asm(
                 kb: bf - wf,
                 m: wf,
                 out: out.as_mut_ptr(),
+                n: n32,
             };
-            // SAFETY: the kernel reads and writes `raw[..5]` (5 `i64`s, checked) and
-            // the 10 bytes of `bias` as 5 halfwords (aligned, checked), and
-            // writes the 5 `u16`s of `out` (checked) and one word of its
-            // own stack frame. It keeps the AAPCS (saves r4-r11, restores
-            // sp) and touches no other memory.
-            if unsafe { pg_costs5(&args) } != 0 {
+            // SAFETY: the kernel reads and writes `raw[..n]` (`n` `i64`s,
+            // checked), reads the `2n` bytes of `bias` as `n` halfwords
+            // (aligned, checked), writes the `n` `u16`s of `out` and one
+            // word of its own stack frame. It keeps the AAPCS (saves
+            // r4-r11, restores sp) and touches no other memory.
+            if unsafe { pg_costs(&args) } != 0 {
                 return;
             }
         }
     }
-    costs5(raw, total, table, lo, out);
+    costs(raw, total, table, lo, out);
 }

@@ -1,7 +1,7 @@
 //! The phase step of the stereo stage's refinement and its SGM path steps
 //! in assembly: [`PhaseAsm`].
 
-use super::costs::costs5_asm;
+use super::costs::costs_asm;
 use super::sgm::{min16, sgm_lanes, sgm_settle, uadd16, uqadd16, usub16};
 use firmware_sim::pg::disparity::DisparityCell;
 use firmware_sim::pg::stereo::phase::{phase_row3, x_pass5, Half, PhaseKernel, TAP_FRAC, Z_FRAC};
@@ -162,8 +162,8 @@ pub struct PhaseAsm;
 
 impl PhaseKernel for PhaseAsm {
     #[inline]
-    fn costs5(raw: &mut [i64], total: i64, table: &DemTable<'_>, lo: usize, out: &mut [u16]) {
-        costs5_asm(raw, total, table, lo, out);
+    fn costs(raw: &mut [i64], total: i64, table: &DemTable<'_>, lo: usize, out: &mut [u16]) {
+        costs_asm(raw, total, table, lo, out);
     }
 
     #[inline]

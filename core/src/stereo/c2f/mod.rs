@@ -93,13 +93,18 @@ pub use buffers::{
 };
 pub use params::{C2fParams, LeftRight, MAX_COARSE};
 
-/// The read-out's costs of one pixel with a window of 5 candidates, all of
-/// them valid: the portable [`PhaseKernel::costs5`]. `raw` holds the
-/// window's scores (`raw[..5]`, overwritten) and `total` (> 0) the sum of
-/// its cells' energies; `table` is the level's decoder table and `lo` the
-/// window's first candidate; `out` (5 entries) takes the `Q8` costs.
-pub fn costs5(raw: &mut [i64], total: i64, table: &DemTable<'_>, lo: usize, out: &mut [u16]) {
-    votes::costs_of::<5>(raw, total, table, lo, 5, out);
+/// The read-out's costs of one pixel whose window's candidates are all
+/// valid: the portable [`PhaseKernel::costs`]. `raw` holds the window's
+/// scores (`raw[..n]`, overwritten; `n = out.len()`) and `total` (> 0) the
+/// sum of its cells' energies; `table` is the level's decoder table and
+/// `lo` the window's first candidate; `out` takes the `Q8` costs.
+pub fn costs(raw: &mut [i64], total: i64, table: &DemTable<'_>, lo: usize, out: &mut [u16]) {
+    match out.len() {
+        5 => votes::costs_of::<5>(raw, total, table, lo, 5, out),
+        9 => votes::costs_of::<9>(raw, total, table, lo, 9, out),
+        3 => votes::costs_of::<3>(raw, total, table, lo, 3, out),
+        n => votes::costs_of::<0>(raw, total, table, lo, n, out),
+    }
 }
 
 use super::phase::{Phase, PhaseBuffers, PhaseKernel, Refiner, SafePhase};

@@ -234,9 +234,7 @@ impl<'e, K> Pass<'e, K> {
                     }
                     let valid = (top - lo + 1).min(n);
                     match (valid, n) {
-                        (5, 5) => K::costs5(raw, total, table, lo, dst),
-                        (3, 3) => costs_of::<3>(raw, total, table, lo, valid, dst),
-                        (9, 9) => costs_of::<9>(raw, total, table, lo, valid, dst),
+                        (5, 5) | (9, 9) | (3, 3) => K::costs(raw, total, table, lo, dst),
                         _ => costs_of::<0>(raw, total, table, lo, valid, dst),
                     }
                 }

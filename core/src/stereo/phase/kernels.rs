@@ -88,16 +88,16 @@ pub trait PhaseKernel {
     }
 
     /// The read-out's third hot step: one pixel's `Q8` costs from its
-    /// window of 5 scores, every candidate valid
-    /// ([`crate::stereo::c2f::costs5`], the portable default; the engine's
-    /// windows of 5 at its finer levels).
+    /// window's scores, every candidate valid ([`crate::stereo::c2f::costs`],
+    /// the portable default; the engine's windows of 5 at its finer levels
+    /// and of 9 at its coarsest).
     ///
-    /// Contract: `raw[..5]` are the window's scores and `raw[..5]` may be
-    /// left with any values; `total > 0`; `out` has 5 entries. Any kernel
-    /// must write the same `out` as the default.
+    /// Contract: `raw[..n]` are the window's scores (`n = out.len()`) and
+    /// may be left with any values; `total > 0`. Any kernel must write the
+    /// same `out` as the default.
     #[inline(always)]
-    fn costs5(raw: &mut [i64], total: i64, table: &DemTable<'_>, lo: usize, out: &mut [u16]) {
-        crate::stereo::c2f::costs5(raw, total, table, lo, out);
+    fn costs(raw: &mut [i64], total: i64, table: &DemTable<'_>, lo: usize, out: &mut [u16]) {
+        crate::stereo::c2f::costs(raw, total, table, lo, out);
     }
 }
 
