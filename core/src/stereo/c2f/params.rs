@@ -171,9 +171,9 @@ impl C2fParams {
     /// half-size map spread over 2x2 blocks. Levels 0 and 1 of
     /// `half-narrow`'s tables. More objects found end to end (the
     /// pipeline's `accurate` preset, docs/PIPELINE.md, "The stereo point")
-    /// for about 60 % more host time and an estimated 20 M M4 instructions
-    /// a 160x120 frame more: a point for boards with more cycles than the
-    /// product's 32 M.
+    /// for about 55 % more host time and 44 M M4 instructions a 160x120
+    /// frame more (the stereo stage 64.4 M instead of 20.3 M): a point for
+    /// boards with several times the product's 32 M.
     pub const HALF_NARROW_FULL_SEARCH: Self = Self {
         coarse: 1,
         ..Self::HALF_NARROW
