@@ -38,8 +38,14 @@ pub const HEIGHT: usize = if cfg!(feature = "f405") { 96 } else { 120 };
 pub const PLANNED: [(usize, usize); 2] = [(160, 120), (128, 96)];
 /// Objects searched per frame (K).
 pub const OBJECTS: u8 = 4;
-/// The pipeline's parameters: core's defaults with K = [`OBJECTS`].
-pub const PARAMS: PipelineParams = PipelineParams::DEFAULT.with_objects(OBJECTS);
+/// The pipeline's parameters: core's defaults with K = [`OBJECTS`] (with
+/// the `accurate` feature, [`PipelineParams::ACCURATE`]'s).
+pub const PARAMS: PipelineParams = if cfg!(feature = "accurate") {
+    PipelineParams::ACCURATE
+} else {
+    PipelineParams::DEFAULT
+}
+.with_objects(OBJECTS);
 /// `u64` words of the pipeline's workspace at [`WIDTH`] x [`HEIGHT`].
 pub const WORKSPACE_WORDS: usize = pipeline::workspace_words(WIDTH, HEIGHT, &PARAMS);
 /// Its first part, the maps kept for the result ([`pipeline::kept_words`]):
@@ -56,11 +62,23 @@ pub const FRAME_LEN: usize = pair_len(WIDTH, HEIGHT);
 /// (`data/dem_c2f_narrow_l{0,1,2}.bin`, written by `protogist train-dem
 /// --levels 1 --max-disp 31 | 16 | 8 --radius 2`), each at an aligned
 /// address ([`Aligned`]).
+#[cfg(not(feature = "accurate"))]
 pub const TABLES: [&[u8]; 3] = [
     &Aligned(*include_bytes!("../data/dem_c2f_narrow_l0.bin")).0,
     &Aligned(*include_bytes!("../data/dem_c2f_narrow_l1.bin")).0,
     &Aligned(*include_bytes!("../data/dem_c2f_narrow_l2.bin")).0,
 ];
+/// With the `accurate` feature: its point (`half-narrow-full-search`)
+/// has no level 2, so levels 0 and 1 of the same tables.
+#[cfg(feature = "accurate")]
+pub const TABLES: [&[u8]; 2] = [
+    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l0.bin")).0,
+    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l1.bin")).0,
+];
+const _: () = assert!(
+    TABLES.len() == PARAMS.tables(),
+    "one table per stereo level"
+);
 /// The shipped classifier (`host/data/shapes_model.bin`), word-aligned.
 pub const MODEL: &[u8] = &Aligned(*include_bytes!("../../host/data/shapes_model.bin")).0;
 

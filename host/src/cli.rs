@@ -307,7 +307,7 @@ pub fn preflight(cmd: &Command, limit: u64) -> Result<()> {
             let (w, h) = l::working_size_of(&opts.left, opts.width)?;
             l::check_frame(w, h)?;
             let params =
-                protogist::pipeline::PipelineParams::DEFAULT.with_objects(opts.objects.clamp(1, 8));
+                crate::product::preset(&opts.preset)?.with_objects(opts.objects.clamp(1, 8));
             let workspace = protogist::pipeline::workspace_bytes(w, h, &params) as u64;
             l::check_memory(
                 "the pipeline",

@@ -35,6 +35,22 @@ pub const DESIGN_TABLES: [&[u8]; 3] = [
     include_bytes!("../../firmware-sim/data/dem_c2f_l2.bin"),
 ];
 
+/// The pipeline's named setting `name` (`--preset`:
+/// [`PipelineParams::NAMED`]).
+///
+/// # Errors
+/// [`HostError::InvalidArgument`] naming `preset` and the settings, for an
+/// unknown name.
+pub fn preset(name: &str) -> Result<PipelineParams> {
+    PipelineParams::from_name(name).ok_or_else(|| HostError::InvalidArgument {
+        name: "preset",
+        reason: format!(
+            "unknown setting {name:?} ({})",
+            PipelineParams::NAMED.map(|(n, _)| n).join(", ")
+        ),
+    })
+}
+
 /// The default largest disparity at a working width: a fifth of it, less
 /// 1 (31 at 160 px, the firmware's 32 disparities).
 pub fn default_max_disp(width: usize) -> u8 {

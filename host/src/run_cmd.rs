@@ -59,6 +59,10 @@ pub struct RunOptions {
     /// fifth of the working width, less 1: 31 at 160 px).
     #[arg(long)]
     pub max_disp: Option<u8>,
+    /// The pipeline's named setting (`default`, `paper` or `accurate`:
+    /// `protogist::pipeline::PipelineParams::NAMED`).
+    #[arg(long, default_value = "default")]
+    pub preset: String,
     /// Output directory (created if missing).
     #[arg(long)]
     pub out: PathBuf,
@@ -105,9 +109,8 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
             reason: format!("must be below half the working width {w}, got {max_disp}"),
         });
     }
-    let params = PipelineParams::DEFAULT
-        .with_objects(opts.objects)
-        .with_max_disp(max_disp);
+    let preset = crate::product::preset(&opts.preset)?;
+    let params = preset.with_objects(opts.objects).with_max_disp(max_disp);
     // The model is checked before any table is trained.
     let mut model_check = params;
     model_check.stereo = PipelineParams::DEFAULT.stereo;
@@ -133,8 +136,8 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
     s.push(
         "pipeline",
         format!(
-            "core, fixed point (the firmware's bits), max disparity {max_disp}, K = {}",
-            opts.objects
+            "core, fixed point (the firmware's bits), preset {}, max disparity {max_disp}, K = {}",
+            opts.preset, opts.objects
         ),
     );
     let tables = tables_for(&params)?;
@@ -183,6 +186,7 @@ pub fn run_pipeline(opts: &RunOptions) -> Result<Summary> {
         "scale": scale,
         "max_disp": max_disp,
         "pipeline": "core",
+        "preset": opts.preset,
         "objects": run.objects.iter().map(|o| o.to_json(scale)).collect::<Vec<_>>(),
     });
     if opts.reference || opts.gt_disparity.is_some() {
@@ -247,7 +251,7 @@ fn reference_chain(
 ) -> Result<ReferenceRun> {
     let seg_params = SegmentParams {
         max_objects: opts.objects,
-        ..PipelineParams::DEFAULT.segment
+        ..crate::product::preset(&opts.preset)?.segment
     };
     seg_params.validate()?;
     let (w, h) = (pair.width, pair.height);

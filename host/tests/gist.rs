@@ -143,8 +143,22 @@ fn gen_scenes_then_gist_eval_reports_and_draws() {
     let o = eval(dir.path(), "s", MODEL, "ref", &["--objects", "2"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out = text(&o.stdout);
-    assert!(out.contains("mode core, K = 2"), "{out}");
+    assert!(out.contains("mode core, K = 2, preset default"), "{out}");
     assert!(out.contains("recall") && out.contains("gist"), "{out}");
+
+    // Every named setting of the pipeline runs, under its name.
+    for (name, _) in protogist::pipeline::PipelineParams::NAMED {
+        let o = eval(dir.path(), "s", MODEL, name, &["--preset", name, "--json"]);
+        assert!(o.status.success(), "{name}: {}", text(&o.stderr));
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(report["preset"], name);
+        assert_eq!(report["overall"]["scenes"], 3);
+    }
+    let o = eval(dir.path(), "s", MODEL, "x", &["--preset", "fastest"]);
+    assert_one_line_error(
+        &o,
+        "--preset: unknown setting \"fastest\" (default, paper, accurate)",
+    );
 }
 
 /// Rewrites one file of scene 0 of set `s` in a fresh copy.

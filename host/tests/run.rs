@@ -115,9 +115,13 @@ fn run_rejects_bad_input_and_leaves_no_output() {
     let p = |f: &str| dir.path().join(f).display().to_string();
     let out = dir.path().join("out");
     let outs = out.display().to_string();
-    let cases: [(&[&str], &str); 3] = [
+    let cases: [(&[&str], &str); 4] = [
         (&["--right", &p("small.png")], "right is 40x30"),
         (&["--right", &p("r.png"), "--objects", "0"], "--objects"),
+        (
+            &["--right", &p("r.png"), "--preset", "fastest"],
+            "--preset: unknown setting",
+        ),
         (
             &["--right", &p("r.png"), "--gt-disparity", &p("small.png")],
             "ground truth",
@@ -130,5 +134,38 @@ fn run_rejects_bad_input_and_leaves_no_output() {
         args.extend_from_slice(&["--out", &outs]);
         assert_one_line_error(&protogist(&args, dir.path()), word);
         assert!(!out.join("report.json").exists(), "{args:?}");
+    }
+}
+
+#[test]
+fn run_takes_the_pipelines_named_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    write_scene(dir.path());
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    for preset in ["accurate", "paper"] {
+        let out = dir.path().join(preset);
+        let o = protogist(
+            &[
+                "run",
+                "--left",
+                &p("l.png"),
+                "--right",
+                &p("r.png"),
+                "--preset",
+                preset,
+                "--out",
+                &out.display().to_string(),
+            ],
+            dir.path(),
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        assert_eq!(report["preset"], preset);
+        assert!(
+            !report["objects"].as_array().unwrap().is_empty(),
+            "{preset}: {report}"
+        );
     }
 }

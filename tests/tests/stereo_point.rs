@@ -5,7 +5,10 @@
 //! background's (docs/PIPELINE.md, "The stereo point"); and against
 //! `C2fParams::HALF_LOW_PENALTY`: with narrow filters more of a small
 //! object's interior takes its disparity (docs/CHOICES.md, "Narrow
-//! filters").
+//! filters"). And the `accurate` preset's point,
+//! `C2fParams::HALF_NARROW_FULL_SEARCH`: the pipeline's point searching
+//! every disparity at the half-size level, which finds a small object of a
+//! generated scene that the coarse-to-fine default loses.
 
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, ImageViewMut, Rgb8};
@@ -208,4 +211,167 @@ fn run_into_a_map_gives_the_cells_run_gives() {
             );
         });
     }
+}
+
+#[test]
+fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size() {
+    let p = PipelineParams::ACCURATE;
+    // The default pipeline but for the stereo point's coarse levels.
+    assert_eq!(
+        PipelineParams {
+            stereo: STEREO_DEFAULT,
+            ..p
+        },
+        PipelineParams::DEFAULT
+    );
+    assert_eq!(p.stereo, C2fParams::HALF_NARROW_FULL_SEARCH);
+    assert_eq!(
+        p.stereo,
+        C2fParams {
+            coarse: 1,
+            ..C2fParams::HALF_NARROW
+        }
+    );
+    // Every disparity at the half-size level, which is the output, spread
+    // over 2x2 blocks; two tables, levels 0 and 1 of the default's.
+    assert_eq!((p.stereo.coarse, p.stereo.finest), (1, 1));
+    assert_eq!(p.stereo.phase, None);
+    assert_eq!(p.stereo.candidates(1), 17);
+    assert_eq!(p.tables(), 2);
+    let tables = protogist_host::product::tables_for(&p).unwrap();
+    let bundled: Vec<Vec<u8>> = protogist_host::product::DEFAULT_TABLES[..2]
+        .iter()
+        .map(|t| t.to_vec())
+        .collect();
+    assert_eq!(tables, bundled);
+    // By name, both ways, for the preset and its stereo point.
+    assert_eq!(PipelineParams::from_name("accurate"), Some(p));
+    assert_eq!(p.name(), Some("accurate"));
+    assert_eq!(PipelineParams::DEFAULT.name(), Some("default"));
+    assert_eq!(
+        C2fParams::from_name("half-narrow-full-search"),
+        Some(p.stereo)
+    );
+    assert_eq!(p.stereo.name(), Some("half-narrow-full-search"));
+    assert_eq!(
+        protogist_host::product::preset("accurate").unwrap(),
+        PipelineParams::ACCURATE
+    );
+    // The workspace at 160x120 with K = 4, as the product runs: the
+    // half-size level's full search needs 3,168 B more than the default's
+    // windows.
+    let bytes = |p: &PipelineParams| protogist::pipeline::workspace_bytes(W, H, &p.with_objects(4));
+    assert_eq!(bytes(&p), 170_616);
+    assert_eq!(bytes(&p) - bytes(&PipelineParams::DEFAULT), 3_168);
+}
+
+/// Scene `index` of the training split, seed 1, 1 to 4 objects (the set
+/// of `protogist gen-scenes --scenes 1000 --seed 1 --split train`), as
+/// packed frames, with its truth.
+fn training_scene(
+    index: u64,
+) -> (
+    Vec<Rgb8>,
+    Vec<Rgb8>,
+    Vec<protogist_host::scenes::ObjectTruth>,
+) {
+    use protogist_host::scenes::{render::render_scene, SceneKey, SceneParams, Split};
+    let params = SceneParams {
+        width: W as u32,
+        height: H as u32,
+        classes: 19,
+        objects: (1, 4),
+    };
+    let key = SceneKey {
+        seed: 1,
+        split: Split::Train,
+        index,
+    };
+    let s = render_scene(&params, key).unwrap();
+    let px = |im: &image::RgbImage| im.pixels().map(|p| Rgb8::new(p[0], p[1], p[2])).collect();
+    (px(&s.left), px(&s.right), s.objects)
+}
+
+/// The boxes of the objects `params` (K = 4, as `gist-eval`) finds, from
+/// their masks as `gist-eval` takes them.
+fn found_boxes(
+    params: &PipelineParams,
+    l: &[Rgb8],
+    r: &[Rgb8],
+) -> Vec<protogist_host::scenes::BoxPx> {
+    let params = params
+        .with_objects(4)
+        .with_max_disp(protogist_host::product::default_max_disp(W));
+    let tables = protogist_host::product::tables_for(&params).unwrap();
+    let model = protogist_host::classify::shipped::SHIPPED_MODEL;
+    let run = protogist_host::product::run_frame(&params, &tables, model, l, r, W, H).unwrap();
+    run.objects
+        .iter()
+        .filter_map(|o| {
+            protogist_host::scenes::BoxPx::of(W as u32, H as u32, |x, y| {
+                o.mask[y as usize * W + x as usize]
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn the_accurate_preset_runs_a_frame() {
+    // The demo pair, frame in, objects out, in a workspace of the
+    // preset's size with its two tables.
+    let spec = SceneSpec::demo(W, H);
+    let (mut l, mut r) = (vec![Rgb8::default(); W * H], vec![Rgb8::default(); W * H]);
+    render_left(&spec, &mut ImageViewMut::packed(&mut l, W, H).unwrap()).unwrap();
+    render_right(&spec, &mut ImageViewMut::packed(&mut r, W, H).unwrap()).unwrap();
+    let params = PipelineParams::ACCURATE.with_objects(4);
+    let tables = protogist_host::product::tables_for(&params).unwrap();
+    let refs: Vec<&[u8]> = tables.iter().map(Vec::as_slice).collect();
+    let model = protogist_host::classify::shipped::SHIPPED_MODEL;
+    let pipeline = protogist::pipeline::Pipeline::new(&params, &refs, model).unwrap();
+    let mut ws = vec![0u64; protogist::pipeline::workspace_words(W, H, &params)];
+    let (lv, rv) = (
+        ImageView::packed(&l, W, H).unwrap(),
+        ImageView::packed(&r, W, H).unwrap(),
+    );
+    let frame = pipeline.run(&lv, &rv, &mut ws).unwrap();
+    let objects = frame.objects();
+    assert_eq!(objects.len(), 1, "{objects:?}");
+    // The demo's object, about where it is drawn.
+    let o = &spec.objects[0];
+    let b = objects[0].bbox;
+    let (cx, cy) = (b.x + b.width / 2, b.y + b.height / 2);
+    assert!(
+        cx.abs_diff(o.cx as usize) <= 4 && cy.abs_diff(o.cy as usize) <= 4,
+        "{b:?} against {o:?}"
+    );
+    // One table fewer than the default is an error, not a wrong map.
+    assert!(protogist::pipeline::Pipeline::new(&params, &refs[..1], model).is_err());
+}
+
+#[test]
+fn the_accurate_preset_finds_a_small_object_the_default_loses() {
+    // Scene 11 of the training set: one arrow, 23x15 px, 21 px of
+    // disparity. At the default's coarsest level (40x30) it is about 6x4
+    // cells and averages into the wall; the full search at 80x60 keeps
+    // it. (From the 1-object scenes of `gist-eval --mode core` with and
+    // without the full search: 9 of 261 found only with it, none lost.)
+    let (l, r, truth) = training_scene(11);
+    assert_eq!(truth.len(), 1);
+    let t = &truth[0];
+    assert_eq!((t.bbox.width, t.bbox.height), (23, 15));
+    let matched = |params: &PipelineParams| {
+        let found = found_boxes(params, &l, &r);
+        let best = found.iter().map(|b| b.iou(&t.bbox)).fold(0.0, f64::max);
+        println!(
+            "{:?}: {} objects, best box IoU with the truth {best:.3}",
+            params.name(),
+            found.len()
+        );
+        best >= 0.5
+    };
+    assert!(
+        !matched(&PipelineParams::DEFAULT),
+        "the default finds it now: pick another scene the default loses"
+    );
+    assert!(matched(&PipelineParams::ACCURATE));
 }

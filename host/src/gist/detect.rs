@@ -123,7 +123,11 @@ impl Classifier<'_> {
 
 /// What every detector of a run shares: parameters and the classifier.
 pub struct Shared<'a> {
-    /// Segmentation parameters (`max_objects` = K).
+    /// The pipeline's named setting (`--preset`), for [`Mode::Core`]: its
+    /// stereo point, conspicuity, completion and Δ ([`core_params`]).
+    pub preset: protogist::pipeline::PipelineParams,
+    /// Segmentation parameters (`max_objects` = K): the preset's, for
+    /// every mode.
     pub segment: SegmentParams,
     /// The classifier.
     pub classifier: Classifier<'a>,
@@ -136,11 +140,12 @@ pub struct Shared<'a> {
     pub tables: Vec<Vec<u8>>,
 }
 
-/// The pipeline's parameters for `shared`'s K and the scenes' width.
+/// The pipeline's parameters: `shared`'s preset with its segmentation
+/// (K) and the scenes' width's largest disparity.
 pub fn core_params(shared: &Shared<'_>, width: usize) -> protogist::pipeline::PipelineParams {
     protogist::pipeline::PipelineParams {
         segment: shared.segment,
-        ..protogist::pipeline::PipelineParams::DEFAULT
+        ..shared.preset
     }
     .with_max_disp(crate::product::default_max_disp(width))
 }

@@ -46,7 +46,8 @@ pub struct GistEvalOptions {
     /// Objects to detect per scene, most salient first (K).
     #[arg(long, default_value_t = 4)]
     pub objects: u8,
-    /// The pipeline's named setting (`default` or `paper`).
+    /// The pipeline's named setting (`default`, `paper` or `accurate`:
+    /// `protogist::pipeline::PipelineParams::NAMED`).
     #[arg(long, default_value = "default")]
     pub preset: String,
     /// Which chain runs.
@@ -67,6 +68,8 @@ pub struct Report {
     pub format: &'static str,
     /// The chain.
     pub mode: Mode,
+    /// The pipeline's named setting (`--preset`).
+    pub preset: String,
     /// The scene set.
     pub scenes_dir: String,
     /// The model file.
@@ -189,13 +192,9 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
     check_classes(&set, &opts.model, &names)?;
     ensure_dir(&opts.out)?;
 
-    let preset = protogist::pipeline::PipelineParams::from_name(&opts.preset).ok_or_else(|| {
-        HostError::InvalidArgument {
-            name: "preset",
-            reason: format!("unknown setting {:?} (default, paper)", opts.preset),
-        }
-    })?;
+    let preset = crate::product::preset(&opts.preset)?;
     let shared = Shared {
+        preset,
         segment: SegmentParams {
             max_objects: opts.objects,
             ..preset.segment
@@ -248,6 +247,7 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
     let report = Report {
         format: REPORT_FORMAT,
         mode: opts.mode,
+        preset: opts.preset.clone(),
         scenes_dir: opts.scenes.display().to_string(),
         model: opts.model.display().to_string(),
         max_objects: opts.objects,
@@ -265,11 +265,12 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
     write_atomic(&report_path, format!("{json}\n").as_bytes())?;
 
     let mut s = Summary::new(format!(
-        "protogist gist-eval: {} scenes of {}, mode {}, K = {}",
+        "protogist gist-eval: {} scenes of {}, mode {}, K = {}, preset {}",
         report.overall.scenes,
         opts.scenes.display(),
         opts.mode.name(),
-        opts.objects
+        opts.objects,
+        opts.preset
     ));
     push_totals(&mut s, "all scenes", &report.overall);
     for (n, t) in &report.by_objects {

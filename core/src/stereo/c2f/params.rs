@@ -164,14 +164,30 @@ impl C2fParams {
         ..Self::HALF_LOW_PENALTY
     };
 
+    /// **Half, narrow filters, full search**: [`C2fParams::HALF_NARROW`]
+    /// with one coarse level fewer (`coarse` 1): every disparity is
+    /// searched at the half-size level, with no coarser level whose
+    /// windows a small object could fall out of; the output is the same
+    /// half-size map spread over 2x2 blocks. Levels 0 and 1 of
+    /// `half-narrow`'s tables. More objects found end to end (the
+    /// pipeline's `accurate` preset, docs/PIPELINE.md, "The stereo point")
+    /// for about 55 % more host time and 44 M M4 instructions a 160x120
+    /// frame more (the stereo stage 64.4 M instead of 20.3 M): a point for
+    /// boards with several times the product's 32 M.
+    pub const HALF_NARROW_FULL_SEARCH: Self = Self {
+        coarse: 1,
+        ..Self::HALF_NARROW
+    };
+
     /// The named points, by the name `protogist stereo --point` takes.
-    pub const NAMED: [(&'static str, Self); 6] = [
+    pub const NAMED: [(&'static str, Self); 7] = [
         ("full", Self::FULL),
         ("fast", Self::FAST),
         ("half", Self::HALF),
         ("fast-low-penalty", Self::FAST_LOW_PENALTY),
         ("half-low-penalty", Self::HALF_LOW_PENALTY),
         ("half-narrow", Self::HALF_NARROW),
+        ("half-narrow-full-search", Self::HALF_NARROW_FULL_SEARCH),
     ];
 
     /// The named point called `name` ([`C2fParams::NAMED`]).
