@@ -24,7 +24,7 @@ fn luv565_table() -> Vec<u8> {
 /// Classes of the benchmark networks.
 const BENCH_CLASSES: u16 = 10;
 
-/// A `PGML` v1 blob (docs/MODEL_FORMAT.md) of a 720 x `hidden` x 10
+/// A `PGML` v1 blob (docs/MODEL_FORMAT.md; no symmetry section) of a 720 x `hidden` x 10
 /// network: int8 weights uniform in −127..=127 and small biases from
 /// `protogist::rng::SplitMix64` seeded with `hidden`; every channel
 /// requantised by 2^−5 (multiplier 2^30, shift −4), zero templates, Δ 0.
@@ -36,7 +36,7 @@ fn bench_blob(hidden: u16) -> Vec<u8> {
     let mut rng = protogist::rng::SplitMix64::new(u64::from(hidden));
     let mut b = Vec::new();
     b.extend_from_slice(&MAGIC);
-    b.extend_from_slice(&VERSION.to_le_bytes());
+    b.extend_from_slice(&VERSION_1.to_le_bytes());
     b.extend_from_slice(&[INPUT_I4F12, WEIGHTS_I8_PER_CHANNEL, HIDDEN_U8, OUTPUT_U16]);
     for n in [d, h, k] {
         b.extend_from_slice(&n.to_le_bytes());

@@ -592,5 +592,49 @@ pub fn shape_vector(
     })
 }
 
+/// A reflection of the object, as a permutation of its shape vector.
+///
+/// Bin `b` holds the angles `[b − 180°, b − 179°)`. A mirror about the
+/// vertical axis (`x → −x`) sends the angle `θ` to `180° − θ`, so bin `b`
+/// to bin `179 − b` (mod 360); a mirror about the horizontal axis
+/// (`y → −y`) sends `θ` to `−θ`, bin `b` to `359 − b`. The max and the
+/// min half are permuted alike. A permutation keeps the mean and the
+/// standard deviation, so the mirrored vector is the exact `I4F12` vector
+/// of the mirrored profile: no renormalisation, no rounding. (The vector of
+/// a really mirrored mask can differ a little: a contour pixel exactly on a
+/// bin boundary falls into the half-open bin on the other side.)
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mirror {
+    /// About the vertical axis through the centroid (left and right swap).
+    Vertical,
+    /// About the horizontal axis through the centroid (top and bottom swap).
+    Horizontal,
+}
+
+impl Mirror {
+    /// Both mirrors.
+    pub const ALL: [Self; 2] = [Self::Vertical, Self::Horizontal];
+
+    /// The element of the original vector that lands at element `i` of the
+    /// mirrored one (`i` in `0..SHAPE_LEN`; the map is its own inverse).
+    pub const fn source(self, i: usize) -> usize {
+        let half = i / BINS * BINS;
+        let b = i % BINS;
+        let k = match self {
+            Self::Vertical => BINS / 2 - 1,
+            Self::Horizontal => BINS - 1,
+        };
+        // (k − b) mod 360 with b < 360, k < 360.
+        half + (k + BINS - b) % BINS
+    }
+
+    /// Writes the mirrored `src` into `dst`: `dst[i] = src[source(i)]`.
+    pub fn apply(self, src: &ShapeVector, dst: &mut ShapeVector) {
+        for (i, d) in dst.iter_mut().enumerate() {
+            *d = src.get(self.source(i)).copied().unwrap_or(ShapeElem::ZERO);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests;

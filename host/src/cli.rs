@@ -138,6 +138,10 @@ pub enum Command {
     /// Quantise a float model to the int8 blob, or emit a blob as a Rust
     /// `static` for firmware (`--emit-rust`).
     Quantize(crate::classify::quant_cmd::QuantizeOptions),
+    /// Add per-class symmetry (the mirrors a class looks the same under,
+    /// for the mirror check) to an existing model blob, derived as `train`
+    /// derives it from the clean training silhouettes.
+    ModelSymmetry(crate::classify::symmetry_cmd::ModelSymmetryOptions),
     /// Print the core's working memory per stage and frame size, from its
     /// `const fn`s (`scratch <stage> <W>x<H> <bytes>` lines).
     Scratch,
@@ -263,6 +267,9 @@ pub fn run(cli: Cli) -> Result<Summary> {
         }
         Some(Command::Eval(opts)) => crate::classify::model_cmd::run_eval(&opts),
         Some(Command::Quantize(opts)) => crate::classify::quant_cmd::run_quantize(&opts),
+        Some(Command::ModelSymmetry(opts)) => {
+            crate::classify::symmetry_cmd::run_model_symmetry(&opts)
+        }
         Some(Command::Scratch) => Ok(scratch_summary()),
         Some(Command::SegmentEval {
             scenes,

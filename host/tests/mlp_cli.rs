@@ -210,11 +210,11 @@ fn train_and_eval_run_and_reject_bad_input() {
     corrupt[100] ^= 0x10;
     assert_one_line_error(&eval_blob(&corrupt), "corrupt: CRC-32");
     assert_one_line_error(&eval_blob(&blob[..blob.len() - 9]), "truncated");
-    let mut v2 = blob.clone();
-    v2[4] = 2;
+    let mut v3 = blob.clone();
+    v3[4] = 3;
     assert_one_line_error(
-        &eval_blob(&v2),
-        "model version 2, this build reads version 1",
+        &eval_blob(&v3),
+        "model version 3, this build reads versions 1 to 2",
     );
     assert_one_line_error(
         &eval_blob(b"{\"not\": \"a model\"}"),

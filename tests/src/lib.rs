@@ -363,6 +363,7 @@ pub mod nets {
                 delta_q16: 0,
                 names: &names,
                 meta: "",
+                symmetry: None,
             },
         )
         .expect("a valid network writes")

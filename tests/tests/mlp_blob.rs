@@ -2,13 +2,14 @@
 //! truncated or mutated bytes, and names each defect with a typed error.
 
 use proptest::prelude::*;
-use protogist::mlp::blob::{crc32, CRC_LEN};
+use protogist::mlp::blob::{crc32, CRC_LEN, VERSION, VERSION_1};
 use protogist::mlp::{
-    forward, identify, top_k, verify, Identity, MlpError, Model, ModelError, Ranked, Scratch, TOP_K,
+    forward, identify, mirror_check, mirror_outputs_len, top_k, verify, Identity, MirrorScratch,
+    MlpError, Model, ModelError, Ranked, Scratch, Symmetry, TOP_K,
 };
-use protogist::shape::ShapeElem;
+use protogist::shape::{Mirror, ShapeElem, SHAPE_LEN};
 use protogist_host::classify::mlp::Mlp;
-use protogist_host::classify::quant::{quantize_net, write_blob, BlobExtras};
+use protogist_host::classify::quant::{quantize_net, with_symmetry, write_blob, BlobExtras};
 
 /// A valid 9-5-3 blob.
 fn small_blob() -> Vec<u8> {
@@ -26,6 +27,33 @@ fn small_blob() -> Vec<u8> {
             delta_q16: 40_000,
             names: &names,
             meta: "test",
+            symmetry: None,
+        },
+    )
+    .unwrap()
+}
+
+/// A valid 720-4-3 blob with symmetry `flags` (version 2), or version 1.
+fn shape_blob(flags: Option<&[u8]>) -> Vec<u8> {
+    let net = Mlp::new(SHAPE_LEN, 4, 3, 5);
+    let calib: Vec<Vec<i16>> = (0..3)
+        .map(|i| {
+            (0..SHAPE_LEN)
+                .map(|j| ((i * 977 + j * 37) % 4001) as i16 - 2000)
+                .collect()
+        })
+        .collect();
+    let q = quantize_net(&net, &calib).unwrap();
+    let names: Vec<String> = ["a", "bb", "ccc"].map(String::from).to_vec();
+    let templates: Vec<u16> = (0..9).map(|i| 7000 * (i as u16 % 4) + 100).collect();
+    write_blob(
+        &q,
+        &BlobExtras {
+            templates: &templates,
+            delta_q16: 1000,
+            names: &names,
+            meta: "m",
+            symmetry: flags,
         },
     )
     .unwrap()
@@ -64,8 +92,132 @@ fn exercise(blob: &[u8]) {
         assert!(r[..n].windows(2).all(|w| w[0].score >= w[1].score));
         for c in 0..k {
             assert!(m.class_name(c).is_some());
+            assert!(m.symmetry(c).bits() < 4);
+        }
+        if d == SHAPE_LEN {
+            let mut v = vec![ShapeElem::ZERO; SHAPE_LEN];
+            let mut o = vec![0u16; mirror_outputs_len(k)];
+            let mut mean = vec![0u16; k];
+            let mut s = Scratch {
+                input: &mut xi,
+                hidden: &mut hi,
+                output: &mut yo,
+            };
+            let mut ms = MirrorScratch {
+                vector: &mut v,
+                outputs: &mut o,
+                mean: &mut mean,
+            };
+            let mut r2 = [Ranked::default(); TOP_K];
+            let n2 = mirror_check(&m, &input, &mut s, &mut ms, &mut r2).unwrap();
+            assert_eq!(n2, n);
+            if m.any_symmetry() == Symmetry::NONE {
+                assert_eq!(r2, r);
+            }
         }
     }
+}
+
+#[test]
+fn version_2_round_trips_and_version_1_still_parses() {
+    let v1 = shape_blob(None);
+    let m1 = Model::parse(&v1).unwrap();
+    assert_eq!(u16::from_le_bytes([v1[4], v1[5]]), VERSION_1);
+    assert!(!m1.has_symmetry_section());
+    assert_eq!(m1.any_symmetry(), Symmetry::NONE);
+    for c in 0..4 {
+        assert_eq!(m1.symmetry(c), Symmetry::NONE);
+    }
+    let flags = [1u8, 2, 3];
+    let v2 = shape_blob(Some(&flags));
+    assert_eq!(u16::from_le_bytes([v2[4], v2[5]]), VERSION);
+    assert_eq!(v2.len(), v1.len() + 3);
+    let m2 = Model::parse(&v2).unwrap();
+    assert!(m2.has_symmetry_section());
+    for (c, &f) in flags.iter().enumerate() {
+        assert_eq!(m2.symmetry(c).bits(), f);
+    }
+    assert_eq!(m2.symmetry(3), Symmetry::NONE);
+    assert!(m2.symmetry(0).has(Mirror::Vertical) && !m2.symmetry(0).has(Mirror::Horizontal));
+    assert!(m2.symmetry(1).has(Mirror::Horizontal) && !m2.symmetry(1).has(Mirror::Vertical));
+    assert_eq!(m2.any_symmetry().bits(), 3);
+    // Everything else as in version 1.
+    assert_eq!(
+        (
+            m2.inputs(),
+            m2.hidden(),
+            m2.classes(),
+            m2.delta_q16(),
+            m2.meta()
+        ),
+        (
+            m1.inputs(),
+            m1.hidden(),
+            m1.classes(),
+            m1.delta_q16(),
+            m1.meta()
+        )
+    );
+    assert_eq!(m2.class_name(2), Some("ccc"));
+    assert_eq!(m2.parameter_bytes(), m1.parameter_bytes());
+    // Adding flags to the v1 blob writes the same bytes; replacing them too.
+    assert_eq!(with_symmetry(&v1, &flags).unwrap(), v2);
+    assert_eq!(
+        with_symmetry(&shape_blob(Some(&[0, 0, 0])), &flags).unwrap(),
+        v2
+    );
+    assert!(with_symmetry(&v1, &flags[..2]).is_err());
+    // Same outputs either way.
+    let x = vec![ShapeElem::from_bits(-777); SHAPE_LEN];
+    let run = |m: &Model<'_>| {
+        let (mut xi, mut hi, mut yo) = (
+            vec![0u32; protogist::mlp::packed_len(SHAPE_LEN, 4)],
+            vec![0u8; 4],
+            vec![0u16; 3],
+        );
+        let mut s = Scratch {
+            input: &mut xi,
+            hidden: &mut hi,
+            output: &mut yo,
+        };
+        forward(m, &x, &mut s).unwrap().to_vec()
+    };
+    assert_eq!(run(&m1), run(&m2));
+}
+
+#[test]
+fn bad_symmetry_bytes_are_errors() {
+    let v2 = shape_blob(Some(&[1, 2, 3]));
+    // The section sits before the names (1+1, 1+2, 1+3 bytes), the meta
+    // ("m") and the CRC.
+    let at = v2.len() - CRC_LEN - 1 - 9 - 3;
+    assert_eq!(v2[at..at + 3], [1, 2, 3]);
+    for (i, bad) in [(0usize, 4u8), (2, 0x80), (1, 7)] {
+        let mut b = v2.clone();
+        b[at + i] = bad;
+        assert_eq!(
+            Model::parse(&fix_crc(b)),
+            Err(ModelError::BadSymmetry { index: i })
+        );
+    }
+    // A v1 blob labelled version 2 misses its section.
+    let mut relabelled = shape_blob(None);
+    relabelled[4] = 2;
+    assert!(matches!(
+        Model::parse(&fix_crc(relabelled)),
+        Err(ModelError::Truncated { .. })
+    ));
+    // Flags on a model that does not take 720-element shape vectors.
+    let small = small_blob();
+    assert!(with_symmetry(&small, &[0, 0, 0]).is_ok());
+    assert!(with_symmetry(&small, &[0, 1, 0]).is_err());
+    let mut b = with_symmetry(&small, &[0, 0, 0]).unwrap();
+    let at = b.len() - CRC_LEN - 4 - 17 - 3;
+    b[at + 1] = 2;
+    assert_eq!(
+        Model::parse(&fix_crc(b)),
+        Err(ModelError::BadSymmetry { index: 1 })
+    );
 }
 
 #[test]
@@ -239,6 +391,18 @@ proptest! {
     #[test]
     fn mutated_blobs_never_panic(at in 0usize..10_000, xor in 1u8..=255) {
         let mut b = small_blob();
+        let at = at % b.len();
+        b[at] ^= xor;
+        prop_assert!(Model::parse(&b).is_err());
+        exercise(&fix_crc(b));
+    }
+
+    /// The same for a version-2 blob of shape vectors, whose flags let the
+    /// mirror check run.
+    #[test]
+    fn mutated_v2_blobs_never_panic(at in 0usize..20_000, xor in 1u8..=255, flags in proptest::collection::vec(0u8..4, 3)) {
+        let mut b = shape_blob(Some(&flags));
+        exercise(&b);
         let at = at % b.len();
         b[at] ^= xor;
         prop_assert!(Model::parse(&b).is_err());

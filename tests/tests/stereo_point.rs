@@ -216,10 +216,13 @@ fn run_into_a_map_gives_the_cells_run_gives() {
 #[test]
 fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size() {
     let p = PipelineParams::ACCURATE;
-    // The default pipeline but for the stereo point's coarse levels.
+    // The default pipeline but for the stereo point's coarse levels and
+    // the mirror check.
+    assert!(p.mirror_check);
     assert_eq!(
         PipelineParams {
             stereo: STEREO_DEFAULT,
+            mirror_check: false,
             ..p
         },
         PipelineParams::DEFAULT

@@ -1,14 +1,19 @@
-//! The model blob (`PGML` version 1): a little-endian byte string parsed
-//! zero-copy into a [`Model`] that borrows its sections. The layout is
-//! documented field by field in `docs/MODEL_FORMAT.md`.
+//! The model blob (`PGML` versions 1 and 2): a little-endian byte string
+//! parsed zero-copy into a [`Model`] that borrows its sections. The layout
+//! is documented field by field in `docs/MODEL_FORMAT.md`. Version 2 adds,
+//! after the templates, one [`Symmetry`] byte per class: the mirrors under
+//! which the class looks the same (for the mirror check,
+//! [`super::mirror_check`]); a version-1 blob has no symmetry.
 //!
 //! Multi-byte fields are decoded with `from_le_bytes` on byte slices, so the
 //! blob may sit at any address (flash or RAM) and no `unsafe` is needed.
 
 /// The first four bytes of every model.
 pub const MAGIC: [u8; 4] = *b"PGML";
-/// The version this crate reads and writes.
-pub const VERSION: u16 = 1;
+/// The newest version, the one with per-class [`Symmetry`] bytes.
+pub const VERSION: u16 = 2;
+/// The first version (no symmetry section), still read.
+pub const VERSION_1: u16 = 1;
 /// Bytes of the fixed header.
 pub const HEADER_LEN: usize = 40;
 /// Bytes of the CRC-32 trailer.
@@ -169,6 +174,13 @@ pub enum ModelError {
     },
     /// The metadata section is not UTF-8.
     BadMeta,
+    /// Class `index`'s symmetry byte has bits other than 0 and 1 set, or
+    /// a mirror is flagged on a model whose input is not a
+    /// [`SHAPE_LEN`](crate::shape::SHAPE_LEN)-element shape vector.
+    BadSymmetry {
+        /// The class.
+        index: usize,
+    },
     /// An image input kind whose length `d` is not the kind's.
     InputLength {
         /// The input code.
@@ -193,7 +205,10 @@ impl core::fmt::Display for ModelError {
             }
             Self::BadMagic => write!(f, "not a protogist model (magic is not PGML)"),
             Self::UnsupportedVersion(v) => {
-                write!(f, "model version {v}, this build reads version {VERSION}")
+                write!(
+                    f,
+                    "model version {v}, this build reads versions {VERSION_1} to {VERSION}"
+                )
             }
             Self::UnsupportedFormat { field, code } => {
                 write!(f, "unsupported {field} format code {code}")
@@ -206,6 +221,7 @@ impl core::fmt::Display for ModelError {
             Self::BadRequant => write!(f, "a requantisation multiplier or shift is out of range"),
             Self::BadClassName { index } => write!(f, "class name {index} is bad"),
             Self::BadMeta => write!(f, "metadata is not UTF-8"),
+            Self::BadSymmetry { index } => write!(f, "symmetry byte of class {index} is bad"),
             Self::InputLength {
                 code,
                 expected,
@@ -250,6 +266,59 @@ const CRC_TABLE: [u32; 256] = {
     t
 };
 
+/// The mirrors ([`Mirror`]) under which a class looks the same, as the
+/// blob stores them: bit 0 the mirror about the vertical axis, bit 1 about
+/// the horizontal axis; the other bits are 0.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Symmetry(u8);
+
+impl Symmetry {
+    /// No mirror.
+    pub const NONE: Self = Self(0);
+    /// Bit of [`Mirror::Vertical`].
+    pub const VERTICAL: u8 = 1;
+    /// Bit of [`Mirror::Horizontal`].
+    pub const HORIZONTAL: u8 = 2;
+
+    /// The symmetry of a blob byte (`None` when another bit is set).
+    pub const fn from_bits(bits: u8) -> Option<Self> {
+        if bits & !(Self::VERTICAL | Self::HORIZONTAL) == 0 {
+            Some(Self(bits))
+        } else {
+            None
+        }
+    }
+
+    /// Its blob byte.
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+
+    /// The bit of `m`.
+    pub const fn bit(m: Mirror) -> u8 {
+        match m {
+            Mirror::Vertical => Self::VERTICAL,
+            Mirror::Horizontal => Self::HORIZONTAL,
+        }
+    }
+
+    /// Whether the class looks the same under `m`.
+    pub const fn has(self, m: Mirror) -> bool {
+        self.0 & Self::bit(m) != 0
+    }
+
+    /// This symmetry and `m`.
+    #[must_use]
+    pub const fn with(self, m: Mirror) -> Self {
+        Self(self.0 | Self::bit(m))
+    }
+
+    /// How many mirrors.
+    pub const fn count(self) -> u32 {
+        self.0.count_ones()
+    }
+}
+
 /// A parsed model: dimensions, the threshold and borrowed sections.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Model<'a> {
@@ -274,9 +343,13 @@ pub struct Model<'a> {
     pub(crate) w2: &'a [u8],
     /// `classes × classes` u16 templates.
     pub(crate) templates: &'a [u8],
+    /// One [`Symmetry`] byte per class (empty in a version-1 blob).
+    symmetry: &'a [u8],
     names: &'a [u8],
     meta: &'a str,
 }
+
+use crate::shape::Mirror;
 
 /// Little-endian reads that cannot panic.
 pub(crate) fn le_u16(b: &[u8], at: usize) -> u16 {
@@ -299,8 +372,24 @@ pub(crate) fn le_i32(b: &[u8], at: usize) -> i32 {
     le_u32(b, at) as i32
 }
 
+/// Bytes of the symmetry section of a blob of `version` with `k` classes.
+pub const fn symmetry_len(version: u16, k: usize) -> usize {
+    if version >= VERSION {
+        k
+    } else {
+        0
+    }
+}
+
 /// Section lengths in blob order, from the header fields.
-fn section_lengths(d: usize, h: usize, k: usize, names: usize, meta: usize) -> Option<[usize; 9]> {
+fn section_lengths(
+    version: u16,
+    d: usize,
+    h: usize,
+    k: usize,
+    names: usize,
+    meta: usize,
+) -> Option<[usize; 10]> {
     Some([
         h.checked_mul(8)?,
         k.checked_mul(8)?,
@@ -309,14 +398,23 @@ fn section_lengths(d: usize, h: usize, k: usize, names: usize, meta: usize) -> O
         h.checked_mul(d)?,
         k.checked_mul(h)?,
         k.checked_mul(k)?.checked_mul(2)?,
+        symmetry_len(version, k),
         names,
         meta,
     ])
 }
 
-/// The total blob length for these header fields (`None` on overflow).
-pub fn blob_len(d: usize, h: usize, k: usize, names: usize, meta: usize) -> Option<usize> {
-    section_lengths(d, h, k, names, meta)?
+/// The total length of a blob of `version` with these header fields
+/// (`None` on overflow).
+pub fn blob_len(
+    version: u16,
+    d: usize,
+    h: usize,
+    k: usize,
+    names: usize,
+    meta: usize,
+) -> Option<usize> {
+    section_lengths(version, d, h, k, names, meta)?
         .iter()
         .try_fold(HEADER_LEN + CRC_LEN, |a, &l| a.checked_add(l))
 }
@@ -332,7 +430,7 @@ impl<'a> Model<'a> {
     /// Parses and validates `blob` (see the module doc and
     /// `docs/MODEL_FORMAT.md`). Checks, in order: length of the header,
     /// magic, version, formats, dimensions, total length, CRC, requantisation
-    /// parameters, class names, metadata.
+    /// parameters, class names, metadata, symmetry bytes (version 2).
     ///
     /// # Errors
     /// [`ModelError`] naming the first failed check.
@@ -354,7 +452,7 @@ impl<'a> Model<'a> {
             });
         }
         let version = le_u16(blob, 4);
-        if version != VERSION {
+        if version != VERSION && version != VERSION_1 {
             return Err(ModelError::UnsupportedVersion(version));
         }
         let byte = |at: usize| blob.get(at).copied().unwrap_or(0);
@@ -389,8 +487,9 @@ impl<'a> Model<'a> {
         }
         let names_len = le_u32(blob, 32) as usize;
         let meta_len = le_u32(blob, 36) as usize;
-        let lens = section_lengths(d, h, k, names_len, meta_len).ok_or(ModelError::BadDims)?;
-        let needed = blob_len(d, h, k, names_len, meta_len).ok_or(ModelError::BadDims)?;
+        let lens =
+            section_lengths(version, d, h, k, names_len, meta_len).ok_or(ModelError::BadDims)?;
+        let needed = blob_len(version, d, h, k, names_len, meta_len).ok_or(ModelError::BadDims)?;
         if got < needed {
             return Err(ModelError::Truncated { needed, got });
         }
@@ -406,13 +505,13 @@ impl<'a> Model<'a> {
         if stored != computed {
             return Err(ModelError::BadCrc { stored, computed });
         }
-        let mut sections: [&[u8]; 9] = [&[]; 9];
+        let mut sections: [&[u8]; 10] = [&[]; 10];
         let mut at = HEADER_LEN;
         for (s, &l) in sections.iter_mut().zip(&lens) {
             *s = blob.get(at..at + l).ok_or(ModelError::BadDims)?;
             at += l;
         }
-        let [rq1, rq2, b1, b2, w1, w2, templates, names, meta] = sections;
+        let [rq1, rq2, b1, b2, w1, w2, templates, symmetry, names, meta] = sections;
         if !valid_rq(rq1) || !valid_rq(rq2) {
             return Err(ModelError::BadRequant);
         }
@@ -437,6 +536,14 @@ impl<'a> Model<'a> {
             return Err(ModelError::BadClassName { index: k });
         }
         let meta = core::str::from_utf8(meta).map_err(|_| ModelError::BadMeta)?;
+        // Mirrors permute a shape vector's bins: only such an input has them.
+        let mirrors = kind == InputKind::Shape && d == crate::shape::SHAPE_LEN;
+        for (index, &b) in symmetry.iter().enumerate() {
+            match Symmetry::from_bits(b) {
+                Some(s) if mirrors || s == Symmetry::NONE => {}
+                _ => return Err(ModelError::BadSymmetry { index }),
+            }
+        }
         Ok(Self {
             inputs: d,
             kind,
@@ -452,6 +559,7 @@ impl<'a> Model<'a> {
             w1,
             w2,
             templates,
+            symmetry,
             names,
             meta,
         })
@@ -535,6 +643,28 @@ impl<'a> Model<'a> {
         None
     }
 
+    /// The mirrors class `c` looks the same under ([`Symmetry::NONE`] in
+    /// a version-1 blob and out of range).
+    pub fn symmetry(&self, c: usize) -> Symmetry {
+        self.symmetry
+            .get(c)
+            .and_then(|&b| Symmetry::from_bits(b))
+            .unwrap_or(Symmetry::NONE)
+    }
+
+    /// The union of every class's symmetry: the mirrors the mirror check
+    /// runs the network on ([`Symmetry::NONE`]: the check is the plain
+    /// identification).
+    pub fn any_symmetry(&self) -> Symmetry {
+        let bits = self.symmetry.iter().fold(0u8, |a, &b| a | b);
+        Symmetry::from_bits(bits).unwrap_or(Symmetry::NONE)
+    }
+
+    /// Whether the blob has a symmetry section (version 2).
+    pub const fn has_symmetry_section(&self) -> bool {
+        !self.symmetry.is_empty()
+    }
+
     /// Template `v_c` (u16 per output), as its little-endian bytes.
     pub(crate) fn template(&self, c: usize) -> Option<&'a [u8]> {
         // `classes >= 1` (`parse`); `max` shows the compiler (no panic path).
@@ -563,8 +693,16 @@ mod tests {
         assert_eq!(Model::parse(b"GIF89a"), Err(ModelError::BadMagic));
         let mut b = [0u8; 44];
         b[..4].copy_from_slice(&MAGIC);
+        b[4] = 3;
+        assert_eq!(Model::parse(&b), Err(ModelError::UnsupportedVersion(3)));
         b[4] = 2;
-        assert_eq!(Model::parse(&b), Err(ModelError::UnsupportedVersion(2)));
+        assert!(matches!(
+            Model::parse(&b),
+            Err(ModelError::UnsupportedFormat {
+                field: "input",
+                code: 0
+            })
+        ));
         b[4] = 1;
         assert!(matches!(
             Model::parse(&b),

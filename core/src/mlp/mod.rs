@@ -50,11 +50,16 @@
 pub mod blob;
 mod kernel;
 pub mod logsig_table;
+pub mod mirror;
 pub mod requant;
 mod rules;
 
-pub use blob::{crc32, InputKind, Model, ModelError};
+pub use blob::{crc32, InputKind, Model, ModelError, Symmetry};
 pub use kernel::{safe_dot_rows, MacKernel, SafeKernel};
+pub use mirror::{
+    mirror_check, mirror_check_with, mirror_mean, mirror_mean_len, mirror_outputs_len,
+    mirror_scratch_bytes, mirror_top_k, MirrorScratch, MIRROR_VIEWS,
+};
 pub use rules::{cosine_q16, identify, scores, top_k, verify};
 
 use crate::shape::ShapeElem;

@@ -57,9 +57,23 @@ pub fn top_k(model: &Model<'_>, outputs: &[u16], ranked: &mut [Ranked]) -> Resul
             got: outputs.len(),
         });
     }
+    Ok(rank_by(
+        k,
+        |c| model.template(c).map_or(0, |t| cosine_q16(outputs, t)),
+        ranked,
+    ))
+}
+
+/// The best `ranked.len()` of `classes` classes by `score(c)`, best first,
+/// ties to the lower class; returns how many entries were filled.
+pub(crate) fn rank_by(
+    classes: usize,
+    mut score: impl FnMut(usize) -> u32,
+    ranked: &mut [Ranked],
+) -> usize {
     let mut filled = 0usize;
-    for c in 0..k {
-        let score = model.template(c).map_or(0, |t| cosine_q16(outputs, t));
+    for c in 0..classes {
+        let score = score(c);
         let entry = Ranked {
             class: c as u16,
             score,
@@ -84,7 +98,7 @@ pub fn top_k(model: &Model<'_>, outputs: &[u16], ranked: &mut [Ranked]) -> Resul
         }
         filled = (filled + 1).min(ranked.len());
     }
-    Ok(filled)
+    filled
 }
 
 /// Identification: the best class if its score reaches `Δ`, else

@@ -101,7 +101,8 @@ pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) 
         }
 }
 
-/// Bytes of segmentation and of the classifier's activations.
+/// Bytes of segmentation and of the classifier's activations (with the
+/// mirror check's [`mirror_bytes`]).
 pub const fn object_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
     let m = &params.model;
     bytes(maps_len(width, height), 4)
@@ -109,6 +110,20 @@ pub const fn object_bytes(width: usize, height: usize, params: &PipelineParams) 
         + bytes(mlp::packed_len(SHAPE_LEN, m.hidden as usize), 4)
         + bytes(mlp::hidden_len(m.hidden as usize), 1)
         + bytes(mlp::output_len(m.classes as usize), 2)
+        + mirror_bytes(params)
+}
+
+/// Bytes of the mirror check's buffers ([`mlp::MirrorScratch`]; 0 when
+/// [`PipelineParams::mirror_check`] is off).
+pub const fn mirror_bytes(params: &PipelineParams) -> usize {
+    let k = params.model.classes as usize;
+    if params.mirror_check {
+        bytes(SHAPE_LEN, size_of::<ShapeElem>())
+            + bytes(mlp::mirror_outputs_len(k), 2)
+            + bytes(mlp::mirror_mean_len(k), 2)
+    } else {
+        0
+    }
 }
 
 const fn max(a: usize, b: usize) -> usize {

@@ -101,6 +101,14 @@ pub struct PipelineParams {
     pub delta_q16: Option<u32>,
     /// The largest classifier the workspace holds.
     pub model: ModelCapacity,
+    /// The mirror check ([`crate::mlp::mirror`]): also run the classifier
+    /// on each object's mirror images that some class looks the same
+    /// under (the model's per-class symmetry) and score each class on its
+    /// mean output over the object and its own mirrors. Up to two more
+    /// forward passes per object (about 0.28 M M4 instructions each with
+    /// the shipped 720-256-19 model) and [`crate::mlp::mirror_scratch_bytes`]
+    /// of workspace; nothing changes with a model without symmetry.
+    pub mirror_check: bool,
 }
 
 /// The stereo point the pipeline runs by default,
@@ -128,6 +136,7 @@ impl PipelineParams {
             hidden: 2048,
             classes: 64,
         },
+        mirror_check: false,
     };
 
     /// The default: [`PipelineParams::PAPER`] without the foreground
@@ -177,9 +186,12 @@ impl PipelineParams {
     /// 2.4 times the default's M4 instructions a 160x120 frame (76.4 M
     /// against 32.2 M, the product's budget 32 M) and 3,168 B more
     /// workspace there: a setting for boards with several times the
-    /// cycles. Two decoder tables, levels 0 and 1 of the default's.
+    /// cycles. Two decoder tables, levels 0 and 1 of the default's. With
+    /// the mirror check ([`PipelineParams::mirror_check`]), which the
+    /// default's budget has no room for.
     pub const ACCURATE: Self = Self {
         stereo: C2fParams::HALF_NARROW_FULL_SEARCH,
+        mirror_check: true,
         ..Self::DEFAULT
     };
 
@@ -216,6 +228,13 @@ impl PipelineParams {
     #[must_use]
     pub const fn with_max_disp(mut self, d: u8) -> Self {
         self.stereo.dem.max_disp = d;
+        self
+    }
+
+    /// These parameters with the mirror check on or off.
+    #[must_use]
+    pub const fn with_mirror_check(mut self, on: bool) -> Self {
+        self.mirror_check = on;
         self
     }
 

@@ -12,7 +12,7 @@ use crate::complete::{
 use crate::conspicuity::{self, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut, Rgb8};
-use crate::mlp::{self, Identity, Ranked, Scratch};
+use crate::mlp::{self, Identity, MirrorScratch, Ranked, Scratch};
 use crate::segment::{
     bit_map_len, maps_len, segment_with_depth_pass, table_len, BitView, Masks, SegmentBuffers,
     SegmentObserver,
@@ -262,6 +262,16 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
         hidden: s.take(mlp::hidden_len(m.hidden()))?,
         output: s.take(mlp::output_len(m.classes()))?,
     };
+    let mut mirror = if params.mirror_check {
+        let k = usize::from(params.model.classes);
+        Some(MirrorScratch {
+            vector: s.take(SHAPE_LEN)?,
+            outputs: s.take(mlp::mirror_outputs_len(k))?,
+            mean: s.take(mlp::mirror_mean_len(k))?,
+        })
+    } else {
+        None
+    };
     let mut objects = heapless::Vec::new();
     for &(search, centroid) in &shaped {
         let Some(det) = report.objects.get(search) else {
@@ -273,9 +283,14 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
         let v = vectors
             .get(search * SHAPE_LEN..(search + 1) * SHAPE_LEN)
             .unwrap_or(&[]);
-        let outputs = mlp::forward_with::<K>(m, v, &mut scratch)?;
         let mut top = [Ranked::default(); TOP_K];
-        let filled = mlp::top_k(m, outputs, &mut top)?;
+        let filled = match mirror.as_mut() {
+            Some(mirror) => mlp::mirror_check_with::<K>(m, v, &mut scratch, mirror, &mut top)?,
+            None => {
+                let outputs = mlp::forward_with::<K>(m, v, &mut scratch)?;
+                mlp::top_k(m, outputs, &mut top)?
+            }
+        };
         let identity = match top.first() {
             Some(b) if filled > 0 && b.score >= p.delta_q16 => Identity::Known(b.class),
             _ => Identity::Unknown,

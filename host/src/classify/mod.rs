@@ -32,6 +32,7 @@ pub mod dataset;
 pub mod eval_set;
 pub mod families;
 pub mod metrics;
+pub mod mirror;
 pub mod mlp;
 pub mod model;
 pub mod model_cmd;
@@ -45,6 +46,7 @@ pub mod quant_cmd;
 pub mod rules;
 pub mod shapes;
 pub mod shipped;
+pub mod symmetry_cmd;
 pub mod train;
 pub mod train_cmd;
 
@@ -105,6 +107,9 @@ pub enum ClassifyError {
     /// The integer network rejected its input.
     #[error("integer network: {0}")]
     Mlp(#[from] protogist::mlp::MlpError),
+    /// A model blob does not parse.
+    #[error("model blob: {0}")]
+    Model(#[from] protogist::mlp::ModelError),
     /// A rate (FAR target, ...) outside `[0, 1]`.
     #[error("rate {0} is outside [0, 1]")]
     BadRate(f64),

@@ -1,6 +1,13 @@
 //! Post-training quantisation of the float network into the core's int8
-//! model blob (`PGML` v1, docs/MODEL_FORMAT.md), and host-side helpers
-//! around the core's integer inference.
+//! model blob (`PGML` v1, or v2 with per-class symmetry bytes;
+//! docs/MODEL_FORMAT.md), and host-side helpers around the core's integer
+//! inference.
+//!
+//! **Symmetry.** Class `c` is taken as symmetric under a mirror when the
+//! quantised model names at least [`SYMMETRY_MIN_AGREEMENT`] of the
+//! mirrored shape vectors of `c`'s clean training silhouettes as `c`
+//! (plain identification, Δ included; [`derive_symmetry`]); the flags go
+//! into a version-2 blob ([`with_symmetry`]).
 //!
 //! **Scales.**
 //! * input: `s_x = max |x| / 127` over every element of every training
@@ -23,11 +30,13 @@ use super::metrics::Det;
 use super::mlp::Mlp;
 use super::ClassifyError;
 use protogist::mlp::blob::{
-    blob_len, crc32, InputKind, Model, ModelError, HEADER_LEN, HIDDEN_U8, MAGIC, MAX_CLASSES,
-    MAX_NAME_LEN, OUTPUT_U16, VERSION, WEIGHTS_I8_PER_CHANNEL,
+    blob_len, crc32, InputKind, Model, ModelError, Symmetry, CRC_LEN, HEADER_LEN, HIDDEN_U8, MAGIC,
+    MAX_CLASSES, MAX_NAME_LEN, OUTPUT_U16, VERSION, VERSION_1, WEIGHTS_I8_PER_CHANNEL,
 };
-use protogist::mlp::{forward, hidden_len, output_len, packed_len, scores, Scratch};
-use protogist::shape::ShapeElem;
+use protogist::mlp::{
+    forward, hidden_len, identify, output_len, packed_len, scores, Identity, Scratch,
+};
+use protogist::shape::{Mirror, ShapeElem, ShapeVector, SHAPE_LEN};
 use rayon::prelude::*;
 
 /// Q12: the pre-activation format the requantisation targets.
@@ -189,9 +198,13 @@ pub struct BlobExtras<'a> {
     pub names: &'a [String],
     /// Free-form metadata.
     pub meta: &'a str,
+    /// One symmetry byte per class ([`Symmetry::bits`]): a version-2
+    /// blob; `None` writes version 1.
+    pub symmetry: Option<&'a [u8]>,
 }
 
-/// Serialises a network and its extras into a `PGML` v1 blob.
+/// Serialises a network and its extras into a `PGML` blob: version 2 with
+/// [`BlobExtras::symmetry`], else version 1.
 ///
 /// # Errors
 /// [`ClassifyError`] for a name that is empty or longer than 64 bytes, or
@@ -242,13 +255,28 @@ pub fn write_blob_as(
             got: x.names[index].len(),
         });
     }
+    if let Some(sym) = x.symmetry {
+        if sym.len() != k {
+            return Err(ClassifyError::DimensionMismatch {
+                index: 0,
+                expected: k,
+                got: sym.len(),
+            });
+        }
+    }
+    let version = if x.symmetry.is_some() {
+        VERSION
+    } else {
+        VERSION_1
+    };
     let names_len: usize = x.names.iter().map(|n| 1 + n.len()).sum();
-    let total = blob_len(d, h, k, names_len, x.meta.len()).ok_or(ClassifyError::Empty {
-        what: "a model small enough for the format",
-    })?;
+    let total =
+        blob_len(version, d, h, k, names_len, x.meta.len()).ok_or(ClassifyError::Empty {
+            what: "a model small enough for the format",
+        })?;
     let mut b = Vec::with_capacity(total);
     b.extend_from_slice(&MAGIC);
-    b.extend_from_slice(&VERSION.to_le_bytes());
+    b.extend_from_slice(&version.to_le_bytes());
     b.extend_from_slice(&[kind.code(), WEIGHTS_I8_PER_CHANNEL, HIDDEN_U8, OUTPUT_U16]);
     for n in [d, h, k] {
         b.extend_from_slice(&(n as u16).to_le_bytes());
@@ -277,6 +305,9 @@ pub fn write_blob_as(
     }
     for &t in x.templates {
         b.extend_from_slice(&t.to_le_bytes());
+    }
+    if let Some(sym) = x.symmetry {
+        b.extend_from_slice(sym);
     }
     for n in x.names {
         b.push(n.len() as u8);
@@ -428,6 +459,7 @@ pub fn quantize_as(
         delta_q16: 0,
         names,
         meta,
+        symmetry: None,
     })?;
     let model = Model::parse(&draft).map_err(|_| ClassifyError::Empty {
         what: "a well-formed draft model",
@@ -439,6 +471,7 @@ pub fn quantize_as(
         delta_q16: 0,
         names,
         meta,
+        symmetry: None,
     })?;
     let model = Model::parse(&with_templates).map_err(|_| ClassifyError::Empty {
         what: "a well-formed draft model",
@@ -460,16 +493,162 @@ pub fn quantize_as(
         delta_q16,
         names,
         meta,
+        symmetry: None,
     })
+}
+
+/// The least share of a class's mirrored training vectors the model must
+/// name as the class for the class to count as symmetric under the mirror.
+pub const SYMMETRY_MIN_AGREEMENT: f64 = 0.9;
+
+/// Per class and mirror ([`Mirror::ALL`] order), the share of the class's
+/// vectors (`inputs`, labelled `labels`) whose mirror image `model` names
+/// as the class (plain identification: best cosine, reaching Δ).
+///
+/// # Errors
+/// [`ClassifyError::DimensionMismatch`] when the model does not take
+/// 720-element shape vectors or a vector is not 720 long,
+/// [`ClassifyError::LabelOutOfRange`], [`ClassifyError::EmptyClass`].
+pub fn mirror_agreement(
+    model: &Model<'_>,
+    inputs: &[Vec<i16>],
+    labels: &[usize],
+) -> Result<Vec<[f64; 2]>, ClassifyError> {
+    let (d, h, k) = (model.inputs(), model.hidden(), model.classes());
+    if d != SHAPE_LEN || model.input_kind() != InputKind::Shape {
+        return Err(ClassifyError::DimensionMismatch {
+            index: 0,
+            expected: SHAPE_LEN,
+            got: d,
+        });
+    }
+    let hits: Vec<[bool; 2]> = inputs
+        .par_iter()
+        .zip(labels)
+        .enumerate()
+        .map_init(
+            || {
+                (
+                    vec![0u32; packed_len(d, h)],
+                    vec![0u8; hidden_len(h)],
+                    vec![0u16; output_len(k)],
+                )
+            },
+            |(i, hd, o), (index, (raw, &c))| {
+                let x: ShapeVector = shape_elems(raw).try_into().map_err(|v: Vec<ShapeElem>| {
+                    ClassifyError::DimensionMismatch {
+                        index,
+                        expected: SHAPE_LEN,
+                        got: v.len(),
+                    }
+                })?;
+                let mut hit = [false; 2];
+                for (m, hit) in Mirror::ALL.into_iter().zip(&mut hit) {
+                    let mut v = [ShapeElem::ZERO; SHAPE_LEN];
+                    m.apply(&x, &mut v);
+                    let mut s = Scratch {
+                        input: i,
+                        hidden: hd,
+                        output: o,
+                    };
+                    let out = forward(model, &v, &mut s)?;
+                    *hit = identify(model, out)?.0 == Identity::Known(c as u16);
+                }
+                Ok(hit)
+            },
+        )
+        .collect::<Result<_, ClassifyError>>()?;
+    let mut counts = vec![(0usize, [0usize; 2]); k];
+    for (hit, &c) in hits.iter().zip(labels) {
+        let e = counts.get_mut(c).ok_or(ClassifyError::LabelOutOfRange {
+            label: c,
+            classes: k,
+        })?;
+        e.0 += 1;
+        for (n, &h) in e.1.iter_mut().zip(hit) {
+            *n += usize::from(h);
+        }
+    }
+    counts
+        .iter()
+        .enumerate()
+        .map(|(class, &(n, hits))| {
+            if n == 0 {
+                return Err(ClassifyError::EmptyClass { class });
+            }
+            Ok(hits.map(|h| h as f64 / n as f64))
+        })
+        .collect()
+}
+
+/// The symmetry byte of each class from [`mirror_agreement`]: a mirror's
+/// bit when at least [`SYMMETRY_MIN_AGREEMENT`] of the class's mirrored
+/// vectors are named as the class.
+///
+/// # Errors
+/// As [`mirror_agreement`].
+pub fn derive_symmetry(
+    model: &Model<'_>,
+    inputs: &[Vec<i16>],
+    labels: &[usize],
+) -> Result<Vec<u8>, ClassifyError> {
+    Ok(mirror_agreement(model, inputs, labels)?
+        .iter()
+        .map(|rates| {
+            Mirror::ALL
+                .into_iter()
+                .zip(rates)
+                .filter(|&(_, &r)| r >= SYMMETRY_MIN_AGREEMENT)
+                .fold(Symmetry::NONE, |s, (m, _)| s.with(m))
+                .bits()
+        })
+        .collect())
+}
+
+/// `blob` (version 1 or 2) as a version-2 blob with the symmetry bytes
+/// `symmetry` (one per class); every other byte as it was, the CRC
+/// recomputed.
+///
+/// # Errors
+/// [`ClassifyError::Model`] when `blob` or the result does not parse (a
+/// flag on a model that does not take shape vectors),
+/// [`ClassifyError::DimensionMismatch`] for a count other than the
+/// classes.
+pub fn with_symmetry(blob: &[u8], symmetry: &[u8]) -> Result<Vec<u8>, ClassifyError> {
+    let m = Model::parse(blob)?;
+    let (d, h, k) = (m.inputs(), m.hidden(), m.classes());
+    if symmetry.len() != k {
+        return Err(ClassifyError::DimensionMismatch {
+            index: 0,
+            expected: k,
+            got: symmetry.len(),
+        });
+    }
+    let at = HEADER_LEN + 12 * h + 12 * k + h * d + k * h + 2 * k * k;
+    let old = if m.has_symmetry_section() { k } else { 0 };
+    let body = &blob[..blob.len() - CRC_LEN];
+    let mut b = Vec::with_capacity(body.len() + k + CRC_LEN);
+    b.extend_from_slice(&body[..at]);
+    b.extend_from_slice(symmetry);
+    b.extend_from_slice(&body[at + old..]);
+    b[4..6].copy_from_slice(&VERSION.to_le_bytes());
+    let crc = crc32(&b);
+    b.extend_from_slice(&crc.to_le_bytes());
+    Model::parse(&b)?;
+    Ok(b)
 }
 
 /// A Rust source file holding `blob` as `pub static MODEL: [u8; N]`.
 pub fn emit_rust(blob: &[u8], what: &str) -> String {
     let mut s = format!(
         "//! Generated by `protogist quantize --emit-rust`: {what}.\n\
-         //! A `PGML` v{VERSION} model blob (docs/MODEL_FORMAT.md); parse it with\n\
+         //! A `PGML` v{} model blob (docs/MODEL_FORMAT.md); parse it with\n\
          //! `protogist::mlp::Model::parse(&MODEL)`.\n\n\
          /// The model blob, {} bytes.\n#[rustfmt::skip]\npub static MODEL: [u8; {}] = [\n",
+        u16::from_le_bytes([
+            blob.get(4).copied().unwrap_or(0),
+            blob.get(5).copied().unwrap_or(0)
+        ]),
         blob.len(),
         blob.len()
     );

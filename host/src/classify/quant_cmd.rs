@@ -99,7 +99,14 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
                 .unzip(),
         };
         let meta = super::model_cmd::train_meta(&file, dir);
-        quantize(&net, &calib, &labels, &file.classes, &meta)?
+        let blob = quantize(&net, &calib, &labels, &file.classes, &meta)?;
+        // As `train`: the symmetry from the clean training silhouettes.
+        let clean: Vec<&super::dataset::Sample> = ds
+            .samples
+            .iter()
+            .filter(|s| train.contains(s.key.as_str()))
+            .collect();
+        super::symmetry_cmd::add_symmetry(&blob, &clean)?.0
     } else {
         return Err(bad_model(
             &opts.model,

@@ -207,6 +207,11 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
         &ds.classes,
         &train_meta(&model, &opts.dataset),
     )?;
+    // The symmetry of each class, from the quantised model and the class's
+    // clean training silhouettes (docs/MODEL_FORMAT.md, version 2).
+    let clean_train = clean_split(false);
+    let (blob, symmetry) =
+        super::symmetry_cmd::add_symmetry(&blob, &clean_train.iter().collect::<Vec<_>>())?;
     let model = ModelFile {
         blob_crc32: Some(protogist::mlp::blob::crc32(&blob)),
         ..model
@@ -283,6 +288,10 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
             pc(int8_top1(&qm, held.samples.iter().map(|(_, s)| s))?),
         );
     }
+    s.push(
+        "symmetry (V, H: named as the class when mirrored)",
+        super::symmetry_cmd::describe(&qm, &symmetry),
+    );
     s.push(
         "model",
         format!(

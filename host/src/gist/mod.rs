@@ -50,6 +50,10 @@ pub struct GistEvalOptions {
     /// `protogist::pipeline::PipelineParams::NAMED`).
     #[arg(long, default_value = "default")]
     pub preset: String,
+    /// The mirror check (`PipelineParams::mirror_check`, the model's
+    /// per-class symmetry) on or off, whatever the preset says.
+    #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
+    pub mirror_check: Option<bool>,
     /// Which chain runs.
     #[arg(long, value_enum, default_value = "core")]
     pub mode: Mode,
@@ -61,6 +65,15 @@ pub struct GistEvalOptions {
     pub out: PathBuf,
 }
 
+/// `on` or `off`.
+fn parse_on_off(s: &str) -> std::result::Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("{s:?}: on or off")),
+    }
+}
+
 /// `report.json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
@@ -70,6 +83,8 @@ pub struct Report {
     pub mode: Mode,
     /// The pipeline's named setting (`--preset`).
     pub preset: String,
+    /// Whether the mirror check ran (the preset's, or `--mirror-check`).
+    pub mirror_check: bool,
     /// The scene set.
     pub scenes_dir: String,
     /// The model file.
@@ -192,7 +207,10 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
     check_classes(&set, &opts.model, &names)?;
     ensure_dir(&opts.out)?;
 
-    let preset = crate::product::preset(&opts.preset)?;
+    let mut preset = crate::product::preset(&opts.preset)?;
+    if let Some(on) = opts.mirror_check {
+        preset = preset.with_mirror_check(on);
+    }
     let shared = Shared {
         preset,
         segment: SegmentParams {
@@ -248,6 +266,7 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
         format: REPORT_FORMAT,
         mode: opts.mode,
         preset: opts.preset.clone(),
+        mirror_check: shared.preset.mirror_check,
         scenes_dir: opts.scenes.display().to_string(),
         model: opts.model.display().to_string(),
         max_objects: opts.objects,
@@ -265,12 +284,13 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
     write_atomic(&report_path, format!("{json}\n").as_bytes())?;
 
     let mut s = Summary::new(format!(
-        "protogist gist-eval: {} scenes of {}, mode {}, K = {}, preset {}",
+        "protogist gist-eval: {} scenes of {}, mode {}, K = {}, preset {}, mirror check {}",
         report.overall.scenes,
         opts.scenes.display(),
         opts.mode.name(),
         opts.objects,
-        opts.preset
+        opts.preset,
+        if report.mirror_check { "on" } else { "off" }
     ));
     push_totals(&mut s, "all scenes", &report.overall);
     for (n, t) in &report.by_objects {

@@ -1,0 +1,572 @@
+//! The mirror check (`protogist::mlp::mirror`, docs/CLASSIFY.md "The
+//! mirror check"): mirrors as permutations of the shape vector, per-class
+//! averaging by the model's symmetry, the pipeline switch, the symmetry
+//! derived from training silhouettes, and the float reference.
+
+use proptest::prelude::*;
+use protogist::image::{ImageView, ImageViewMut, Rgb8};
+use protogist::mlp::{
+    forward, mirror_check, mirror_mean, mirror_outputs_len, mirror_top_k, scores, top_k,
+    MirrorScratch, MlpError, Model, Ranked, Scratch, Symmetry, MIRROR_VIEWS, TOP_K,
+};
+use protogist::pipeline::{workspace_words, Pipeline, PipelineParams};
+use protogist::shape::{
+    shape_vector, Mirror, RadialProfile, ShapeElem, ShapeVector, BINS, SHAPE_LEN,
+};
+use protogist::synth::{render_left, render_right, SceneSpec};
+use protogist_host::classify::mirror as fref;
+use protogist_host::classify::mlp::{unit, Mlp, SplitMix};
+use protogist_host::classify::quant::{
+    output_error_bound, quantize_net, shape_elems, with_symmetry, write_blob, BlobExtras,
+};
+use protogist_host::classify::rules::Templates;
+use protogist_tests::nets::random_net;
+
+const MODEL: &[u8] = include_bytes!("../../host/data/shapes_model.bin");
+
+/// An asymmetric blob (a tilted, off-centre L with a notch and a disc),
+/// 41x41, as the tta26 probe drew it.
+fn blob(x: i32, y: i32) -> bool {
+    let (u, v) = (x - 20, 20 - y);
+    let l = (-12..=10).contains(&u) && (-12..=-4).contains(&v)
+        || (-12..=-5).contains(&u) && (-12..=14).contains(&v);
+    l && !(u == 3 && v == -8) || (u - 8).pow(2) + (v - 6).pow(2) <= 9
+}
+
+fn vector(f: impl Fn(i32, i32) -> bool) -> ShapeVector {
+    let px: Vec<u8> = (0..41 * 41).map(|i| u8::from(f(i % 41, i / 41))).collect();
+    let mask = ImageView::packed(&px, 41, 41).unwrap();
+    let mut p = RadialProfile::new();
+    let mut v = [ShapeElem::ZERO; SHAPE_LEN];
+    shape_vector(&mask, &mut p, &mut v).unwrap();
+    v
+}
+
+fn mirrored(m: Mirror, x: &ShapeVector) -> ShapeVector {
+    let mut v = [ShapeElem::ZERO; SHAPE_LEN];
+    m.apply(x, &mut v);
+    v
+}
+
+fn mean_abs(a: &ShapeVector, b: &ShapeVector) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| (*a - *b).abs().to_num::<f32>())
+        .sum::<f32>()
+        / SHAPE_LEN as f32
+}
+
+#[test]
+fn mirrors_are_involutive_permutations() {
+    for m in Mirror::ALL {
+        let mut seen = [false; SHAPE_LEN];
+        for i in 0..SHAPE_LEN {
+            let s = m.source(i);
+            assert!(s < SHAPE_LEN);
+            // Within its half (max radii stay max radii).
+            assert_eq!(s / BINS, i / BINS, "{m:?} {i}");
+            assert_eq!(m.source(s), i, "{m:?} is its own inverse at {i}");
+            seen[s] = true;
+        }
+        assert!(seen.iter().all(|&s| s), "{m:?} is a permutation");
+    }
+    // Bin 180 (0°, right) goes to bin 359 (179°, left) under V and stays
+    // under H; bin 270 (90°, up) goes to 89 (−91°) under H, stays under V.
+    assert_eq!(Mirror::Vertical.source(180), 359);
+    assert_eq!(Mirror::Horizontal.source(180), 179);
+    assert_eq!(Mirror::Vertical.source(269), 270);
+    assert_eq!(Mirror::Horizontal.source(270), 89);
+    // V then H is the half turn: bin b + 180.
+    for i in 0..SHAPE_LEN {
+        let vh = Mirror::Vertical.source(Mirror::Horizontal.source(i));
+        assert_eq!(vh, i / BINS * BINS + (i % BINS + 180) % BINS);
+    }
+    let x = vector(blob);
+    for m in Mirror::ALL {
+        assert_eq!(
+            mirrored(m, &mirrored(m, &x)),
+            x,
+            "{m:?} twice is the identity"
+        );
+        assert_ne!(mirrored(m, &x), x);
+    }
+}
+
+#[test]
+fn mirrors_agree_with_really_mirrored_masks() {
+    let x = vector(blob);
+    for (m, w) in [
+        (Mirror::Vertical, vector(|x, y| blob(40 - x, y))),
+        (Mirror::Horizontal, vector(|x, y| blob(x, 40 - y))),
+    ] {
+        let good = mean_abs(&mirrored(m, &x), &w);
+        let other = Mirror::ALL.into_iter().find(|&o| o != m).unwrap();
+        let wrong = mean_abs(&mirrored(other, &x), &w);
+        let bad = mean_abs(&x, &w);
+        eprintln!("{m:?}: mapped {good:.4}, other mirror {wrong:.4}, unmapped {bad:.4}");
+        assert!(
+            good < 0.05 && good * 5.0 < bad && good * 5.0 < wrong,
+            "{m:?}"
+        );
+    }
+}
+
+/// The shipped model with symmetry `flags` (one byte per class).
+fn with_flags(flags: &[u8]) -> Vec<u8> {
+    with_symmetry(MODEL, flags).unwrap()
+}
+
+/// Shape vectors of a few real masks and their mirrors.
+fn probes() -> Vec<ShapeVector> {
+    let mut out = vec![vector(blob)];
+    for (a, b) in [(9, 4), (5, 12), (14, 7)] {
+        out.push(vector(|x, y| {
+            let (u, v) = (x - 20, y - 20);
+            (u * u * b + v * v * a <= 12 * a * b) || (u > 0 && v.abs() < 2 && u < 18)
+        }));
+    }
+    let m: Vec<ShapeVector> = out
+        .iter()
+        .flat_map(|x| Mirror::ALL.map(|m| mirrored(m, x)))
+        .collect();
+    out.extend(m);
+    out
+}
+
+struct Bufs {
+    xi: Vec<u32>,
+    hi: Vec<u8>,
+    yo: Vec<u16>,
+    v: Vec<ShapeElem>,
+    o: Vec<u16>,
+    mean: Vec<u16>,
+}
+
+impl Bufs {
+    fn new(m: &Model<'_>) -> Self {
+        let (d, h, k) = (m.inputs(), m.hidden(), m.classes());
+        Self {
+            xi: vec![0; protogist::mlp::packed_len(d, h)],
+            hi: vec![0; h],
+            yo: vec![0; k],
+            v: vec![ShapeElem::ZERO; SHAPE_LEN],
+            o: vec![0; mirror_outputs_len(k)],
+            mean: vec![0; k],
+        }
+    }
+
+    fn plain(&mut self, m: &Model<'_>, x: &[ShapeElem]) -> (Vec<u16>, Vec<Ranked>) {
+        let mut s = Scratch {
+            input: &mut self.xi,
+            hidden: &mut self.hi,
+            output: &mut self.yo,
+        };
+        let out = forward(m, x, &mut s).unwrap().to_vec();
+        let mut r = [Ranked::default(); TOP_K];
+        let n = top_k(m, &out, &mut r).unwrap();
+        (out, r[..n].to_vec())
+    }
+
+    fn check(&mut self, m: &Model<'_>, x: &[ShapeElem]) -> Vec<Ranked> {
+        let mut s = Scratch {
+            input: &mut self.xi,
+            hidden: &mut self.hi,
+            output: &mut self.yo,
+        };
+        let mut ms = MirrorScratch {
+            vector: &mut self.v,
+            outputs: &mut self.o,
+            mean: &mut self.mean,
+        };
+        let mut r = [Ranked::default(); TOP_K];
+        let n = mirror_check(m, x, &mut s, &mut ms, &mut r).unwrap();
+        r[..n].to_vec()
+    }
+}
+
+#[test]
+fn without_symmetry_the_check_is_plain_identification() {
+    let v1 = Model::parse(MODEL).unwrap();
+    assert!(!v1.has_symmetry_section());
+    let zeros = with_flags(&vec![0; v1.classes()]);
+    let v2 = Model::parse(&zeros).unwrap();
+    assert!(v2.has_symmetry_section());
+    let mut b = Bufs::new(&v1);
+    for x in probes() {
+        let (_, plain) = b.plain(&v1, &x);
+        assert_eq!(b.check(&v1, &x), plain);
+        assert_eq!(b.check(&v2, &x), plain);
+        assert_eq!(b.plain(&v2, &x).1, plain);
+    }
+}
+
+/// The check against its definition: the network on x, V(x), H(x), per
+/// class the rounded mean over x and the class's mirrors, its cosine with
+/// the class's template.
+#[test]
+fn the_check_scores_each_class_on_its_own_mirrors() {
+    let k = Model::parse(MODEL).unwrap().classes();
+    // Every combination of flags over the classes.
+    let flags: Vec<u8> = (0..k).map(|c| (c % 4) as u8).collect();
+    let blob = with_flags(&flags);
+    let m = Model::parse(&blob).unwrap();
+    let mut b = Bufs::new(&m);
+    let mut changed = 0;
+    for x in probes() {
+        let views: Vec<Vec<u16>> = [
+            x,
+            mirrored(Mirror::Vertical, &x),
+            mirrored(Mirror::Horizontal, &x),
+        ]
+        .iter()
+        .map(|v| b.plain(&m, v).0)
+        .collect();
+        let mut want: Vec<(u32, u16)> = (0..k)
+            .map(|c| {
+                let s = Symmetry::from_bits(flags[c]).unwrap();
+                let mut rows = vec![&views[0]];
+                if s.has(Mirror::Vertical) {
+                    rows.push(&views[1]);
+                }
+                if s.has(Mirror::Horizontal) {
+                    rows.push(&views[2]);
+                }
+                let n = rows.len() as u32;
+                let mean: Vec<u16> = (0..k)
+                    .map(|j| {
+                        ((rows.iter().map(|r| u32::from(r[j])).sum::<u32>() + n / 2) / n) as u16
+                    })
+                    .collect();
+                let mut sc = vec![0u32; k];
+                scores(&m, &mean, &mut sc).unwrap();
+                (sc[c], c as u16)
+            })
+            .collect();
+        want.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
+        let got = b.check(&m, &x);
+        let want: Vec<Ranked> = want[..TOP_K]
+            .iter()
+            .map(|&(score, class)| Ranked { class, score })
+            .collect();
+        assert_eq!(got, want);
+        changed += usize::from(got != b.plain(&m, &x).1);
+    }
+    assert!(changed > 0, "the flags change some ranking");
+}
+
+/// A 720-4-2 model whose templates are (60000, 10000) and (10000, 60000),
+/// with symmetry `flags`.
+fn two_class_blob(flags: Option<[u8; 2]>) -> Vec<u8> {
+    let net = Mlp::new(SHAPE_LEN, 4, 2, 3);
+    let calib: Vec<Vec<i16>> = vec![(0..SHAPE_LEN).map(|j| (j as i16 % 200) - 100).collect()];
+    let q = quantize_net(&net, &calib).unwrap();
+    let names: Vec<String> = ["left", "right"].map(String::from).to_vec();
+    write_blob(
+        &q,
+        &BlobExtras {
+            templates: &[60000, 10000, 10000, 60000],
+            delta_q16: 0,
+            names: &names,
+            meta: "",
+            symmetry: flags.as_ref().map(|f| &f[..]),
+        },
+    )
+    .unwrap()
+}
+
+/// A near tie on the object itself, decided by its vertical mirror for the
+/// class that looks the same mirrored, and only for that class.
+#[test]
+fn averaging_follows_the_flags() {
+    // Rows: x (a near tie leaning to class 1), V(x) (clearly class 0),
+    // H(x) (clearly class 1).
+    let outputs = [30000u16, 31000, 60000, 5000, 8000, 62000];
+    let rank = |flags: Option<[u8; 2]>| {
+        let b = two_class_blob(flags);
+        let m = Model::parse(&b).unwrap();
+        let mut mean = [0u16; 2];
+        let mut r = [Ranked::default(); 2];
+        assert_eq!(mirror_top_k(&m, &outputs, &mut mean, &mut r).unwrap(), 2);
+        r
+    };
+    let plain = rank(None);
+    assert_eq!(plain[0].class, 1);
+    // Class 0 has V: its mean (45000, 18000) wins.
+    let v0 = rank(Some([1, 0]));
+    assert_eq!(v0[0].class, 0);
+    assert!(v0[0].score > plain[0].score);
+    // Class 1's score is the plain one: it has no mirror.
+    assert_eq!(
+        v0.iter().find(|r| r.class == 1),
+        plain.iter().find(|r| r.class == 1)
+    );
+    // Class 0 with H instead: its mean (19000, 46500) only loses more.
+    let h0 = rank(Some([2, 0]));
+    assert_eq!(h0[0].class, 1);
+    // Class 1 with V: x and V(x) for class 1 only; class 0 plain.
+    let v1 = rank(Some([0, 1]));
+    assert_eq!(
+        v1.iter().find(|r| r.class == 0),
+        plain.iter().find(|r| r.class == 0)
+    );
+    assert!(v1.iter().find(|r| r.class == 1).unwrap().score < plain[0].score);
+    // The means, rounded half up.
+    let mut mean = [0u16; 2];
+    mirror_mean(
+        Symmetry::from_bits(3).unwrap(),
+        &[1, 2, 2, 2, 2, 3],
+        &mut mean,
+    );
+    assert_eq!(mean, [2, 2]);
+    mirror_mean(
+        Symmetry::from_bits(1).unwrap(),
+        &[1, 2, 2, 2, 0, 0],
+        &mut mean,
+    );
+    assert_eq!(mean, [2, 2]);
+    mirror_mean(Symmetry::NONE, &[1, 2, 9, 9, 9, 9], &mut mean);
+    assert_eq!(mean, [1, 2]);
+}
+
+#[test]
+fn short_buffers_are_typed_errors() {
+    let flagged = two_class_blob(Some([1, 0]));
+    let plain = two_class_blob(Some([0, 0]));
+    for (blob, vector_needed) in [(&flagged, true), (&plain, false)] {
+        let m = Model::parse(blob).unwrap();
+        let mut b = Bufs::new(&m);
+        let x = vector(blob_fn);
+        let mut s = Scratch {
+            input: &mut b.xi,
+            hidden: &mut b.hi,
+            output: &mut b.yo,
+        };
+        let mut r = [Ranked::default(); 2];
+        let mut short = [ShapeElem::ZERO; 10];
+        let mut ms = MirrorScratch {
+            vector: &mut short,
+            outputs: &mut b.o,
+            mean: &mut b.mean,
+        };
+        let got = mirror_check(&m, &x, &mut s, &mut ms, &mut r);
+        if vector_needed {
+            assert!(
+                matches!(got, Err(MlpError::ScratchTooSmall { .. })),
+                "{got:?}"
+            );
+        } else {
+            assert_eq!(got, Ok(2));
+        }
+        let mut few = [0u16; MIRROR_VIEWS * 2 - 1];
+        let mut ms = MirrorScratch {
+            vector: &mut b.v,
+            outputs: &mut few,
+            mean: &mut b.mean,
+        };
+        assert!(matches!(
+            mirror_check(&m, &x, &mut s, &mut ms, &mut r),
+            Err(MlpError::ScratchTooSmall {
+                buffer: "outputs",
+                ..
+            })
+        ));
+    }
+}
+
+fn blob_fn(x: i32, y: i32) -> bool {
+    blob(x, y)
+}
+
+fn demo_pair() -> (Vec<Rgb8>, Vec<Rgb8>) {
+    let (w, h) = (160, 120);
+    let spec = SceneSpec::demo(w, h);
+    let mut l = vec![Rgb8::default(); w * h];
+    let mut r = l.clone();
+    render_left(&spec, &mut ImageViewMut::packed(&mut l, w, h).unwrap()).unwrap();
+    render_right(&spec, &mut ImageViewMut::packed(&mut r, w, h).unwrap()).unwrap();
+    (l, r)
+}
+
+/// The frame's objects: box, centroid, ranking and identity.
+fn run(params: &PipelineParams, model: &[u8]) -> Vec<String> {
+    let (l, r) = demo_pair();
+    let p = Pipeline::new(params, &protogist_host::product::DEFAULT_TABLES, model).unwrap();
+    let mut ws = vec![0u64; workspace_words(160, 120, params)];
+    let f = p
+        .run(
+            &ImageView::packed(&l, 160, 120).unwrap(),
+            &ImageView::packed(&r, 160, 120).unwrap(),
+            &mut ws,
+        )
+        .unwrap();
+    f.objects()
+        .iter()
+        .map(|o| {
+            format!(
+                "{:?} {:?} {:?} {:?}",
+                o.bbox,
+                o.centroid,
+                o.top(),
+                o.identity
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_switch_off_is_todays_pipeline() {
+    let k = Model::parse(MODEL).unwrap().classes();
+    let off = PipelineParams::DEFAULT.with_objects(4);
+    let on = off.with_mirror_check(true);
+    const { assert!(!PipelineParams::DEFAULT.mirror_check && PipelineParams::ACCURATE.mirror_check) };
+    // The switch's buffers only when it is on.
+    use protogist::pipeline::layout::{mirror_bytes, object_bytes};
+    assert_eq!(mirror_bytes(&off), 0);
+    assert!(mirror_bytes(&on) >= protogist::mlp::mirror_scratch_bytes(64));
+    assert_eq!(
+        object_bytes(160, 120, &on),
+        object_bytes(160, 120, &off) + mirror_bytes(&on)
+    );
+    let today = run(&off, MODEL);
+    assert!(!today.is_empty());
+    // A v1 model with the check on, a v2 model with the check off.
+    assert_eq!(run(&on, MODEL), today);
+    let all = with_flags(&vec![3; k]);
+    assert_eq!(run(&off, &all), today);
+    // On with flags: the ranking may change, the objects do not.
+    let checked = run(&on, &all);
+    assert_eq!(checked.len(), today.len());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Per class, the rounded mean of the int8 outputs over the views stays
+    /// within the mean of the views' bounds `B_k` plus half an output LSB
+    /// of the float network's mean (docs/ERROR_BOUNDS.md §9).
+    #[test]
+    fn averaged_outputs_within_the_bound(
+        h in 1usize..12,
+        k in 1usize..5,
+        seed in any::<u64>(),
+        a1 in 0.002f64..0.2,
+        a2 in 0.05f64..8.0,
+        flags in proptest::collection::vec(0u8..4, 4),
+    ) {
+        let mut rng = SplitMix::new(seed);
+        let net = random_net(&mut rng, (SHAPE_LEN, h, k), a1, a2, 1.0);
+        let raw: Vec<i16> = (0..SHAPE_LEN)
+            .map(|_| (8000.0 * (2.0 * unit(&mut rng) - 1.0)).round() as i16)
+            .collect();
+        let q = quantize_net(&net, std::slice::from_ref(&raw)).unwrap();
+        let names: Vec<String> = (0..k).map(|c| format!("c{c}")).collect();
+        let sym: Vec<u8> = flags[..k].to_vec();
+        let blob = write_blob(&q, &BlobExtras {
+            templates: &vec![1; k * k],
+            delta_q16: 0,
+            names: &names,
+            meta: "",
+            symmetry: Some(&sym),
+        }).unwrap();
+        let m = Model::parse(&blob).unwrap();
+        let x: ShapeVector = shape_elems(&raw).try_into().unwrap();
+        let views = [x, mirrored(Mirror::Vertical, &x), mirrored(Mirror::Horizontal, &x)];
+        let mut b = Bufs::new(&m);
+        let mut ints = Vec::new();
+        let mut bounds = Vec::new();
+        for v in &views {
+            ints.extend(b.plain(&m, v).0);
+            let vr: Vec<i16> = v.iter().map(|e| e.to_bits()).collect();
+            bounds.push(output_error_bound(&net, &q, &vr).1);
+        }
+        let xf: Vec<f64> = raw.iter().map(|&r| f64::from(r) / 4096.0).collect();
+        let floats = fref::mirror_outputs(&net, &xf, Symmetry::from_bits(3).unwrap()).unwrap();
+        for (c, &f) in sym.iter().enumerate() {
+            let s = Symmetry::from_bits(f).unwrap();
+            let mut mean = vec![0u16; k];
+            mirror_mean(s, &ints, &mut mean);
+            let fmean = fref::mirror_mean(s, &floats);
+            let rows: Vec<usize> = std::iter::once(0)
+                .chain(Mirror::ALL.into_iter().enumerate().filter(|(_, m)| s.has(*m)).map(|(i, _)| i + 1))
+                .collect();
+            for j in 0..k {
+                let bound = rows.iter().map(|&r| bounds[r][j]).sum::<f64>() / rows.len() as f64
+                    + 0.5 / 65535.0;
+                let err = (f64::from(mean[j]) / 65535.0 - fmean[j]).abs();
+                prop_assert!(err <= bound, "class {c} output {j}: {err:e} > {bound:e}");
+            }
+        }
+    }
+}
+
+/// The float reference ranks as core does on a model whose int8 outputs
+/// are close to the float ones: the shipped network's sidecar is not in the
+/// repository, so a random one with its own float templates.
+#[test]
+fn float_reference_check_follows_the_flags() {
+    let mut rng = SplitMix::new(7);
+    let net = random_net(&mut rng, (SHAPE_LEN, 6, 3), 0.05, 4.0, 1.0);
+    let x: Vec<f64> = vector(blob).iter().map(|e| e.to_num::<f64>()).collect();
+    let t = Templates::new(vec![
+        vec![1.0, 0.2, 0.1],
+        vec![0.1, 1.0, 0.3],
+        vec![0.2, 0.1, 1.0],
+    ])
+    .unwrap();
+    let none = [Symmetry::NONE; 3];
+    let plain = fref::mirror_check(&net, &t, &none, &x).unwrap();
+    let direct: Vec<f32> = fref::mirror_outputs(&net, &x, Symmetry::NONE).unwrap()[0]
+        .iter()
+        .map(|&v| v as f32)
+        .collect();
+    assert_eq!(plain, t.scores(&direct).unwrap());
+    let vh = [Symmetry::from_bits(3).unwrap(); 3];
+    let outs = fref::mirror_outputs(&net, &x, vh[0]).unwrap();
+    let all = fref::mirror_check(&net, &t, &vh, &x).unwrap();
+    for (c, &score) in all.iter().enumerate() {
+        let mean: Vec<f32> = (0..3)
+            .map(|j| ((outs[0][j] + outs[1][j] + outs[2][j]) / 3.0) as f32)
+            .collect();
+        assert!((score - t.scores(&mean).unwrap()[c]).abs() < 1e-12);
+    }
+    assert!(fref::mirror_check(&net, &t, &none[..2], &x).is_err());
+}
+
+/// `train`'s rule on the shipped model and a few fresh gen-shapes
+/// silhouettes: classes drawn with a vertical axis (triangle, heart) keep
+/// their name mirrored left-right but not upside down, the arrow and the
+/// crescent the other way round, the ring both, the L neither.
+#[test]
+fn symmetry_derived_from_silhouettes() {
+    use protogist_host::classify::dataset::{load_dataset, Sample};
+    use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
+    use protogist_host::classify::symmetry_cmd::{add_symmetry, flags_of};
+    assert_eq!(flags_of(&[0.9, 0.8999]).bits(), 1);
+    assert_eq!(flags_of(&[0.8999, 0.9]).bits(), 2);
+    assert_eq!(flags_of(&[1.0, 1.0]).bits(), 3);
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("shapes");
+    gen_shapes(&GenShapesOptions {
+        out: ds.clone(),
+        classes: 19,
+        per_class: 12,
+        seed: 77,
+        size: 64,
+    })
+    .unwrap();
+    let d = load_dataset(&ds).unwrap();
+    let samples: Vec<&Sample> = d.samples.iter().collect();
+    let (blob, rates) = add_symmetry(MODEL, &samples).unwrap();
+    let m = Model::parse(&blob).unwrap();
+    let flag = |name: &str| {
+        let c = d.classes.iter().position(|n| n.ends_with(name)).unwrap();
+        eprintln!("{name}: {:?}", rates[c]);
+        m.symmetry(c).bits()
+    };
+    assert_eq!(flag("_triangle"), 1);
+    assert_eq!(flag("_heart"), 1);
+    assert_eq!(flag("_arrow"), 2);
+    assert_eq!(flag("_crescent"), 2);
+    assert_eq!(flag("_ring"), 3);
+    assert_eq!(flag("_l-shape"), 0);
+}
