@@ -389,6 +389,12 @@ fn demo_pair() -> (Vec<Rgb8>, Vec<Rgb8>) {
 
 /// The frame's objects: box, centroid, ranking and identity.
 fn run(params: &PipelineParams, model: &[u8]) -> Vec<String> {
+    run_with_check(params, model).0
+}
+
+/// [`run`], and each object's ranking by `mirror_check` on its shape
+/// vector beside the pipeline's own ranking.
+fn run_with_check(params: &PipelineParams, model: &[u8]) -> (Vec<String>, Vec<(String, String)>) {
     let (l, r) = demo_pair();
     let p = Pipeline::new(params, &protogist_host::product::DEFAULT_TABLES, model).unwrap();
     let mut ws = vec![0u64; workspace_words(160, 120, params)];
@@ -399,7 +405,10 @@ fn run(params: &PipelineParams, model: &[u8]) -> Vec<String> {
             &mut ws,
         )
         .unwrap();
-    f.objects()
+    let m = Model::parse(model).unwrap();
+    let mut b = Bufs::new(&m);
+    let objects = f
+        .objects()
         .iter()
         .map(|o| {
             format!(
@@ -410,7 +419,18 @@ fn run(params: &PipelineParams, model: &[u8]) -> Vec<String> {
                 o.identity
             )
         })
-        .collect()
+        .collect();
+    let checked = f
+        .objects()
+        .iter()
+        .map(|o| {
+            (
+                format!("{:?}", o.top()),
+                format!("{:?}", b.check(&m, f.shape(o).unwrap())),
+            )
+        })
+        .collect();
+    (objects, checked)
 }
 
 #[test]
@@ -433,9 +453,15 @@ fn the_switch_off_is_todays_pipeline() {
     assert_eq!(run(&on, MODEL), today);
     let all = with_flags(&vec![3; k]);
     assert_eq!(run(&off, &all), today);
-    // On with flags: the ranking may change, the objects do not.
-    let checked = run(&on, &all);
-    assert_eq!(checked.len(), today.len());
+    // On with flags: each object ranked as `mirror_check` ranks its
+    // vector, which is not the plain ranking here.
+    let (objects, checked) = run_with_check(&on, &all);
+    assert_eq!(objects.len(), today.len());
+    for (got, want) in &checked {
+        assert_eq!(got, want);
+    }
+    let (_, plain) = run_with_check(&off, &all);
+    assert_ne!(checked, plain);
 }
 
 proptest! {
