@@ -190,7 +190,8 @@ pub fn mirror_mean(symmetry: Symmetry, outputs: &[u16], mean: &mut [u16]) {
                 sum += u32::from(row(view(mir)).get(j).copied().unwrap_or(0));
             }
         }
-        // At most 3 · 65535 + 1: fits u32, and the mean fits u16.
-        *m = ((sum + n / 2) / n) as u16;
+        // At most 3 · 65535 + 1: fits u32, and the mean fits u16 (n >= 1;
+        // `checked_div` leaves no division-by-zero panic path to link).
+        *m = (sum + n / 2).checked_div(n).unwrap_or(0) as u16;
     }
 }
