@@ -16,7 +16,7 @@ use crate::pg::complete::{complete_runs, CompleteParams, RegionTables, RowSpan, 
 use crate::pg::conspicuity::{edge_conspicuity, EdgeBuffers, EdgeCell, EdgeParams, Luv, LuvTables};
 use crate::pg::disparity::DisparityCell;
 use crate::pg::image::{ImageError, ImageView, ImageViewMut, Rgb8};
-use crate::pg::mlp::{self, blob::Model, Ranked, Scratch};
+use crate::pg::mlp::{self, blob::Model, MirrorScratch, Ranked, Scratch};
 use crate::pg::segment::{segment, SegmentBuffers, SegmentParams};
 use crate::pg::shape::{shape_vector, RadialProfile, ShapeVector, SHAPE_LEN};
 use crate::pg::stereo::c2f::{C2f, C2fBuffers, C2fParams};
@@ -63,6 +63,8 @@ pub struct ProbeBuffers<'a> {
     pub mlp: Scratch<'a>,
     /// Classifier ranking.
     pub ranked: &'a mut [Ranked],
+    /// The mirror check's buffers.
+    pub mirror: MirrorScratch<'a>,
 }
 
 /// A `w x h` view of `d`, the slice and the stride opaque.
@@ -103,6 +105,7 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
         mask,
         mlp: mut scratch,
         ranked,
+        mut mirror,
     } = b;
     let mut bits = 0;
 
@@ -192,6 +195,9 @@ pub fn probe(b: ProbeBuffers<'_>, w: usize, h: usize, tables: [&[u8]; 3], model:
             bits |= seen(&mlp::identify(m, out), 9);
             bits |= seen(&mlp::verify(m, out, black_box(0)), 10);
         }
+        // The mirror check (whatever symmetry the model bytes hold).
+        let r = mlp::mirror_check(m, input, &mut scratch, &mut mirror, ranked);
+        bits |= seen(&r, 11);
     }
     bits
 }

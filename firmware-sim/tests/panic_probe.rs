@@ -20,6 +20,6 @@ fn the_probe_runs_every_stage_to_success_on_the_demo_scene() {
     // Edge conspicuity, table, the stereo engine, completion, segmentation,
     // shape, model, top-k, identify, verify (bit 2 was the full-search
     // engine's, removed).
-    assert_eq!(bits, ((1 << 11) - 1) & !(1 << 2), "{text}");
+    assert_eq!(bits, ((1 << 12) - 1) & !(1 << 2), "{text}");
     assert!(text.contains("scene Ok(())"), "{text}");
 }

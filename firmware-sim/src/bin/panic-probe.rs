@@ -26,6 +26,7 @@ const REGIONS: usize = complete::region_table_len(W, H);
 const HIDDEN: usize = mlp::hidden_len(256);
 const OUTPUT: usize = mlp::output_len(19);
 const INPUT: usize = mlp::input_len(720);
+const MIRROR_OUTPUTS: usize = mlp::mirror_outputs_len(19);
 
 mod len {
     use super::*;
@@ -123,6 +124,15 @@ macro_rules! buffers {
                 output: $alloc!(u16, OUTPUT, 0u16),
             },
             ranked: $alloc!(mlp::Ranked, 5, mlp::Ranked::default()),
+            mirror: mlp::MirrorScratch {
+                vector: $alloc!(
+                    firmware_sim::pg::shape::ShapeElem,
+                    720,
+                    firmware_sim::pg::shape::ShapeElem::ZERO
+                ),
+                outputs: $alloc!(u16, MIRROR_OUTPUTS, 0u16),
+                mean: $alloc!(u16, OUTPUT, 0u16),
+            },
         }
     };
 }
@@ -157,7 +167,7 @@ fn main() {
         firmware_sim::bench::stereo_run::TABLES,
         firmware_sim::bench::mlp_run::SHIPPED,
     );
-    println!("panic-probe {W}x{H}: scene {ok:?}, stages ok {bits:#013b}");
+    println!("panic-probe {W}x{H}: scene {ok:?}, stages ok {bits:#014b}");
 }
 
 #[cfg(target_os = "none")]
