@@ -566,10 +566,25 @@ fn float_reference_check_follows_the_flags() {
 fn symmetry_derived_from_silhouettes() {
     use protogist_host::classify::dataset::{load_dataset, Sample};
     use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
+    use protogist_host::classify::quant::{Agreement, SYMMETRY_MIN_RATIO};
     use protogist_host::classify::symmetry_cmd::{add_symmetry, flags_of};
-    assert_eq!(flags_of(&[0.9, 0.8999]).bits(), 1);
-    assert_eq!(flags_of(&[0.8999, 0.9]).bits(), 2);
-    assert_eq!(flags_of(&[1.0, 1.0]).bits(), 3);
+    // Relative rule: mirrored rate ≥ SYMMETRY_MIN_RATIO × unmirrored rate,
+    // which must be above zero.
+    let a = |plain: f64, v: f64, h: f64| {
+        flags_of(&Agreement {
+            plain,
+            mirrored: [v, h],
+        })
+        .bits()
+    };
+    let r = SYMMETRY_MIN_RATIO;
+    assert_eq!(a(0.8, 0.8 * r, 0.8 * r - 1e-9), 1);
+    assert_eq!(a(0.8, 0.8 * r - 1e-9, 0.8 * r), 2);
+    assert_eq!(a(1.0, 1.0, 1.0), 3);
+    // a class named right only 64 % of the time, mirrored just as often
+    assert_eq!(a(0.64, 0.64, 0.65), 3);
+    assert_eq!(a(0.0, 0.0, 0.0), 0);
+    assert_eq!(a(0.0, 0.5, 0.5), 0);
     let tmp = tempfile::tempdir().unwrap();
     let ds = tmp.path().join("shapes");
     gen_shapes(&GenShapesOptions {

@@ -4,10 +4,11 @@
 //! inference.
 //!
 //! **Symmetry.** Class `c` is taken as symmetric under a mirror when the
-//! quantised model names at least [`SYMMETRY_MIN_AGREEMENT`] of the
-//! mirrored shape vectors of `c`'s clean training silhouettes as `c`
-//! (plain identification, Δ included; [`derive_symmetry`]); the flags go
-//! into a version-2 blob ([`with_symmetry`]).
+//! quantised model names the mirrored shape vectors of `c`'s clean
+//! training silhouettes as `c` at least [`SYMMETRY_MIN_RATIO`] times as
+//! often as it names the unmirrored ones (that rate above zero; plain
+//! identification, Δ included; [`derive_symmetry`]); the flags go into a
+//! version-2 blob ([`with_symmetry`]).
 //!
 //! **Scales.**
 //! * input: `s_x = max |x| / 127` over every element of every training
@@ -497,13 +498,40 @@ pub fn quantize_as(
     })
 }
 
-/// The least share of a class's mirrored training vectors the model must
-/// name as the class for the class to count as symmetric under the mirror.
-pub const SYMMETRY_MIN_AGREEMENT: f64 = 0.9;
+/// The least ratio of the rate at which a class's mirrored training
+/// vectors are named as the class to the rate for its unmirrored ones for
+/// the class to count as symmetric under the mirror (relative, so that a
+/// class the model names only moderately well, such as the circle, is not
+/// held to a bar its own silhouettes do not reach).
+pub const SYMMETRY_MIN_RATIO: f64 = 0.9;
 
-/// Per class and mirror ([`Mirror::ALL`] order), the share of the class's
-/// vectors (`inputs`, labelled `labels`) whose mirror image `model` names
-/// as the class (plain identification: best cosine, reaching Δ).
+/// One class's identification rates on its training vectors
+/// ([`mirror_agreement`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Agreement {
+    /// The share of the vectors the model names as the class.
+    pub plain: f64,
+    /// The share of their mirror images it names as the class, per mirror
+    /// ([`Mirror::ALL`] order).
+    pub mirrored: [f64; 2],
+}
+
+impl Agreement {
+    /// The symmetry under the relative rule: mirror `m` when
+    /// `plain > 0` and `mirrored[m] ≥ min_ratio · plain`.
+    #[must_use]
+    pub fn symmetry(&self, min_ratio: f64) -> Symmetry {
+        Mirror::ALL
+            .into_iter()
+            .zip(self.mirrored)
+            .filter(|&(_, r)| self.plain > 0.0 && r >= min_ratio * self.plain)
+            .fold(Symmetry::NONE, |s, (m, _)| s.with(m))
+    }
+}
+
+/// Per class, the share of the class's vectors (`inputs`, labelled
+/// `labels`) that `model` names as the class, unmirrored and under each
+/// mirror (plain identification: best cosine, reaching Δ).
 ///
 /// # Errors
 /// [`ClassifyError::DimensionMismatch`] when the model does not take
@@ -513,7 +541,7 @@ pub fn mirror_agreement(
     model: &Model<'_>,
     inputs: &[Vec<i16>],
     labels: &[usize],
-) -> Result<Vec<[f64; 2]>, ClassifyError> {
+) -> Result<Vec<Agreement>, ClassifyError> {
     let (d, h, k) = (model.inputs(), model.hidden(), model.classes());
     if d != SHAPE_LEN || model.input_kind() != InputKind::Shape {
         return Err(ClassifyError::DimensionMismatch {
@@ -522,7 +550,7 @@ pub fn mirror_agreement(
             got: d,
         });
     }
-    let hits: Vec<[bool; 2]> = inputs
+    let hits: Vec<[bool; 3]> = inputs
         .par_iter()
         .zip(labels)
         .enumerate()
@@ -542,10 +570,13 @@ pub fn mirror_agreement(
                         got: v.len(),
                     }
                 })?;
-                let mut hit = [false; 2];
-                for (m, hit) in Mirror::ALL.into_iter().zip(&mut hit) {
-                    let mut v = [ShapeElem::ZERO; SHAPE_LEN];
-                    m.apply(&x, &mut v);
+                let mut hit = [false; 3];
+                let modes = [None, Some(Mirror::ALL[0]), Some(Mirror::ALL[1])];
+                for (m, hit) in modes.into_iter().zip(&mut hit) {
+                    let mut v = x;
+                    if let Some(m) = m {
+                        m.apply(&x, &mut v);
+                    }
                     let mut s = Scratch {
                         input: i,
                         hidden: hd,
@@ -558,7 +589,7 @@ pub fn mirror_agreement(
             },
         )
         .collect::<Result<_, ClassifyError>>()?;
-    let mut counts = vec![(0usize, [0usize; 2]); k];
+    let mut counts = vec![(0usize, [0usize; 3]); k];
     for (hit, &c) in hits.iter().zip(labels) {
         let e = counts.get_mut(c).ok_or(ClassifyError::LabelOutOfRange {
             label: c,
@@ -576,14 +607,19 @@ pub fn mirror_agreement(
             if n == 0 {
                 return Err(ClassifyError::EmptyClass { class });
             }
-            Ok(hits.map(|h| h as f64 / n as f64))
+            let r = hits.map(|h| h as f64 / n as f64);
+            Ok(Agreement {
+                plain: r[0],
+                mirrored: [r[1], r[2]],
+            })
         })
         .collect()
 }
 
 /// The symmetry byte of each class from [`mirror_agreement`]: a mirror's
-/// bit when at least [`SYMMETRY_MIN_AGREEMENT`] of the class's mirrored
-/// vectors are named as the class.
+/// bit when the class's mirrored vectors are named as the class at least
+/// [`SYMMETRY_MIN_RATIO`] times as often as its unmirrored ones (and
+/// those at all; [`Agreement::symmetry`]).
 ///
 /// # Errors
 /// As [`mirror_agreement`].
@@ -594,14 +630,7 @@ pub fn derive_symmetry(
 ) -> Result<Vec<u8>, ClassifyError> {
     Ok(mirror_agreement(model, inputs, labels)?
         .iter()
-        .map(|rates| {
-            Mirror::ALL
-                .into_iter()
-                .zip(rates)
-                .filter(|&(_, &r)| r >= SYMMETRY_MIN_AGREEMENT)
-                .fold(Symmetry::NONE, |s, (m, _)| s.with(m))
-                .bits()
-        })
+        .map(|a| a.symmetry(SYMMETRY_MIN_RATIO).bits())
         .collect())
 }
 

@@ -6,7 +6,7 @@
 use super::dataset::{load_dataset, Sample};
 use super::model::{bad_model, parse_sidecar};
 use super::model_cmd::sidecar_path;
-use super::quant::{mirror_agreement, model_error, with_symmetry, SYMMETRY_MIN_AGREEMENT};
+use super::quant::{mirror_agreement, model_error, with_symmetry, Agreement, SYMMETRY_MIN_RATIO};
 use crate::error::{HostError, Result};
 use crate::summary::Summary;
 use protogist::mlp::{Model, Symmetry};
@@ -15,44 +15,56 @@ use std::collections::HashSet;
 use std::path::PathBuf;
 
 /// `blob` with the symmetry bytes derived from `samples` (clean
-/// silhouettes with their labels), and each class's agreement per mirror
-/// ([`Mirror::ALL`] order).
+/// silhouettes with their labels) under the rule with
+/// [`SYMMETRY_MIN_RATIO`], and each class's identification rates.
 ///
 /// # Errors
 /// A blob that does not parse; a class without sample; a model that does
 /// not take shape vectors.
-pub fn add_symmetry(blob: &[u8], samples: &[&Sample]) -> Result<(Vec<u8>, Vec<[f64; 2]>)> {
+pub fn add_symmetry(blob: &[u8], samples: &[&Sample]) -> Result<(Vec<u8>, Vec<Agreement>)> {
+    add_symmetry_with(blob, samples, SYMMETRY_MIN_RATIO)
+}
+
+/// [`add_symmetry`] with the rule's ratio `min_ratio`
+/// ([`Agreement::symmetry`]).
+///
+/// # Errors
+/// As [`add_symmetry`].
+pub fn add_symmetry_with(
+    blob: &[u8],
+    samples: &[&Sample],
+    min_ratio: f64,
+) -> Result<(Vec<u8>, Vec<Agreement>)> {
     let model = Model::parse(blob).map_err(super::ClassifyError::from)?;
     let inputs: Vec<Vec<i16>> = samples.iter().map(|s| s.shape.clone()).collect();
     let labels: Vec<usize> = samples.iter().map(|s| s.label).collect();
     let rates = mirror_agreement(&model, &inputs, &labels)?;
-    let flags: Vec<u8> = rates.iter().map(|r| flags_of(r).bits()).collect();
+    let flags: Vec<u8> = rates.iter().map(|a| a.symmetry(min_ratio).bits()).collect();
     Ok((with_symmetry(blob, &flags)?, rates))
 }
 
-/// The symmetry of one class's agreements.
-pub fn flags_of(rates: &[f64; 2]) -> Symmetry {
-    Mirror::ALL
-        .into_iter()
-        .zip(rates)
-        .filter(|&(_, &r)| r >= SYMMETRY_MIN_AGREEMENT)
-        .fold(Symmetry::NONE, |s, (m, _)| s.with(m))
+/// The symmetry of one class's rates under the rule with
+/// [`SYMMETRY_MIN_RATIO`].
+pub fn flags_of(a: &Agreement) -> Symmetry {
+    a.symmetry(SYMMETRY_MIN_RATIO)
 }
 
-/// One summary value: `V H` flags and the agreements of every class.
-pub fn describe(model: &Model<'_>, rates: &[[f64; 2]]) -> String {
+/// One summary value: `V H` flags (rule ratio `min_ratio`) and the rates
+/// of every class: unmirrored, mirrored V, mirrored H.
+pub fn describe(model: &Model<'_>, rates: &[Agreement], min_ratio: f64) -> String {
     rates
         .iter()
         .enumerate()
-        .map(|(c, r)| {
-            let s = flags_of(r);
+        .map(|(c, a)| {
+            let s = a.symmetry(min_ratio);
             let name = model.class_name(c).unwrap_or("?");
             format!(
-                "{name} {}{} ({:.1}/{:.1} %)",
+                "{name} {}{} ({:.1}: {:.1}/{:.1} %)",
                 if s.has(Mirror::Vertical) { "V" } else { "-" },
                 if s.has(Mirror::Horizontal) { "H" } else { "-" },
-                100.0 * r[0],
-                100.0 * r[1]
+                100.0 * a.plain,
+                100.0 * a.mirrored[0],
+                100.0 * a.mirrored[1]
             )
         })
         .collect::<Vec<_>>()
@@ -60,7 +72,7 @@ pub fn describe(model: &Model<'_>, rates: &[[f64; 2]]) -> String {
 }
 
 /// Options of `protogist model-symmetry`.
-#[derive(Clone, Debug, PartialEq, Eq, clap::Args)]
+#[derive(Clone, Debug, PartialEq, clap::Args)]
 pub struct ModelSymmetryOptions {
     /// The int8 model blob (version 1 or 2).
     #[arg(long)]
@@ -73,6 +85,11 @@ pub struct ModelSymmetryOptions {
     /// The version-2 blob to write.
     #[arg(long)]
     pub out: PathBuf,
+    /// A mirror is flagged when the class's mirrored silhouettes are
+    /// named as the class at least this many times as often as its
+    /// unmirrored ones.
+    #[arg(long, default_value_t = SYMMETRY_MIN_RATIO)]
+    pub min_ratio: f64,
 }
 
 /// `protogist model-symmetry`: the model with symmetry bytes derived as
@@ -103,7 +120,7 @@ pub fn run_model_symmetry(opts: &ModelSymmetryOptions) -> Result<Summary> {
         .iter()
         .filter(|s| train.as_ref().is_none_or(|t| t.contains(&s.key)))
         .collect();
-    let (out, rates) = add_symmetry(&blob, &samples)?;
+    let (out, rates) = add_symmetry_with(&blob, &samples, opts.min_ratio)?;
     if let Some(parent) = opts.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         crate::output::ensure_dir(parent)?;
     }
@@ -127,8 +144,11 @@ pub fn run_model_symmetry(opts: &ModelSymmetryOptions) -> Result<Summary> {
         ),
     );
     s.push(
-        "symmetry (V, H: named as the class when mirrored)",
-        describe(&model, &rates),
+        format!(
+            "symmetry (named as the class: unmirrored: mirrored V/H; V, H when ≥ {} × unmirrored)",
+            opts.min_ratio
+        ),
+        describe(&model, &rates, opts.min_ratio),
     );
     s.push("wrote", format!("{} ({} B)", opts.out.display(), out.len()));
     Ok(s)

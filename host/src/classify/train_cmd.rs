@@ -289,8 +289,8 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
         );
     }
     s.push(
-        "symmetry (V, H: named as the class when mirrored)",
-        super::symmetry_cmd::describe(&qm, &symmetry),
+        "symmetry (named as the class: unmirrored: mirrored V/H)",
+        super::symmetry_cmd::describe(&qm, &symmetry, super::quant::SYMMETRY_MIN_RATIO),
     );
     s.push(
         "model",
