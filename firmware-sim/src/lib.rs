@@ -9,6 +9,7 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod assets;
 pub mod bench;
 pub mod camera;
 pub mod display;

@@ -5,7 +5,7 @@
 //! the pipeline reads each eye as RGB rows ([`crate::stereo_camera::Rgb565View`]). Frames and
 //! workspace are the caller's (statics in `.bss` on the board, sized by
 //! [`FRAME_LEN`] and [`WORKSPACE_WORDS`]); the decoder tables and the
-//! model are `const`s in flash. The report's `product`, `object` and
+//! model are `const`s in flash ([`crate::assets`]). The report's `product`, `object` and
 //! `objects-checksum` lines are what `cargo xtask firmware` compares
 //! between the desktop, QEMU and `golden/demo_objects.txt`.
 
@@ -25,7 +25,6 @@ use crate::pg::segment::{Step as SegmentStep, STAT_FRAC_BITS};
 use crate::pg::stereo::phase::{PhaseKernel, SafePhase};
 use crate::pg::stereo::Step as StereoStep;
 use crate::stereo_camera::{pair_len, StereoCamera};
-use crate::Aligned;
 use crate::Ticks;
 
 /// Frame width the product runs: 160 on the mps2-an386 build, 128 (the
@@ -57,30 +56,7 @@ pub const SHARED_WORDS: usize = pipeline::shared_words(WIDTH, HEIGHT, &PARAMS);
 /// `u16`s of a captured RGB565 pair at [`WIDTH`] x [`HEIGHT`].
 pub const FRAME_LEN: usize = pair_len(WIDTH, HEIGHT);
 
-/// The coarse-to-fine engine's decoder tables at the pipeline's point
-/// (`half-narrow`: kernels of radius 2), level 0 first
-/// (`data/dem_c2f_narrow_l{0,1,2}.bin`, written by `protogist train-dem
-/// --levels 1 --max-disp 31 | 16 | 8 --radius 2`), each at an aligned
-/// address ([`Aligned`]).
-#[cfg(not(feature = "accurate"))]
-pub const TABLES: [&[u8]; 3] = [
-    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l0.bin")).0,
-    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l1.bin")).0,
-    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l2.bin")).0,
-];
-/// With the `accurate` feature: its point (`half-narrow-full-search`)
-/// has no level 2, so levels 0 and 1 of the same tables.
-#[cfg(feature = "accurate")]
-pub const TABLES: [&[u8]; 2] = [
-    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l0.bin")).0,
-    &Aligned(*include_bytes!("../data/dem_c2f_narrow_l1.bin")).0,
-];
-const _: () = assert!(
-    TABLES.len() == PARAMS.tables(),
-    "one table per stereo level"
-);
-/// The shipped classifier (`host/data/shapes_model.bin`), word-aligned.
-pub const MODEL: &[u8] = &Aligned(*include_bytes!("../../host/data/shapes_model.bin")).0;
+pub use crate::assets::{MODEL, TABLES};
 
 /// The stages of a frame, as the report names them: the capture, then
 /// the pipeline's.

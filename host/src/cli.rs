@@ -140,7 +140,7 @@ pub enum Command {
     Quantize(crate::classify::quant_cmd::QuantizeOptions),
     /// Add per-class symmetry (the mirrors a class looks the same under,
     /// for the mirror check) to an existing model blob, derived as `train`
-    /// derives it from the clean training silhouettes.
+    /// derives it from the clean held-out silhouettes.
     ModelSymmetry(crate::classify::symmetry_cmd::ModelSymmetryOptions),
     /// Print the core's working memory per stage and frame size, from its
     /// `const fn`s (`scratch <stage> <W>x<H> <bytes>` lines).

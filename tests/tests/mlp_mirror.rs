@@ -565,8 +565,8 @@ fn float_reference_check_follows_the_flags() {
 #[test]
 fn symmetry_derived_from_silhouettes() {
     use protogist_host::classify::dataset::{load_dataset, Sample};
-    use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
     use protogist_host::classify::quant::{Agreement, SYMMETRY_MIN_RATIO};
+    use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
     use protogist_host::classify::symmetry_cmd::{add_symmetry, flags_of};
     // Relative rule: mirrored rate ≥ SYMMETRY_MIN_RATIO × unmirrored rate,
     // which must be above zero.
@@ -610,4 +610,37 @@ fn symmetry_derived_from_silhouettes() {
     assert_eq!(flag("_crescent"), 2);
     assert_eq!(flag("_ring"), 3);
     assert_eq!(flag("_l-shape"), 0);
+}
+
+/// The symmetry is measured on the held-out silhouettes when every class
+/// has one (the network never trained on them nor on any mirror image),
+/// else on the training ones.
+#[test]
+fn symmetry_is_measured_on_held_out_silhouettes() {
+    use protogist_host::classify::dataset::Sample;
+    use protogist_host::classify::symmetry_cmd::{symmetry_samples, SymmetrySource};
+    let s = |key: &str, label: usize| Sample {
+        key: key.into(),
+        label,
+        x: vec![],
+        shape: vec![],
+    };
+    let train = [s("a/0", 0), s("b/0", 1), s("c/0", 2)];
+    let held = [s("a/1", 0), s("b/1", 1), s("c/1", 2), s("c/2", 2)];
+    let keys = |v: &[&Sample]| v.iter().map(|s| s.key.clone()).collect::<Vec<_>>();
+    let (got, src) = symmetry_samples(held.iter().collect(), train.iter().collect(), 3);
+    assert_eq!(src, SymmetrySource::HeldOut);
+    assert_eq!(keys(&got), ["a/1", "b/1", "c/1", "c/2"]);
+    // class 1 has no held-out silhouette: the training ones
+    let partial: Vec<&Sample> = held.iter().filter(|s| s.label != 1).collect();
+    let (got, src) = symmetry_samples(partial, train.iter().collect(), 3);
+    assert_eq!(src, SymmetrySource::Training);
+    assert_eq!(keys(&got), ["a/0", "b/0", "c/0"]);
+    // a label beyond the classes does not stand in for a missing class
+    let beyond = s("z/0", 5);
+    let odd = vec![&held[0], &held[1], &beyond];
+    let (_, src) = symmetry_samples(odd, train.iter().collect(), 3);
+    assert_eq!(src, SymmetrySource::Training);
+    let (_, src) = symmetry_samples(vec![], vec![], 0);
+    assert_eq!(src, SymmetrySource::Training);
 }

@@ -107,6 +107,12 @@ pub fn run_ci() -> Result<CiSummary> {
         Ok(())
     })?;
     timed("ipp", t);
+    let (report, t) = step(
+        "accurate: the product with the accurate preset on QEMU vs host",
+        product::run_accurate,
+    )?;
+    println!("{report}");
+    timed("accurate", t);
     // Last, so that every other check has run when the F405 does not fit.
     let (report, t) = step(
         "f405: the product at 128x96 on QEMU netduinoplus2 vs host, in 192 KB",

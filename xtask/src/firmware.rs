@@ -77,6 +77,13 @@ pub fn f405_elf() -> PathBuf {
 
 const F405_TARGET_DIR: &str = "target/thumb-f405";
 
+/// The product ELF with the accurate preset ([`build_accurate`]).
+pub fn accurate_elf() -> PathBuf {
+    thumb_dir(ACCURATE_TARGET_DIR).join("firmware-sim")
+}
+
+const ACCURATE_TARGET_DIR: &str = "target/thumb-accurate";
+
 /// Why a firmware build or run failed.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum FirmwareError {
@@ -140,22 +147,31 @@ pub fn overflows(linker_output: &str) -> Vec<(String, u64)> {
 /// [`FirmwareError::Overflow`] when the linker cannot fit it (the largest
 /// overflow it names), else [`FirmwareError::Build`].
 pub fn build_f405() -> std::result::Result<PathBuf, FirmwareError> {
-    let args = [
-        "-p",
-        "firmware-sim",
-        "--bin",
-        "firmware-sim",
-        "--features",
-        "f405",
-    ];
     let what = "the product for the STM32F405 (firmware-sim --features f405, 128x96)";
-    build_checked(
-        &args,
+    build_product_with(
+        "f405",
         F405_TARGET_DIR,
         Machine::Netduinoplus2.memory_map(),
         what,
     )?;
     Ok(f405_elf())
+}
+
+/// The product with the accurate preset at 160x120 (`--features
+/// accurate`, mps2-an386's map: its RAM is over the default's 256 KB and
+/// within `memory.x`'s 512 KB).
+///
+/// # Errors
+/// As [`build_f405`].
+pub fn build_accurate() -> std::result::Result<PathBuf, FirmwareError> {
+    let what = "the product with the accurate preset (firmware-sim --features accurate)";
+    build_product_with(
+        "accurate",
+        ACCURATE_TARGET_DIR,
+        Machine::Mps2An386.memory_map(),
+        what,
+    )?;
+    Ok(accurate_elf())
 }
 
 /// Links the F405 product with the real part's map (`--features
@@ -167,17 +183,28 @@ pub fn build_f405() -> std::result::Result<PathBuf, FirmwareError> {
 /// # Errors
 /// As [`build_f405`].
 pub fn link_f405_board() -> std::result::Result<Sizes, FirmwareError> {
+    let what = "the product for the STM32F405 board (firmware-sim --features f405-board)";
+    build_product_with("f405-board", F405_TARGET_DIR, "memory-f405.x", what)?;
+    sizes(&f405_elf()).map_err(FirmwareError::Build)
+}
+
+/// The product ELF (`firmware-sim`'s default binary) with `feature`, into
+/// `target_dir`, linked against `map` ([`build_checked`]).
+fn build_product_with(
+    feature: &str,
+    target_dir: &str,
+    map: &'static str,
+    what: &str,
+) -> std::result::Result<(), FirmwareError> {
     let args = [
         "-p",
         "firmware-sim",
         "--bin",
         "firmware-sim",
         "--features",
-        "f405-board",
+        feature,
     ];
-    let what = "the product for the STM32F405 board (firmware-sim --features f405-board)";
-    build_checked(&args, F405_TARGET_DIR, "memory-f405.x", what)?;
-    sizes(&f405_elf()).map_err(FirmwareError::Build)
+    build_checked(&args, target_dir, map, what)
 }
 
 /// `cargo build --profile firmware` for thumbv7em: rustup's prebuilt target if it

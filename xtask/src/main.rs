@@ -18,9 +18,11 @@ commands:
   fetch-data  download the aloe (Debian opencv-doc) and motorcycle (scikit-image wheel)
               stereo pairs into the data cache
   firmware    build the product and the bench firmware, run them under QEMU mps2-an386,
-              and the product for the STM32F405 under QEMU netduinoplus2
+              the product for the STM32F405 under QEMU netduinoplus2 and the product
+              with the accurate preset
   product     build the firmware, run only the product under QEMU mps2-an386 and
-              netduinoplus2, and compare it with the host and the golden list
+              netduinoplus2 (and with the accurate preset), and compare it with the
+              host and the golden list
   bench       measure and write docs/BENCHMARKS.md
   fuzz [N]    run every fuzz target of host/tests/fuzz.rs for N cases (default 100000)
   setup       install missing system packages / rustup components";
@@ -36,16 +38,22 @@ fn main() -> ExitCode {
             } else {
                 firmware::build_product()
             };
-            built.and_then(|()| product::run()).and_then(|p| {
-                println!(
-                    "{} product lines equal on host, QEMU and {}\n{}",
-                    p.lines,
-                    product::GOLDEN,
-                    p.report
-                );
-                println!("-- the product for the STM32F405 on QEMU netduinoplus2:");
-                product::run_f405(&p.qemu.stdout).map(|r| println!("{r}"))
-            })
+            built
+                .and_then(|()| product::run())
+                .and_then(|p| {
+                    println!(
+                        "{} product lines equal on host, QEMU and {}\n{}",
+                        p.lines,
+                        product::GOLDEN,
+                        p.report
+                    );
+                    println!("-- the product for the STM32F405 on QEMU netduinoplus2:");
+                    product::run_f405(&p.qemu.stdout).map(|r| println!("{r}"))
+                })
+                .and_then(|()| {
+                    println!("-- the product with the accurate preset on QEMU mps2-an386:");
+                    product::run_accurate().map(|r| println!("{r}"))
+                })
         }
         Some("bench") => bench::run(),
         Some("fuzz") => fuzz::run(&args[1..]),

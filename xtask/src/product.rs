@@ -5,8 +5,8 @@
 //! ([`run_f405`]).
 
 use crate::firmware::{
-    budget, budget_of, build_f405, check_no_panic, f405_ccm_budget, link_f405_board, product_elf,
-    run_qemu, sizes, FirmwareError, Machine, QemuRun, Sizes,
+    budget, budget_of, build_accurate, build_f405, check_no_panic, f405_ccm_budget,
+    link_f405_board, product_elf, run_qemu, sizes, FirmwareError, Machine, QemuRun, Sizes,
 };
 use crate::util::{host_cargo, output, root, Result, Section};
 
@@ -267,6 +267,35 @@ pub fn bench_section(run: &ProductRun) -> Section {
             run.lines, run.report
         ),
     }
+}
+
+/// The product with the accurate preset (`PipelineParams::ACCURATE`,
+/// firmware-sim/README.md): built, checked for panic paths, run under QEMU
+/// mps2-an386 and on the host, whose `product`, `object` and
+/// `objects-checksum` lines must be equal; returns a line with their count
+/// and the frame's instructions.
+///
+/// # Errors
+/// A failed build or run, a panic path, or runs that differ.
+pub fn run_accurate() -> Result<String> {
+    let elf = build_accurate()?;
+    println!("{}", check_no_panic(&elf)?);
+    let qemu = run_qemu(Machine::Mps2An386, &elf)?;
+    let host = host_run(&["accurate"])?;
+    let lines = compare("host", &host, "QEMU", &qemu.stdout)?;
+    let instr = |name: &str| {
+        qemu.stdout
+            .lines()
+            .find_map(|l| l.strip_prefix(name)?.trim().parse::<u64>().ok())
+    };
+    let frame = match (instr("instr total"), instr("instr stage capture")) {
+        (Some(t), Some(c)) => format!("{} M4 instructions a frame", t.saturating_sub(c)),
+        _ => "no instruction count".into(),
+    };
+    Ok(format!(
+        "{lines} product lines equal on host and QEMU with the accurate preset; {frame} \
+         without the simulated camera's rendering"
+    ))
 }
 
 /// The product at 128x96 for the STM32F405: built with `--features f405`

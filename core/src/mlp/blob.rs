@@ -8,6 +8,8 @@
 //! Multi-byte fields are decoded with `from_le_bytes` on byte slices, so the
 //! blob may sit at any address (flash or RAM) and no `unsafe` is needed.
 
+use crate::shape::Mirror;
+
 /// The first four bytes of every model.
 pub const MAGIC: [u8; 4] = *b"PGML";
 /// The newest version, the one with per-class [`Symmetry`] bytes.
@@ -348,8 +350,6 @@ pub struct Model<'a> {
     names: &'a [u8],
     meta: &'a str,
 }
-
-use crate::shape::Mirror;
 
 /// Little-endian reads that cannot panic.
 pub(crate) fn le_u16(b: &[u8], at: usize) -> u16 {

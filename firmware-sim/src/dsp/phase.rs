@@ -1,5 +1,6 @@
 //! The phase step of the stereo stage's refinement and its SGM path steps
-//! in assembly: [`PhaseAsm`].
+//! in assembly: [`PhaseAsm`], which also runs the read-out's cost kernel
+//! (`costs.rs`).
 
 use super::costs::costs_asm;
 use super::sgm::{min16, sgm_lanes, sgm_settle, uadd16, uqadd16, usub16};

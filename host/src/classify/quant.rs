@@ -5,9 +5,9 @@
 //!
 //! **Symmetry.** Class `c` is taken as symmetric under a mirror when the
 //! quantised model names the mirrored shape vectors of `c`'s clean
-//! training silhouettes as `c` at least [`SYMMETRY_MIN_RATIO`] times as
+//! silhouettes (the held-out ones, `symmetry_cmd::symmetry_samples`) as `c` at least [`SYMMETRY_MIN_RATIO`] times as
 //! often as it names the unmirrored ones (that rate above zero; plain
-//! identification, Δ included; [`derive_symmetry`]); the flags go into a
+//! identification, Δ included; [`mirror_agreement`], [`Agreement::symmetry`]); the flags go into a
 //! version-2 blob ([`with_symmetry`]).
 //!
 //! **Scales.**
@@ -498,14 +498,14 @@ pub fn quantize_as(
     })
 }
 
-/// The least ratio of the rate at which a class's mirrored training
+/// The least ratio of the rate at which a class's mirrored
 /// vectors are named as the class to the rate for its unmirrored ones for
 /// the class to count as symmetric under the mirror (relative, so that a
 /// class the model names only moderately well, such as the circle, is not
 /// held to a bar its own silhouettes do not reach).
 pub const SYMMETRY_MIN_RATIO: f64 = 0.9;
 
-/// One class's identification rates on its training vectors
+/// One class's identification rates on its silhouettes' vectors
 /// ([`mirror_agreement`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Agreement {
@@ -614,24 +614,6 @@ pub fn mirror_agreement(
             })
         })
         .collect()
-}
-
-/// The symmetry byte of each class from [`mirror_agreement`]: a mirror's
-/// bit when the class's mirrored vectors are named as the class at least
-/// [`SYMMETRY_MIN_RATIO`] times as often as its unmirrored ones (and
-/// those at all; [`Agreement::symmetry`]).
-///
-/// # Errors
-/// As [`mirror_agreement`].
-pub fn derive_symmetry(
-    model: &Model<'_>,
-    inputs: &[Vec<i16>],
-    labels: &[usize],
-) -> Result<Vec<u8>, ClassifyError> {
-    Ok(mirror_agreement(model, inputs, labels)?
-        .iter()
-        .map(|a| a.symmetry(SYMMETRY_MIN_RATIO).bits())
-        .collect())
 }
 
 /// `blob` (version 1 or 2) as a version-2 blob with the symmetry bytes

@@ -100,12 +100,16 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
         };
         let meta = super::model_cmd::train_meta(&file, dir);
         let blob = quantize(&net, &calib, &labels, &file.classes, &meta)?;
-        // As `train`: the symmetry from the clean training silhouettes.
-        let clean: Vec<&super::dataset::Sample> = ds
-            .samples
-            .iter()
-            .filter(|s| train.contains(s.key.as_str()))
-            .collect();
+        // As `train`: the symmetry from the clean held-out silhouettes.
+        let test: HashSet<&str> = file.test.iter().map(String::as_str).collect();
+        let of = |keys: &HashSet<&str>| -> Vec<&super::dataset::Sample> {
+            ds.samples
+                .iter()
+                .filter(|s| keys.contains(s.key.as_str()))
+                .collect()
+        };
+        let (clean, _) =
+            super::symmetry_cmd::symmetry_samples(of(&test), of(&train), ds.classes.len());
         super::symmetry_cmd::add_symmetry(&blob, &clean)?.0
     } else {
         return Err(bad_model(

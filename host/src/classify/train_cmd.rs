@@ -208,10 +208,14 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
         &train_meta(&model, &opts.dataset),
     )?;
     // The symmetry of each class, from the quantised model and the class's
-    // clean training silhouettes (docs/MODEL_FORMAT.md, version 2).
-    let clean_train = clean_split(false);
-    let (blob, symmetry) =
-        super::symmetry_cmd::add_symmetry(&blob, &clean_train.iter().collect::<Vec<_>>())?;
+    // clean held-out silhouettes (docs/MODEL_FORMAT.md, version 2).
+    let (clean_train, clean_test) = (clean_split(false), clean_split(true));
+    let (sym_samples, sym_source) = super::symmetry_cmd::symmetry_samples(
+        clean_test.iter().collect(),
+        clean_train.iter().collect(),
+        n,
+    );
+    let (blob, symmetry) = super::symmetry_cmd::add_symmetry(&blob, &sym_samples)?;
     let model = ModelFile {
         blob_crc32: Some(protogist::mlp::blob::crc32(&blob)),
         ..model
@@ -275,7 +279,6 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
         format!("{:.1} %", 100.0 * correct as f64 / y.len().max(1) as f64),
     );
     let pc = |r: Option<f64>| r.map_or_else(|| "n/a".into(), |v| format!("{:.1} %", 100.0 * v));
-    let clean_test = clean_split(true);
     let qm =
         protogist::mlp::Model::parse(&blob).map_err(|e| bad_model(&opts.out, model_error(e)))?;
     s.push(
@@ -289,7 +292,11 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
         );
     }
     s.push(
-        "symmetry (named as the class: unmirrored: mirrored V/H)",
+        format!(
+            "symmetry ({} {} silhouettes named as the class: unmirrored: mirrored V/H)",
+            sym_samples.len(),
+            sym_source.describe()
+        ),
         super::symmetry_cmd::describe(&qm, &symmetry, super::quant::SYMMETRY_MIN_RATIO),
     );
     s.push(

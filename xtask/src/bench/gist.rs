@@ -6,14 +6,19 @@ use super::{protogist_json, Section, NOT_YET};
 /// Scenes, seed and size of the benchmark set.
 const SCENES: &str = "200";
 const SEED: &str = "1";
-/// The chains measured, with their labels. Core's pipeline joins as
-/// `("core pipeline (fixed point)", "core")` once `gist-eval` has it.
-const MODES: [(&str, &str); 3] = [
-    ("core pipeline (the product)", "core"),
-    ("f32 reference chain", "reference"),
+/// The chains measured: label, `--mode`, `--preset`.
+const MODES: [(&str, &str, &str); 4] = [
+    ("core pipeline (the product)", "core", "default"),
+    (
+        "core pipeline, `accurate` preset (full search at half size)",
+        "core",
+        "accurate",
+    ),
+    ("f32 reference chain", "reference", "default"),
     (
         "ground-truth disparity (stereo upper bound)",
         "gt-disparity",
+        "default",
     ),
 ];
 
@@ -37,7 +42,7 @@ pub fn section() -> Section {
          ms/scene is the detector's time per scene on one of 2 worker threads.\n\n\
          ```\ncargo run --release -- gen-scenes --out scenes --scenes {SCENES} --seed {SEED} --split test\n\
          cargo run --release -- gist-eval --scenes scenes --model host/data/shapes_model.bin \
-         --mode reference|gt-disparity --out OUT\n```\n\n"
+         [--mode reference|gt-disparity | --preset accurate] --out OUT\n```\n\n"
     );
     let made = super::protogist(&[
         "gen-scenes",
@@ -52,8 +57,8 @@ pub fn section() -> Section {
     ]);
     let reports: Vec<(&str, Option<serde_json::Value>)> = MODES
         .iter()
-        .map(|&(label, mode)| {
-            let out = dir.join(mode).display().to_string();
+        .map(|&(label, mode, preset)| {
+            let out = dir.join(format!("{mode}-{preset}")).display().to_string();
             let r = made.as_ref().ok().and_then(|_| {
                 protogist_json(&[
                     "gist-eval",
@@ -63,6 +68,8 @@ pub fn section() -> Section {
                     "host/data/shapes_model.bin",
                     "--mode",
                     mode,
+                    "--preset",
+                    preset,
                     "--json",
                     "--out",
                     &out,

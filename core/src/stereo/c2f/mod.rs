@@ -93,6 +93,15 @@ pub use buffers::{
 };
 pub use params::{C2fParams, LeftRight, MAX_COARSE};
 
+use super::phase::{Phase, PhaseBuffers, PhaseKernel, Refiner, SafePhase};
+use super::{param, Dem, DemTable, Probe, StereoError, StereoReport};
+use crate::disparity::DisparityCell;
+use crate::image::{ImageError, ImageViewMut};
+use buffers::Work;
+use core::marker::PhantomData;
+use pass::{Output, Pass};
+use rows::{Cells, Map, Plain, Refined};
+
 /// The read-out's costs of one pixel whose window's candidates are all
 /// valid: the portable [`PhaseKernel::costs`]. `raw` holds the window's
 /// scores (`raw[..n]`, overwritten; `n = out.len()`) and `total` (> 0) the
@@ -106,15 +115,6 @@ pub fn costs(raw: &mut [i64], total: i64, table: &DemTable<'_>, lo: usize, out: 
         n => votes::costs_of::<0>(raw, total, table, lo, n, out),
     }
 }
-
-use super::phase::{Phase, PhaseBuffers, PhaseKernel, Refiner, SafePhase};
-use super::{param, Dem, DemTable, Probe, StereoError, StereoReport};
-use crate::disparity::DisparityCell;
-use crate::image::{ImageError, ImageViewMut};
-use buffers::Work;
-use core::marker::PhantomData;
-use pass::{Output, Pass};
-use rows::{Cells, Map, Plain, Refined};
 
 /// The number of SGM paths (the 5 of one top-to-bottom pass).
 pub const PATHS: u32 = 5;

@@ -171,8 +171,8 @@ impl C2fParams {
     /// half-size map spread over 2x2 blocks. Levels 0 and 1 of
     /// `half-narrow`'s tables. More objects found end to end (the
     /// pipeline's `accurate` preset, docs/PIPELINE.md, "The stereo point")
-    /// for about 55 % more host time and 44 M M4 instructions a 160x120
-    /// frame more (the stereo stage 64.4 M instead of 20.3 M): a point for
+    /// for about 55 % more host time and 42.6 M M4 instructions a 160x120
+    /// frame more (the stereo stage 62.1 M instead of 19.4 M): a point for
     /// boards with several times the product's 32 M.
     pub const HALF_NARROW_FULL_SEARCH: Self = Self {
         coarse: 1,

@@ -233,9 +233,10 @@ impl<'e, K> Pass<'e, K> {
                         continue;
                     }
                     let valid = (top - lo + 1).min(n);
-                    match (valid, n) {
-                        (5, 5) | (9, 9) | (3, 3) => K::costs(raw, total, table, lo, dst),
-                        _ => costs_of::<0>(raw, total, table, lo, valid, dst),
+                    if valid == n {
+                        K::costs(raw, total, table, lo, dst);
+                    } else {
+                        costs_of::<0>(raw, total, table, lo, valid, dst);
                     }
                 }
             }

@@ -89,8 +89,9 @@ pub trait PhaseKernel {
 
     /// The read-out's third hot step: one pixel's `Q8` costs from its
     /// window's scores, every candidate valid ([`crate::stereo::c2f::costs`],
-    /// the portable default; the engine's windows of 5 at its finer levels
-    /// and of 9 at its coarsest).
+    /// the portable default; every pixel whose window lies within the
+    /// disparity range: windows of 5 at the engine's finer levels, and its
+    /// coarsest level's full search).
     ///
     /// Contract: `raw[..n]` are the window's scores (`n = out.len()`) and
     /// may be left with any values; `total > 0`. Any kernel must write the
