@@ -22,7 +22,51 @@ use protogist_host::classify::quant::{
 use protogist_host::classify::rules::Templates;
 use protogist_tests::nets::random_net;
 
-const MODEL: &[u8] = include_bytes!("../../host/data/shapes_model.bin");
+/// The shipped model as version 1 (no symmetry section).
+static MODEL_V1: std::sync::LazyLock<Vec<u8>> = std::sync::LazyLock::new(|| version_1(SHIPPED));
+const SHIPPED: &[u8] = include_bytes!("../../host/data/shapes_model.bin");
+/// The shipped model's network and templates, without symmetry.
+fn shipped_v1() -> &'static [u8] {
+    &MODEL_V1
+}
+
+/// A version-2 blob as version 1: the symmetry section (before the names
+/// and the metadata) dropped, the version and the CRC rewritten.
+fn version_1(v2: &[u8]) -> Vec<u8> {
+    use protogist::mlp::blob::{crc32, CRC_LEN, HEADER_LEN, VERSION_1};
+    let m = Model::parse(v2).unwrap();
+    assert!(m.has_symmetry_section());
+    let le = |at: usize| u32::from_le_bytes(v2[at..at + 4].try_into().unwrap()) as usize;
+    let tail = le(32) + le(36) + CRC_LEN;
+    let sym = v2.len() - tail - m.classes();
+    let mut v1 = v2[..HEADER_LEN].to_vec();
+    v1[4..6].copy_from_slice(&VERSION_1.to_le_bytes());
+    v1.extend_from_slice(&v2[HEADER_LEN..sym]);
+    v1.extend_from_slice(&v2[sym + m.classes()..v2.len() - CRC_LEN]);
+    let crc = crc32(&v1);
+    v1.extend_from_slice(&crc.to_le_bytes());
+    v1
+}
+
+#[test]
+fn the_shipped_model_as_version_1_keeps_everything_but_symmetry() {
+    let (v1, v2) = (
+        Model::parse(shipped_v1()).unwrap(),
+        Model::parse(SHIPPED).unwrap(),
+    );
+    assert!(!v1.has_symmetry_section() && v2.any_symmetry().bits() == 3);
+    assert_eq!(shipped_v1().len() + v2.classes(), SHIPPED.len());
+    assert_eq!(
+        with_symmetry(
+            shipped_v1(),
+            &(0..v2.classes())
+                .map(|c| v2.symmetry(c).bits())
+                .collect::<Vec<_>>()
+        )
+        .unwrap(),
+        SHIPPED
+    );
+}
 
 /// An asymmetric blob (a tilted, off-centre L with a notch and a disc),
 /// 41x41, as the tta26 probe drew it.
@@ -113,7 +157,7 @@ fn mirrors_agree_with_really_mirrored_masks() {
 
 /// The shipped model with symmetry `flags` (one byte per class).
 fn with_flags(flags: &[u8]) -> Vec<u8> {
-    with_symmetry(MODEL, flags).unwrap()
+    with_symmetry(shipped_v1(), flags).unwrap()
 }
 
 /// Shape vectors of a few real masks and their mirrors.
@@ -186,7 +230,7 @@ impl Bufs {
 
 #[test]
 fn without_symmetry_the_check_is_plain_identification() {
-    let v1 = Model::parse(MODEL).unwrap();
+    let v1 = Model::parse(shipped_v1()).unwrap();
     assert!(!v1.has_symmetry_section());
     let zeros = with_flags(&vec![0; v1.classes()]);
     let v2 = Model::parse(&zeros).unwrap();
@@ -205,7 +249,7 @@ fn without_symmetry_the_check_is_plain_identification() {
 /// the class's template.
 #[test]
 fn the_check_scores_each_class_on_its_own_mirrors() {
-    let k = Model::parse(MODEL).unwrap().classes();
+    let k = Model::parse(shipped_v1()).unwrap().classes();
     // Every combination of flags over the classes.
     let flags: Vec<u8> = (0..k).map(|c| (c % 4) as u8).collect();
     let blob = with_flags(&flags);
@@ -435,7 +479,7 @@ fn run_with_check(params: &PipelineParams, model: &[u8]) -> (Vec<String>, Vec<(S
 
 #[test]
 fn the_switch_off_is_todays_pipeline() {
-    let k = Model::parse(MODEL).unwrap().classes();
+    let k = Model::parse(shipped_v1()).unwrap().classes();
     let off = PipelineParams::DEFAULT.with_objects(4);
     let on = off.with_mirror_check(true);
     const { assert!(!PipelineParams::DEFAULT.mirror_check && PipelineParams::ACCURATE.mirror_check) };
@@ -447,10 +491,10 @@ fn the_switch_off_is_todays_pipeline() {
         object_bytes(160, 120, &on),
         object_bytes(160, 120, &off) + mirror_bytes(&on)
     );
-    let today = run(&off, MODEL);
+    let today = run(&off, shipped_v1());
     assert!(!today.is_empty());
     // A v1 model with the check on, a v2 model with the check off.
-    assert_eq!(run(&on, MODEL), today);
+    assert_eq!(run(&on, shipped_v1()), today);
     let all = with_flags(&vec![3; k]);
     assert_eq!(run(&off, &all), today);
     // On with flags: each object ranked as `mirror_check` ranks its
@@ -597,7 +641,7 @@ fn symmetry_derived_from_silhouettes() {
     .unwrap();
     let d = load_dataset(&ds).unwrap();
     let samples: Vec<&Sample> = d.samples.iter().collect();
-    let (blob, rates) = add_symmetry(MODEL, &samples).unwrap();
+    let (blob, rates) = add_symmetry(shipped_v1(), &samples).unwrap();
     let m = Model::parse(&blob).unwrap();
     let flag = |name: &str| {
         let c = d.classes.iter().position(|n| n.ends_with(name)).unwrap();
