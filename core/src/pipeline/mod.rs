@@ -183,7 +183,7 @@ impl PipelineParams {
     /// frame, where small objects average away. More objects found (on
     /// 1,000 training-split scenes, K = 4: recall 87.4 → 90.6 %,
     /// precision 95.5 → 96.5 %; docs/PIPELINE.md, "The stereo point") for
-    /// 2.4 times the default's M4 instructions a 160x120 frame (73.9 M
+    /// 2.4 times the default's M4 instructions a 160x120 frame (74.5 M
     /// against 31.4 M, the product's budget 32 M) and 3,168 B more
     /// workspace there: a setting for boards with several times the
     /// cycles. Two decoder tables, levels 0 and 1 of the default's. With
