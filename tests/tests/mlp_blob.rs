@@ -9,7 +9,8 @@ use protogist::mlp::{
 };
 use protogist::shape::{Mirror, ShapeElem, SHAPE_LEN};
 use protogist_host::classify::mlp::Mlp;
-use protogist_host::classify::quant::{quantize_net, with_symmetry, write_blob, BlobExtras};
+use protogist_host::classify::quant::{quantize_net, write_blob, BlobExtras};
+use protogist_host::classify::symmetry::with_symmetry;
 
 /// A valid 9-5-3 blob.
 fn small_blob() -> Vec<u8> {

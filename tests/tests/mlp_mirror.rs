@@ -1,7 +1,7 @@
 //! The mirror check (`protogist::mlp::mirror`, docs/CLASSIFY.md "The
 //! mirror check"): mirrors as permutations of the shape vector, per-class
-//! averaging by the model's symmetry, the pipeline switch, the symmetry
-//! derived from training silhouettes, and the float reference.
+//! averaging by the model's symmetry, the pipeline switch and the float
+//! reference (how the symmetry is derived: `mlp_symmetry.rs`).
 
 use proptest::prelude::*;
 use protogist::image::{ImageView, ImageViewMut, Rgb8};
@@ -17,9 +17,10 @@ use protogist::synth::{render_left, render_right, SceneSpec};
 use protogist_host::classify::mirror as fref;
 use protogist_host::classify::mlp::{unit, Mlp, SplitMix};
 use protogist_host::classify::quant::{
-    output_error_bound, quantize_net, shape_elems, with_symmetry, write_blob, BlobExtras,
+    output_error_bound, quantize_net, shape_elems, write_blob, BlobExtras,
 };
 use protogist_host::classify::rules::Templates;
+use protogist_host::classify::symmetry::with_symmetry;
 use protogist_tests::nets::random_net;
 
 /// The shipped model as version 1 (no symmetry section).
@@ -600,91 +601,4 @@ fn float_reference_check_follows_the_flags() {
         assert!((score - t.scores(&mean).unwrap()[c]).abs() < 1e-12);
     }
     assert!(fref::mirror_check(&net, &t, &none[..2], &x).is_err());
-}
-
-/// `train`'s rule on the shipped model and a few fresh gen-shapes
-/// silhouettes: classes drawn with a vertical axis (triangle, heart) keep
-/// their name mirrored left-right but not upside down, the arrow and the
-/// crescent the other way round, the ring both, the L neither.
-#[test]
-fn symmetry_derived_from_silhouettes() {
-    use protogist_host::classify::dataset::{load_dataset, Sample};
-    use protogist_host::classify::quant::{Agreement, SYMMETRY_MIN_RATIO};
-    use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
-    use protogist_host::classify::symmetry_cmd::{add_symmetry, flags_of};
-    // Relative rule: mirrored rate ≥ SYMMETRY_MIN_RATIO × unmirrored rate,
-    // which must be above zero.
-    let a = |plain: f64, v: f64, h: f64| {
-        flags_of(&Agreement {
-            plain,
-            mirrored: [v, h],
-        })
-        .bits()
-    };
-    let r = SYMMETRY_MIN_RATIO;
-    assert_eq!(a(0.8, 0.8 * r, 0.8 * r - 1e-9), 1);
-    assert_eq!(a(0.8, 0.8 * r - 1e-9, 0.8 * r), 2);
-    assert_eq!(a(1.0, 1.0, 1.0), 3);
-    // a class named right only 64 % of the time, mirrored just as often
-    assert_eq!(a(0.64, 0.64, 0.65), 3);
-    assert_eq!(a(0.0, 0.0, 0.0), 0);
-    assert_eq!(a(0.0, 0.5, 0.5), 0);
-    let tmp = tempfile::tempdir().unwrap();
-    let ds = tmp.path().join("shapes");
-    gen_shapes(&GenShapesOptions {
-        out: ds.clone(),
-        classes: 19,
-        per_class: 12,
-        seed: 77,
-        size: 64,
-    })
-    .unwrap();
-    let d = load_dataset(&ds).unwrap();
-    let samples: Vec<&Sample> = d.samples.iter().collect();
-    let (blob, rates) = add_symmetry(shipped_v1(), &samples).unwrap();
-    let m = Model::parse(&blob).unwrap();
-    let flag = |name: &str| {
-        let c = d.classes.iter().position(|n| n.ends_with(name)).unwrap();
-        eprintln!("{name}: {:?}", rates[c]);
-        m.symmetry(c).bits()
-    };
-    assert_eq!(flag("_triangle"), 1);
-    assert_eq!(flag("_heart"), 1);
-    assert_eq!(flag("_arrow"), 2);
-    assert_eq!(flag("_crescent"), 2);
-    assert_eq!(flag("_ring"), 3);
-    assert_eq!(flag("_l-shape"), 0);
-}
-
-/// The symmetry is measured on the held-out silhouettes when every class
-/// has one (the network never trained on them nor on any mirror image),
-/// else on the training ones.
-#[test]
-fn symmetry_is_measured_on_held_out_silhouettes() {
-    use protogist_host::classify::dataset::Sample;
-    use protogist_host::classify::symmetry_cmd::{symmetry_samples, SymmetrySource};
-    let s = |key: &str, label: usize| Sample {
-        key: key.into(),
-        label,
-        x: vec![],
-        shape: vec![],
-    };
-    let train = [s("a/0", 0), s("b/0", 1), s("c/0", 2)];
-    let held = [s("a/1", 0), s("b/1", 1), s("c/1", 2), s("c/2", 2)];
-    let keys = |v: &[&Sample]| v.iter().map(|s| s.key.clone()).collect::<Vec<_>>();
-    let (got, src) = symmetry_samples(held.iter().collect(), train.iter().collect(), 3);
-    assert_eq!(src, SymmetrySource::HeldOut);
-    assert_eq!(keys(&got), ["a/1", "b/1", "c/1", "c/2"]);
-    // class 1 has no held-out silhouette: the training ones
-    let partial: Vec<&Sample> = held.iter().filter(|s| s.label != 1).collect();
-    let (got, src) = symmetry_samples(partial, train.iter().collect(), 3);
-    assert_eq!(src, SymmetrySource::Training);
-    assert_eq!(keys(&got), ["a/0", "b/0", "c/0"]);
-    // a label beyond the classes does not stand in for a missing class
-    let beyond = s("z/0", 5);
-    let odd = vec![&held[0], &held[1], &beyond];
-    let (_, src) = symmetry_samples(odd, train.iter().collect(), 3);
-    assert_eq!(src, SymmetrySource::Training);
-    let (_, src) = symmetry_samples(vec![], vec![], 0);
-    assert_eq!(src, SymmetrySource::Training);
 }

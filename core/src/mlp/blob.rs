@@ -8,7 +8,8 @@
 //! Multi-byte fields are decoded with `from_le_bytes` on byte slices, so the
 //! blob may sit at any address (flash or RAM) and no `unsafe` is needed.
 
-use crate::shape::Mirror;
+pub use super::input_kind::InputKind;
+pub use super::symmetry::Symmetry;
 
 /// The first four bytes of every model.
 pub const MAGIC: [u8; 4] = *b"PGML";
@@ -23,99 +24,6 @@ pub const CRC_LEN: usize = 4;
 /// Input format 1: shape elements (`I4F12`, the core `shape` stage).
 pub const INPUT_I4F12: u8 = 1;
 
-/// What a model's input is: the blob's input code. Every kind is read as
-/// `I4F12` (`raw / 4096`). Code 1 (shape) is the original format and takes
-/// any length (720 in practice); codes 2 to 8 are the image conditions of
-/// the paper's section 4.4 and fix the length.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[non_exhaustive]
-pub enum InputKind {
-    /// Shape vector `s^N` (code 1, 720 values).
-    Shape,
-    /// Luminance `I_L^N`, 60×60 (code 2).
-    Luminance,
-    /// Colour `I_C^N` as an indexed image, 60×60 (code 3).
-    Colour,
-    /// Colour as three 60×60 planes, R, G, B (code 4).
-    Colour3,
-    /// Conspicuity `C^N`, 60×60 (code 5).
-    Conspicuity,
-    /// Range `R^N`, 60×60 (code 6).
-    Range,
-    /// `(s^N, R^N)`, 720 + 3600 (code 7).
-    ShapeRange,
-    /// `(s^N, R^N, C^N, I_L^N)`, 720 + 3·3600 (code 8).
-    ShapeRangeConspicuityLuminance,
-}
-
-impl InputKind {
-    /// Every kind, by code.
-    pub const ALL: [Self; 8] = [
-        Self::Shape,
-        Self::Luminance,
-        Self::Colour,
-        Self::Colour3,
-        Self::Conspicuity,
-        Self::Range,
-        Self::ShapeRange,
-        Self::ShapeRangeConspicuityLuminance,
-    ];
-
-    /// Its code in the blob header.
-    pub const fn code(self) -> u8 {
-        match self {
-            Self::Shape => INPUT_I4F12,
-            Self::Luminance => 2,
-            Self::Colour => 3,
-            Self::Colour3 => 4,
-            Self::Conspicuity => 5,
-            Self::Range => 6,
-            Self::ShapeRange => 7,
-            Self::ShapeRangeConspicuityLuminance => 8,
-        }
-    }
-
-    /// The kind of a code (`None` for an unknown one).
-    pub const fn from_code(code: u8) -> Option<Self> {
-        match code {
-            1 => Some(Self::Shape),
-            2 => Some(Self::Luminance),
-            3 => Some(Self::Colour),
-            4 => Some(Self::Colour3),
-            5 => Some(Self::Conspicuity),
-            6 => Some(Self::Range),
-            7 => Some(Self::ShapeRange),
-            8 => Some(Self::ShapeRangeConspicuityLuminance),
-            _ => None,
-        }
-    }
-
-    /// Input length (`SHAPE_LEN` for shape).
-    pub const fn input_len(self) -> usize {
-        const IMG: usize = 3600;
-        match self {
-            Self::Shape => crate::shape::SHAPE_LEN,
-            Self::Colour3 => 3 * IMG,
-            Self::ShapeRange => crate::shape::SHAPE_LEN + IMG,
-            Self::ShapeRangeConspicuityLuminance => crate::shape::SHAPE_LEN + 3 * IMG,
-            _ => IMG,
-        }
-    }
-
-    /// The name `protogist train --features` and `experiment` use.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Shape => "shape",
-            Self::Luminance => "luminance",
-            Self::Colour => "colour",
-            Self::Colour3 => "colour3",
-            Self::Conspicuity => "conspicuity",
-            Self::Range => "range",
-            Self::ShapeRange => "shape-range",
-            Self::ShapeRangeConspicuityLuminance => "all",
-        }
-    }
-}
 /// Weight format 1: int8, symmetric, one scale per output channel, each
 /// stored excess-128 (byte `w + 128`, so `w = −127..=127` is `1..=255`).
 pub const WEIGHTS_I8_PER_CHANNEL: u8 = 1;
@@ -267,59 +175,6 @@ const CRC_TABLE: [u32; 256] = {
     }
     t
 };
-
-/// The mirrors ([`Mirror`]) under which a class looks the same, as the
-/// blob stores them: bit 0 the mirror about the vertical axis, bit 1 about
-/// the horizontal axis; the other bits are 0.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct Symmetry(u8);
-
-impl Symmetry {
-    /// No mirror.
-    pub const NONE: Self = Self(0);
-    /// Bit of [`Mirror::Vertical`].
-    pub const VERTICAL: u8 = 1;
-    /// Bit of [`Mirror::Horizontal`].
-    pub const HORIZONTAL: u8 = 2;
-
-    /// The symmetry of a blob byte (`None` when another bit is set).
-    pub const fn from_bits(bits: u8) -> Option<Self> {
-        if bits & !(Self::VERTICAL | Self::HORIZONTAL) == 0 {
-            Some(Self(bits))
-        } else {
-            None
-        }
-    }
-
-    /// Its blob byte.
-    pub const fn bits(self) -> u8 {
-        self.0
-    }
-
-    /// The bit of `m`.
-    pub const fn bit(m: Mirror) -> u8 {
-        match m {
-            Mirror::Vertical => Self::VERTICAL,
-            Mirror::Horizontal => Self::HORIZONTAL,
-        }
-    }
-
-    /// Whether the class looks the same under `m`.
-    pub const fn has(self, m: Mirror) -> bool {
-        self.0 & Self::bit(m) != 0
-    }
-
-    /// This symmetry and `m`.
-    #[must_use]
-    pub const fn with(self, m: Mirror) -> Self {
-        Self(self.0 | Self::bit(m))
-    }
-
-    /// How many mirrors.
-    pub const fn count(self) -> u32 {
-        self.0.count_ones()
-    }
-}
 
 /// A parsed model: dimensions, the threshold and borrowed sections.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -18,7 +18,7 @@
 
 use super::blob::{Model, Symmetry};
 use super::rules::{cosine_q16, rank_by};
-use super::{forward_with, MacKernel, MlpError, Ranked, SafeKernel, Scratch};
+use super::{check_scratch, forward_with, MacKernel, MlpError, Ranked, SafeKernel, Scratch};
 use crate::shape::{Mirror, ShapeElem, ShapeVector, SHAPE_LEN};
 
 /// Views of an object the check may run the network on: the object, its
@@ -95,8 +95,8 @@ pub fn mirror_check_with<K: MacKernel>(
     ranked: &mut [Ranked],
 ) -> Result<usize, MlpError> {
     let k = model.classes();
-    check("outputs", mirror_outputs_len(k), mirror.outputs.len())?;
-    check("mean", mirror_mean_len(k), mirror.mean.len())?;
+    check_scratch("outputs", mirror_outputs_len(k), mirror.outputs.len())?;
+    check_scratch("mean", mirror_mean_len(k), mirror.mean.len())?;
     let out = forward_with::<K>(model, input, scratch)?;
     copy_view(out, mirror.outputs, 0, k);
     let any = model.any_symmetry();
@@ -128,17 +128,6 @@ pub fn mirror_check_with<K: MacKernel>(
     mirror_top_k(model, mirror.outputs, mirror.mean, ranked)
 }
 
-fn check(buffer: &'static str, needed: usize, got: usize) -> Result<(), MlpError> {
-    if got < needed {
-        return Err(MlpError::ScratchTooSmall {
-            buffer,
-            needed,
-            got,
-        });
-    }
-    Ok(())
-}
-
 fn copy_view(out: &[u16], outputs: &mut [u16], row: usize, k: usize) {
     if let Some(dst) = outputs.get_mut(row * k..(row + 1) * k) {
         for (d, &o) in dst.iter_mut().zip(out) {
@@ -163,8 +152,8 @@ pub fn mirror_top_k(
     ranked: &mut [Ranked],
 ) -> Result<usize, MlpError> {
     let k = model.classes();
-    check("outputs", mirror_outputs_len(k), outputs.len())?;
-    check("mean", mirror_mean_len(k), mean.len())?;
+    check_scratch("outputs", mirror_outputs_len(k), outputs.len())?;
+    check_scratch("mean", mirror_mean_len(k), mean.len())?;
     let mean = mean.get_mut(..k).unwrap_or(&mut []);
     Ok(rank_by(
         k,

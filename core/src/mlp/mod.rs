@@ -48,11 +48,13 @@
 //! the same bits. docs/MODEL_FORMAT.md, section Kernel, has the costs.
 
 pub mod blob;
+mod input_kind;
 mod kernel;
 pub mod logsig_table;
 pub mod mirror;
 pub mod requant;
 mod rules;
+mod symmetry;
 
 pub use blob::{crc32, InputKind, Model, ModelError, Symmetry};
 pub use kernel::{safe_dot_rows, MacKernel, SafeKernel};
@@ -255,7 +257,11 @@ pub fn quantize_input(
     Ok(())
 }
 
-fn check_scratch(buffer: &'static str, needed: usize, got: usize) -> Result<(), MlpError> {
+pub(crate) fn check_scratch(
+    buffer: &'static str,
+    needed: usize,
+    got: usize,
+) -> Result<(), MlpError> {
     if got < needed {
         return Err(MlpError::ScratchTooSmall {
             buffer,

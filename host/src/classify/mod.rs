@@ -46,6 +46,7 @@ pub mod quant_cmd;
 pub mod rules;
 pub mod shapes;
 pub mod shipped;
+pub mod symmetry;
 pub mod symmetry_cmd;
 pub mod train;
 pub mod train_cmd;

@@ -7,7 +7,8 @@
 use super::dataset::{load_dataset, Sample};
 use super::model::{bad_model, parse_sidecar};
 use super::model_cmd::sidecar_path;
-use super::quant::{mirror_agreement, model_error, with_symmetry, Agreement, SYMMETRY_MIN_RATIO};
+use super::quant::model_error;
+use super::symmetry::{mirror_agreement, with_symmetry, Agreement, SYMMETRY_MIN_RATIO};
 use crate::error::{HostError, Result};
 use crate::summary::Summary;
 use protogist::mlp::{Model, Symmetry};
