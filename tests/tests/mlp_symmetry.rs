@@ -17,14 +17,15 @@ fn symmetry_derived_from_silhouettes() {
     use protogist_host::classify::dataset::{load_dataset, Sample};
     use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
     use protogist_host::classify::symmetry::{Agreement, SYMMETRY_MIN_RATIO};
-    use protogist_host::classify::symmetry_cmd::{add_symmetry, flags_of};
+    use protogist_host::classify::symmetry_cmd::add_symmetry;
     // Relative rule: mirrored rate ≥ SYMMETRY_MIN_RATIO × unmirrored rate,
     // which must be above zero.
     let a = |plain: f64, v: f64, h: f64| {
-        flags_of(&Agreement {
+        Agreement {
             plain,
             mirrored: [v, h],
-        })
+        }
+        .symmetry()
         .bits()
     };
     let r = SYMMETRY_MIN_RATIO;
@@ -93,4 +94,59 @@ fn symmetry_is_measured_on_held_out_silhouettes() {
     assert_eq!(src, SymmetrySource::Training);
     let (_, src) = symmetry_samples(vec![], vec![], 0);
     assert_eq!(src, SymmetrySource::Training);
+}
+
+/// `protogist model-symmetry`: without a sidecar it measures every
+/// silhouette of the dataset and writes the model with the bytes
+/// `add_symmetry` derives from them, every other byte kept; a dataset of
+/// other classes, a sidecar that is not one and a missing model are
+/// errors that write nothing.
+#[test]
+fn model_symmetry_writes_the_derived_bytes_or_nothing() {
+    use protogist_host::classify::dataset::{load_dataset, Sample};
+    use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
+    use protogist_host::classify::symmetry_cmd::{
+        add_symmetry, run_model_symmetry, ModelSymmetryOptions,
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let gen = |name: &str, classes: usize| {
+        let out = tmp.path().join(name);
+        gen_shapes(&GenShapesOptions {
+            out: out.clone(),
+            classes,
+            per_class: 6,
+            seed: 5,
+            size: 64,
+        })
+        .unwrap();
+        out
+    };
+    let (ds, few) = (gen("shapes", 19), gen("few", 3));
+    let model = tmp.path().join("m.bin");
+    std::fs::write(&model, SHIPPED).unwrap();
+    let opts = |dataset: &std::path::Path, out: &str| ModelSymmetryOptions {
+        model: model.clone(),
+        dataset: dataset.to_path_buf(),
+        out: tmp.path().join(out),
+    };
+    run_model_symmetry(&opts(&ds, "a.bin")).unwrap();
+    let d = load_dataset(&ds).unwrap();
+    let all: Vec<&Sample> = d.samples.iter().collect();
+    let want = add_symmetry(SHIPPED, &all).unwrap().0;
+    assert_eq!(std::fs::read(tmp.path().join("a.bin")).unwrap(), want);
+    // Other classes than the model's.
+    assert!(run_model_symmetry(&opts(&few, "b.bin")).is_err());
+    assert!(!tmp.path().join("b.bin").exists());
+    // A sidecar that does not parse, and one that cannot be read.
+    let sidecar = tmp.path().join("m.bin.json");
+    std::fs::write(&sidecar, b"not json").unwrap();
+    assert!(run_model_symmetry(&opts(&ds, "c.bin")).is_err());
+    std::fs::remove_file(&sidecar).unwrap();
+    std::fs::create_dir(&sidecar).unwrap();
+    assert!(run_model_symmetry(&opts(&ds, "c.bin")).is_err());
+    assert!(!tmp.path().join("c.bin").exists());
+    // No model.
+    std::fs::remove_file(&model).unwrap();
+    assert!(run_model_symmetry(&opts(&ds, "d.bin")).is_err());
+    assert!(!tmp.path().join("d.bin").exists());
 }

@@ -9,13 +9,13 @@
 //! [`mirror_agreement`], [`Agreement::symmetry`]); the flags go into a
 //! version-2 blob ([`with_symmetry`]).
 
-use super::quant::shape_elems;
+use super::mirror::mirror_vector;
+use super::quant::int_outputs;
 use super::ClassifyError;
 use protogist::mlp::blob::{crc32, Model, Symmetry, CRC_LEN, HEADER_LEN, VERSION};
 use protogist::mlp::InputKind;
-use protogist::mlp::{forward, hidden_len, identify, output_len, packed_len, Identity, Scratch};
-use protogist::shape::{Mirror, ShapeElem, ShapeVector, SHAPE_LEN};
-use rayon::prelude::*;
+use protogist::mlp::{identify, Identity};
+use protogist::shape::{Mirror, SHAPE_LEN};
 
 /// The least ratio of the rate at which a class's mirrored
 /// vectors are named as the class to the rate for its unmirrored ones for
@@ -36,14 +36,14 @@ pub struct Agreement {
 }
 
 impl Agreement {
-    /// The symmetry under the relative rule: mirror `m` when
-    /// `plain > 0` and `mirrored[m] ≥ min_ratio · plain`.
+    /// The symmetry under the rule: mirror `m` when `plain > 0` and
+    /// `mirrored[m] ≥` [`SYMMETRY_MIN_RATIO`] `· plain`.
     #[must_use]
-    pub fn symmetry(&self, min_ratio: f64) -> Symmetry {
+    pub fn symmetry(&self) -> Symmetry {
         Mirror::ALL
             .into_iter()
             .zip(self.mirrored)
-            .filter(|&(_, r)| self.plain > 0.0 && r >= min_ratio * self.plain)
+            .filter(|&(_, r)| self.plain > 0.0 && r >= SYMMETRY_MIN_RATIO * self.plain)
             .fold(Symmetry::NONE, |s, (m, _)| s.with(m))
     }
 }
@@ -61,7 +61,7 @@ pub fn mirror_agreement(
     inputs: &[Vec<i16>],
     labels: &[usize],
 ) -> Result<Vec<Agreement>, ClassifyError> {
-    let (d, h, k) = (model.inputs(), model.hidden(), model.classes());
+    let (d, k) = (model.inputs(), model.classes());
     if d != SHAPE_LEN || model.input_kind() != InputKind::Shape {
         return Err(ClassifyError::DimensionMismatch {
             index: 0,
@@ -69,54 +69,36 @@ pub fn mirror_agreement(
             got: d,
         });
     }
-    let hits: Vec<[bool; 3]> = inputs
-        .par_iter()
-        .zip(labels)
-        .enumerate()
-        .map_init(
-            || {
-                (
-                    vec![0u32; packed_len(d, h)],
-                    vec![0u8; hidden_len(h)],
-                    vec![0u16; output_len(k)],
-                )
-            },
-            |(i, hd, o), (index, (raw, &c))| {
-                let x: ShapeVector = shape_elems(raw).try_into().map_err(|v: Vec<ShapeElem>| {
-                    ClassifyError::DimensionMismatch {
-                        index,
-                        expected: SHAPE_LEN,
-                        got: v.len(),
-                    }
-                })?;
-                let mut hit = [false; 3];
-                let modes = [None, Some(Mirror::ALL[0]), Some(Mirror::ALL[1])];
-                for (m, hit) in modes.into_iter().zip(&mut hit) {
-                    let mut v = x;
-                    if let Some(m) = m {
-                        m.apply(&x, &mut v);
-                    }
-                    let mut s = Scratch {
-                        input: i,
-                        hidden: hd,
-                        output: o,
-                    };
-                    let out = forward(model, &v, &mut s)?;
-                    *hit = identify(model, out)?.0 == Identity::Known(c as u16);
-                }
-                Ok(hit)
-            },
-        )
-        .collect::<Result<_, ClassifyError>>()?;
+    // The vectors' mirror images ([`Mirror::ALL`] order), then the integer
+    // network's outputs on the vectors and on each mirror's images.
+    let mirrored = Mirror::ALL.map(|m| {
+        inputs
+            .iter()
+            .enumerate()
+            .map(|(index, raw)| {
+                mirror_vector(m, raw).map_err(|_| ClassifyError::DimensionMismatch {
+                    index,
+                    expected: SHAPE_LEN,
+                    got: raw.len(),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()
+    });
+    let [v, h] = mirrored;
+    let outputs = [
+        int_outputs(model, inputs)?,
+        int_outputs(model, &v?)?,
+        int_outputs(model, &h?)?,
+    ];
     let mut counts = vec![(0usize, [0usize; 3]); k];
-    for (hit, &c) in hits.iter().zip(labels) {
+    for (n, &c) in labels.iter().enumerate().take(inputs.len()) {
         let e = counts.get_mut(c).ok_or(ClassifyError::LabelOutOfRange {
             label: c,
             classes: k,
         })?;
         e.0 += 1;
-        for (n, &h) in e.1.iter_mut().zip(hit) {
-            *n += usize::from(h);
+        for (hits, out) in e.1.iter_mut().zip(&outputs) {
+            *hits += usize::from(identify(model, &out[n])?.0 == Identity::Known(c as u16));
         }
     }
     counts

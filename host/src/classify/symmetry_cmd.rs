@@ -11,7 +11,7 @@ use super::quant::model_error;
 use super::symmetry::{mirror_agreement, with_symmetry, Agreement, SYMMETRY_MIN_RATIO};
 use crate::error::{HostError, Result};
 use crate::summary::Summary;
-use protogist::mlp::{Model, Symmetry};
+use protogist::mlp::Model;
 use protogist::shape::Mirror;
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -24,31 +24,12 @@ use std::path::PathBuf;
 /// A blob that does not parse; a class without sample; a model that does
 /// not take shape vectors.
 pub fn add_symmetry(blob: &[u8], samples: &[&Sample]) -> Result<(Vec<u8>, Vec<Agreement>)> {
-    add_symmetry_with(blob, samples, SYMMETRY_MIN_RATIO)
-}
-
-/// [`add_symmetry`] with the rule's ratio `min_ratio`
-/// ([`Agreement::symmetry`]).
-///
-/// # Errors
-/// As [`add_symmetry`].
-pub fn add_symmetry_with(
-    blob: &[u8],
-    samples: &[&Sample],
-    min_ratio: f64,
-) -> Result<(Vec<u8>, Vec<Agreement>)> {
     let model = Model::parse(blob).map_err(super::ClassifyError::from)?;
     let inputs: Vec<Vec<i16>> = samples.iter().map(|s| s.shape.clone()).collect();
     let labels: Vec<usize> = samples.iter().map(|s| s.label).collect();
     let rates = mirror_agreement(&model, &inputs, &labels)?;
-    let flags: Vec<u8> = rates.iter().map(|a| a.symmetry(min_ratio).bits()).collect();
+    let flags: Vec<u8> = rates.iter().map(|a| a.symmetry().bits()).collect();
     Ok((with_symmetry(blob, &flags)?, rates))
-}
-
-/// The symmetry of one class's rates under the rule with
-/// [`SYMMETRY_MIN_RATIO`].
-pub fn flags_of(a: &Agreement) -> Symmetry {
-    a.symmetry(SYMMETRY_MIN_RATIO)
 }
 
 /// Where the silhouettes of [`symmetry_samples`] come from.
@@ -100,14 +81,14 @@ pub fn symmetry_samples<'a>(
     }
 }
 
-/// One summary value: `V H` flags (rule ratio `min_ratio`) and the rates
-/// of every class: unmirrored, mirrored V, mirrored H.
-pub fn describe(model: &Model<'_>, rates: &[Agreement], min_ratio: f64) -> String {
+/// One summary value: `V H` flags and the rates of every class:
+/// unmirrored, mirrored V, mirrored H.
+pub fn describe(model: &Model<'_>, rates: &[Agreement]) -> String {
     rates
         .iter()
         .enumerate()
         .map(|(c, a)| {
-            let s = a.symmetry(min_ratio);
+            let s = a.symmetry();
             let name = model.class_name(c).unwrap_or("?");
             format!(
                 "{name} {}{} ({:.1}: {:.1}/{:.1} %)",
@@ -137,11 +118,6 @@ pub struct ModelSymmetryOptions {
     /// The version-2 blob to write.
     #[arg(long)]
     pub out: PathBuf,
-    /// A mirror is flagged when the class's mirrored silhouettes are
-    /// named as the class at least this many times as often as its
-    /// unmirrored ones.
-    #[arg(long, default_value_t = SYMMETRY_MIN_RATIO)]
-    pub min_ratio: f64,
 }
 
 /// `protogist model-symmetry`: the model with symmetry bytes derived as
@@ -186,7 +162,7 @@ pub fn run_model_symmetry(opts: &ModelSymmetryOptions) -> Result<Summary> {
         }
         None => (ds.samples.iter().collect(), SymmetrySource::All),
     };
-    let (out, rates) = add_symmetry_with(&blob, &samples, opts.min_ratio)?;
+    let (out, rates) = add_symmetry(&blob, &samples)?;
     if let Some(parent) = opts.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         crate::output::ensure_dir(parent)?;
     }
@@ -203,10 +179,9 @@ pub fn run_model_symmetry(opts: &ModelSymmetryOptions) -> Result<Summary> {
     );
     s.push(
         format!(
-            "symmetry (named as the class: unmirrored: mirrored V/H; V, H when ≥ {} × unmirrored)",
-            opts.min_ratio
+            "symmetry (named as the class: unmirrored: mirrored V/H; V, H when ≥ {SYMMETRY_MIN_RATIO} × unmirrored)"
         ),
-        describe(&model, &rates, opts.min_ratio),
+        describe(&model, &rates),
     );
     s.push("wrote", format!("{} ({} B)", opts.out.display(), out.len()));
     Ok(s)

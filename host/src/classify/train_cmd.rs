@@ -297,7 +297,7 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
             sym_samples.len(),
             sym_source.describe()
         ),
-        super::symmetry_cmd::describe(&qm, &symmetry, super::symmetry::SYMMETRY_MIN_RATIO),
+        super::symmetry_cmd::describe(&qm, &symmetry),
     );
     s.push(
         "model",
