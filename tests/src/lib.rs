@@ -327,8 +327,27 @@ macro_rules! mask {
 /// Random float networks and their int8 blobs, for the classifier tests.
 pub mod nets {
     use ndarray::{Array1, Array2};
+    use protogist::mlp::blob::{crc32, Model, CRC_LEN, HEADER_LEN, VERSION_1};
     use protogist_host::classify::mlp::{unit, Mlp, SplitMix};
     use protogist_host::classify::quant::{write_blob, BlobExtras, QuantNet};
+
+    /// A version-2 model blob as version 1: the symmetry section (before
+    /// the names and the metadata) dropped, the version and the CRC
+    /// rewritten.
+    pub fn blob_version_1(v2: &[u8]) -> Vec<u8> {
+        let m = Model::parse(v2).unwrap();
+        assert!(m.has_symmetry_section());
+        let le = |at: usize| u32::from_le_bytes(v2[at..at + 4].try_into().unwrap()) as usize;
+        let tail = le(32) + le(36) + CRC_LEN;
+        let sym = v2.len() - tail - m.classes();
+        let mut v1 = v2[..HEADER_LEN].to_vec();
+        v1[4..6].copy_from_slice(&VERSION_1.to_le_bytes());
+        v1.extend_from_slice(&v2[HEADER_LEN..sym]);
+        v1.extend_from_slice(&v2[sym + m.classes()..v2.len() - CRC_LEN]);
+        let crc = crc32(&v1);
+        v1.extend_from_slice(&crc.to_le_bytes());
+        v1
+    }
 
     /// `n` values uniform in `[-a, a)`.
     pub fn uniform(rng: &mut SplitMix, n: usize, a: f64) -> Vec<f64> {

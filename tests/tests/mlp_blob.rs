@@ -11,6 +11,7 @@ use protogist::shape::{Mirror, ShapeElem, SHAPE_LEN};
 use protogist_host::classify::mlp::Mlp;
 use protogist_host::classify::quant::{quantize_net, write_blob, BlobExtras};
 use protogist_host::classify::symmetry::with_symmetry;
+use protogist_tests::nets::blob_version_1;
 
 /// A valid 9-5-3 blob.
 fn small_blob() -> Vec<u8> {
@@ -409,4 +410,28 @@ proptest! {
         prop_assert!(Model::parse(&b).is_err());
         exercise(&fix_crc(b));
     }
+}
+
+/// `blob_version_1`, which the mirror tests use for a model without
+/// symmetry, keeps every other byte of the shipped model.
+#[test]
+fn the_shipped_model_as_version_1_keeps_everything_but_symmetry() {
+    const SHIPPED: &[u8] = include_bytes!("../../host/data/shapes_model.bin");
+    let v1_blob = blob_version_1(SHIPPED);
+    let (v1, v2) = (
+        Model::parse(&v1_blob).unwrap(),
+        Model::parse(SHIPPED).unwrap(),
+    );
+    assert!(!v1.has_symmetry_section() && v2.any_symmetry().bits() == 3);
+    assert_eq!(v1_blob.len() + v2.classes(), SHIPPED.len());
+    assert_eq!(
+        with_symmetry(
+            &v1_blob,
+            &(0..v2.classes())
+                .map(|c| v2.symmetry(c).bits())
+                .collect::<Vec<_>>()
+        )
+        .unwrap(),
+        SHIPPED
+    );
 }

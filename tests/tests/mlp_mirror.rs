@@ -21,52 +21,15 @@ use protogist_host::classify::quant::{
 };
 use protogist_host::classify::rules::Templates;
 use protogist_host::classify::symmetry::with_symmetry;
-use protogist_tests::nets::random_net;
+use protogist_tests::nets::{blob_version_1, random_net};
 
 /// The shipped model as version 1 (no symmetry section).
-static MODEL_V1: std::sync::LazyLock<Vec<u8>> = std::sync::LazyLock::new(|| version_1(SHIPPED));
+static MODEL_V1: std::sync::LazyLock<Vec<u8>> =
+    std::sync::LazyLock::new(|| blob_version_1(SHIPPED));
 const SHIPPED: &[u8] = include_bytes!("../../host/data/shapes_model.bin");
 /// The shipped model's network and templates, without symmetry.
 fn shipped_v1() -> &'static [u8] {
     &MODEL_V1
-}
-
-/// A version-2 blob as version 1: the symmetry section (before the names
-/// and the metadata) dropped, the version and the CRC rewritten.
-fn version_1(v2: &[u8]) -> Vec<u8> {
-    use protogist::mlp::blob::{crc32, CRC_LEN, HEADER_LEN, VERSION_1};
-    let m = Model::parse(v2).unwrap();
-    assert!(m.has_symmetry_section());
-    let le = |at: usize| u32::from_le_bytes(v2[at..at + 4].try_into().unwrap()) as usize;
-    let tail = le(32) + le(36) + CRC_LEN;
-    let sym = v2.len() - tail - m.classes();
-    let mut v1 = v2[..HEADER_LEN].to_vec();
-    v1[4..6].copy_from_slice(&VERSION_1.to_le_bytes());
-    v1.extend_from_slice(&v2[HEADER_LEN..sym]);
-    v1.extend_from_slice(&v2[sym + m.classes()..v2.len() - CRC_LEN]);
-    let crc = crc32(&v1);
-    v1.extend_from_slice(&crc.to_le_bytes());
-    v1
-}
-
-#[test]
-fn the_shipped_model_as_version_1_keeps_everything_but_symmetry() {
-    let (v1, v2) = (
-        Model::parse(shipped_v1()).unwrap(),
-        Model::parse(SHIPPED).unwrap(),
-    );
-    assert!(!v1.has_symmetry_section() && v2.any_symmetry().bits() == 3);
-    assert_eq!(shipped_v1().len() + v2.classes(), SHIPPED.len());
-    assert_eq!(
-        with_symmetry(
-            shipped_v1(),
-            &(0..v2.classes())
-                .map(|c| v2.symmetry(c).bits())
-                .collect::<Vec<_>>()
-        )
-        .unwrap(),
-        SHIPPED
-    );
 }
 
 /// An asymmetric blob (a tilted, off-centre L with a notch and a disc),
