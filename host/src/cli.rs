@@ -14,7 +14,7 @@
 //! protogist train-speed [--inputs D --hidden H --classes N --rows R]
 //! protogist train --dataset DIR --out model.json [--hidden H --epochs E]
 //!                 [--through-pipeline --views N --with-clean]
-//!                 [--test-fraction F --seed S --gamma G]
+//!                 [--mirror-images] [--test-fraction F --seed S --gamma G]
 //! protogist eval --model model.json --dataset DIR --out DIR [--json]
 //! protogist gen-scenes --out DIR [--scenes N --seed S --split test|train]
 //!                      [--width W --height H --objects LO..HI --classes N]

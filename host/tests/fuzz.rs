@@ -147,6 +147,7 @@ fn sidecar_seed() -> Vec<u8> {
         blob_crc32: Some(7),
         templates: Some(vec![vec![0.9, 0.1], vec![0.1, 0.9]]),
         pipeline: None,
+        mirror_images: false,
     };
     serde_json::to_vec(&file).unwrap()
 }

@@ -17,7 +17,7 @@ use protogist_host::classify::pipeline_data::PipelineTraining;
 use protogist_host::classify::shapes::{gen_shapes, GenShapesOptions};
 use protogist_host::classify::shipped::SHIPPED_MODEL;
 
-const META: &str = "protogist train --dataset shapes --features shape --hidden 256 --epochs 600 --test-fraction 0.1 --seed 1 --gamma 0.5 --through-pipeline --views 2 --with-clean";
+const META: &str = "protogist train --dataset shapes --features shape --hidden 256 --epochs 600 --test-fraction 0.1 --seed 1 --gamma 0.5 --through-pipeline --views 2 --with-clean --mirror-images";
 
 #[test]
 fn shipped_model_parses_and_records_its_parameters() {
@@ -32,7 +32,7 @@ fn shipped_model_parses_and_records_its_parameters() {
 /// `gen-shapes --out shapes --classes 19 --per-class 1000 --seed 1 --size 64`
 /// then `train --dataset shapes --hidden 256 --epochs 600 --seed 1
 /// --gamma 0.5 --test-fraction 0.1 --through-pipeline --views 2
-/// --with-clean --out shapes_model.bin`.
+/// --with-clean --mirror-images --out shapes_model.bin`.
 #[test]
 fn documented_commands_regenerate_the_shipped_model() {
     let tmp = tempfile::tempdir().unwrap();
@@ -56,6 +56,7 @@ fn documented_commands_regenerate_the_shipped_model() {
             seed: 1,
             gamma: 0.5,
             features: Features::Shape,
+            mirror_images: true,
         },
         &PipelineTraining {
             through_pipeline: true,

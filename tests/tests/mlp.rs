@@ -31,6 +31,7 @@ fn float_network_on_generated_shapes() {
             seed: 7,
             gamma,
             features: Features::Shape,
+            mirror_images: false,
         })
         .unwrap();
         print!("{t}");

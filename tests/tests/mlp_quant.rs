@@ -101,6 +101,7 @@ fn int8_agrees_with_float_on_held_out_shapes() {
         test_fraction: 0.5,
         seed: 5,
         gamma: 0.2,
+        mirror_images: false,
         features: Features::Shape,
     })
     .unwrap();

@@ -33,6 +33,7 @@ pub mod eval_set;
 pub mod families;
 pub mod metrics;
 pub mod mirror;
+pub mod mirror_images;
 pub mod mlp;
 pub mod model;
 pub mod model_cmd;

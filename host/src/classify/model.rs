@@ -64,6 +64,11 @@ pub struct ModelFile {
     /// --through-pipeline`); absent for clean silhouettes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pipeline: Option<super::pipeline_data::PipelineRecord>,
+    /// Whether the training vectors of the classes with a mirror symmetry
+    /// were also trained on mirrored (`train --mirror-images`); absent
+    /// when not.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub mirror_images: bool,
 }
 
 pub(crate) fn bad_model(path: &Path, reason: impl Into<String>) -> HostError {
@@ -202,6 +207,7 @@ mod tests {
             blob_crc32: None,
             templates: None,
             pipeline: None,
+            mirror_images: false,
         }
     }
 

@@ -557,6 +557,7 @@ mod tests {
             test_fraction: 0.5,
             seed: 1,
             gamma: 0.2,
+            mirror_images: false,
         };
         let pipe = PipelineTraining {
             through_pipeline: true,

@@ -10,7 +10,7 @@
 //! protogist gen-shapes --out shapes --classes 19 --per-class 1000 --seed 1 --size 64
 //! protogist train --dataset shapes --hidden 256 --epochs 600 --seed 1 --gamma 0.5 \
 //!                 --test-fraction 0.1 --through-pipeline --views 2 --with-clean \
-//!                 --out host/data/shapes_model.bin
+//!                 --mirror-images --out host/data/shapes_model.bin
 //! ```
 
 use super::dataset::shape_inputs;

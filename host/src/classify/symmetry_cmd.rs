@@ -84,12 +84,20 @@ pub fn symmetry_samples<'a>(
 /// One summary value: `V H` flags and the rates of every class:
 /// unmirrored, mirrored V, mirrored H.
 pub fn describe(model: &Model<'_>, rates: &[Agreement]) -> String {
+    let names: Vec<String> = (0..rates.len())
+        .map(|c| model.class_name(c).unwrap_or("?").to_string())
+        .collect();
+    describe_rates(&names, rates)
+}
+
+/// [`describe`] with the class names given (`?` past their end).
+pub fn describe_rates(names: &[String], rates: &[Agreement]) -> String {
     rates
         .iter()
         .enumerate()
         .map(|(c, a)| {
             let s = a.symmetry();
-            let name = model.class_name(c).unwrap_or("?");
+            let name = names.get(c).map_or("?", String::as_str);
             format!(
                 "{name} {}{} ({:.1}: {:.1}/{:.1} %)",
                 if s.has(Mirror::Vertical) { "V" } else { "-" },

@@ -4,17 +4,20 @@
 //! sidecar (`model_cmd`'s module docs say what they hold).
 
 use super::dataset::{load_dataset, stratified_split, Sample};
+use super::mirror_images::{nearest_agreement, with_mirror_images};
 use super::mlp::{Mlp, GAMMA};
 use super::model::{bad_model, ModelFile, MODEL_FORMAT};
 use super::model_cmd::sidecar_path;
 use super::pipeline_data::{harvest_split, int8_top1, training_samples, PipelineTraining};
 use super::quant::{model_error, quantize};
 use super::rules::Templates;
+use super::symmetry::Agreement;
 use super::train::{train, TrainParams};
 use crate::error::{HostError, Result};
 use crate::output::ensure_dir;
 use crate::summary::Summary;
 use ndarray::Array2;
+use protogist::mlp::Symmetry;
 use protogist::shape::SHAPE_LEN;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -47,6 +50,12 @@ pub struct TrainOptions {
     /// Weight of the MSE in MSE_REG = γ·MSE + (1 − γ)·MSW (msereg's ratio).
     #[arg(long, default_value_t = GAMMA)]
     pub gamma: f64,
+    /// Also train on the mirror images of every training vector of a class
+    /// with a mirror symmetry (measured on the clean silhouettes by their
+    /// nearest others, before training; module
+    /// [`super::mirror_images`]).
+    #[arg(long)]
+    pub mirror_images: bool,
 }
 
 /// `protogist train`'s command line: [`TrainOptions`] and the pipeline
@@ -139,13 +148,26 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
             .map(|(s, _)| s.clone())
             .collect()
     };
+    let (clean_train, clean_test) = (clean_split(false), clean_split(true));
     let (train_set, harvests) = match &record {
         Some(r) => {
             let (set, h) = training_samples(&opts.dataset, &ds, &is_test, r, opts.seed, true)?;
             let held = harvest_split(&opts.dataset, &ds, &is_test, true, r, opts.seed, true)?;
             (set, Some((h, held)))
         }
-        None => (clean_split(false), None),
+        None => (clean_train.clone(), None),
+    };
+    // The mirror images of the classes with a mirror symmetry, measured
+    // before training on the clean silhouettes (module
+    // `super::mirror_images`).
+    let (train_set, mirrored) = if opts.mirror_images {
+        let rates = nearest_agreement(&ds.samples.iter().collect::<Vec<_>>(), n)?;
+        let flags: Vec<Symmetry> = rates.iter().map(Agreement::symmetry).collect();
+        let with = with_mirror_images(&train_set, &flags)?;
+        let added = with.len() - train_set.len();
+        (with, Some((rates, added)))
+    } else {
+        (train_set, None)
     };
     let (x, y) = inputs(&train_set);
     let mut t = Array2::zeros((y.len(), n));
@@ -195,6 +217,7 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
         blob_crc32: None,
         templates: Some(train_templates(&out, &y, n)?),
         pipeline: record,
+        mirror_images: opts.mirror_images,
     };
     if let Some(parent) = opts.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         ensure_dir(parent)?;
@@ -209,7 +232,6 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
     )?;
     // The symmetry of each class, from the quantised model and the class's
     // clean held-out silhouettes (docs/MODEL_FORMAT.md, version 2).
-    let (clean_train, clean_test) = (clean_split(false), clean_split(true));
     let (sym_samples, sym_source) = super::symmetry_cmd::symmetry_samples(
         clean_test.iter().collect(),
         clean_train.iter().collect(),
@@ -258,6 +280,16 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
                 held.scenes,
                 train_set.len(),
                 if r.with_clean { " with the clean silhouettes" } else { "" }
+            ),
+        );
+    }
+    if let Some((rates, added)) = &mirrored {
+        s.push(
+            "mirror images",
+            format!(
+                "{added} vectors added; per class, how often the nearest other of the {} clean silhouettes is of the class, unmirrored: mirrored V/H: {}",
+                ds.samples.len(),
+                super::symmetry_cmd::describe_rates(&ds.classes, rates)
             ),
         );
     }
@@ -344,7 +376,12 @@ pub fn train_meta(model: &ModelFile, dataset: &std::path::Path) -> String {
         )
     });
     format!(
-        "protogist train --dataset {name} --features shape --hidden {} --epochs {} --test-fraction {} --seed {} --gamma {}{through}",
-        model.hidden, model.epochs, model.test_fraction, model.seed, model.gamma
+        "protogist train --dataset {name} --features shape --hidden {} --epochs {} --test-fraction {} --seed {} --gamma {}{through}{}",
+        model.hidden,
+        model.epochs,
+        model.test_fraction,
+        model.seed,
+        model.gamma,
+        if model.mirror_images { " --mirror-images" } else { "" }
     )
 }

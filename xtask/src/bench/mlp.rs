@@ -155,6 +155,7 @@ pub(super) fn mlp_host() -> Section {
             "--views",
             "2",
             "--with-clean",
+            "--mirror-images",
             "--out",
             &model,
         ])?;
@@ -189,7 +190,7 @@ pub(super) fn mlp_host() -> Section {
         format!(
         "The shipped model's commands (docs/CLASSIFY.md, Shipped model): `protogist gen-shapes \
          --classes 19 --per-class 1000 --seed 1 --size 64`, `protogist train --hidden 256 --epochs \
-         600 --seed 1 --gamma 0.5 --test-fraction 0.1 --through-pipeline --views 2 --with-clean`, \
+         600 --seed 1 --gamma 0.5 --test-fraction 0.1 --through-pipeline --views 2 --with-clean --mirror-images`, \
          then `protogist eval --json` on the held-out tenth ({} probes, {} classes). The model built here is {} \
          `host/data/shapes_model.bin`.\n\n| measure | float | int8 |\n|---|---|---|\n",
         v["float"]["test"],
