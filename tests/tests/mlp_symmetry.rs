@@ -201,8 +201,9 @@ fn nearest_neighbours_find_the_mirrors_each_class_is_drawn_with() {
 
 /// `train --mirror-images` trains on the mirror images too: it says how
 /// many it added, records the option in the sidecar and the blob's
-/// metadata, and trains another network; without it the sidecar has no
-/// such field and the metadata no such option.
+/// metadata, trains another network, and `quantize` rebuilds its blob;
+/// without it the sidecar has no such field and the metadata no such
+/// option.
 #[test]
 fn train_with_mirror_images_records_them() {
     use protogist_host::classify::dataset::load_dataset;
@@ -277,4 +278,19 @@ fn train_with_mirror_images_records_them() {
         .contains("mirror_images"));
     assert!(!plain_meta.contains("mirror"));
     assert_ne!(blob, plain_blob);
+    // `quantize` calibrates on the mirror images too, as `train` did: the
+    // same blob from the sidecar.
+    use protogist_host::classify::quant_cmd::{run_quantize, QuantizeOptions};
+    let again = tmp.path().join("again.bin");
+    run_quantize(&QuantizeOptions {
+        model: tmp.path().join("mtrue.bin.json"),
+        dataset: Some(ds.clone()),
+        out: Some(again.clone()),
+        emit_rust: None,
+    })
+    .unwrap();
+    assert!(
+        std::fs::read(&again).unwrap() == blob,
+        "quantize rebuilds it"
+    );
 }

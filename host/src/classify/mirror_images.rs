@@ -149,6 +149,35 @@ pub fn with_mirror_images(
     Ok(out)
 }
 
+/// What [`add_mirror_images`] did: each class's rates under
+/// [`nearest_agreement`], and how many vectors it added.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MirrorImages {
+    /// Per class, the nearest-neighbour rates the symmetry comes from.
+    pub rates: Vec<Agreement>,
+    /// Mirror images added.
+    pub added: usize,
+}
+
+/// `train_set` [`with_mirror_images`], the symmetry of each of the
+/// `classes` classes measured by [`nearest_agreement`] on `dataset` (every
+/// clean silhouette): what `train --mirror-images` trains on and what
+/// `quantize` calibrates on for such a model.
+///
+/// # Errors
+/// As [`nearest_agreement`] and [`with_mirror_images`].
+pub fn add_mirror_images(
+    dataset: &[Sample],
+    train_set: &[Sample],
+    classes: usize,
+) -> Result<(Vec<Sample>, MirrorImages), ClassifyError> {
+    let rates = nearest_agreement(&dataset.iter().collect::<Vec<_>>(), classes)?;
+    let flags: Vec<Symmetry> = rates.iter().map(Agreement::symmetry).collect();
+    let with = with_mirror_images(train_set, &flags)?;
+    let added = with.len() - train_set.len();
+    Ok((with, MirrorImages { rates, added }))
+}
+
 /// `V` or `H`, as the summaries write them.
 const fn mirror_name(m: Mirror) -> &'static str {
     match m {

@@ -78,7 +78,7 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
             });
         }
         let train: HashSet<&str> = file.train.iter().map(String::as_str).collect();
-        let (calib, labels): (Vec<Vec<i16>>, Vec<usize>) = match &file.pipeline {
+        let calib: Vec<super::dataset::Sample> = match &file.pipeline {
             // Trained on pipeline masks: the same scenes again.
             Some(rec) => {
                 let is_test: Vec<bool> = ds
@@ -86,18 +86,23 @@ pub fn run_quantize(opts: &QuantizeOptions) -> Result<Summary> {
                     .iter()
                     .map(|s| !train.contains(s.key.as_str()))
                     .collect();
-                let (set, _) = super::pipeline_data::training_samples(
-                    dir, &ds, &is_test, rec, file.seed, true,
-                )?;
-                set.into_iter().map(|s| (s.shape, s.label)).unzip()
+                super::pipeline_data::training_samples(dir, &ds, &is_test, rec, file.seed, true)?.0
             }
             None => ds
                 .samples
                 .iter()
                 .filter(|s| train.contains(s.key.as_str()))
-                .map(|s| (s.shape.clone(), s.label))
-                .unzip(),
+                .cloned()
+                .collect(),
         };
+        // As `train`: the mirror images too, when it trained on them.
+        let calib = if file.mirror_images {
+            super::mirror_images::add_mirror_images(&ds.samples, &calib, ds.classes.len())?.0
+        } else {
+            calib
+        };
+        let (calib, labels): (Vec<Vec<i16>>, Vec<usize>) =
+            calib.into_iter().map(|s| (s.shape, s.label)).unzip();
         let meta = super::model_cmd::train_meta(&file, dir);
         let blob = quantize(&net, &calib, &labels, &file.classes, &meta)?;
         // As `train`: the symmetry from the clean held-out silhouettes.

@@ -4,20 +4,18 @@
 //! sidecar (`model_cmd`'s module docs say what they hold).
 
 use super::dataset::{load_dataset, stratified_split, Sample};
-use super::mirror_images::{nearest_agreement, with_mirror_images};
+use super::mirror_images::{add_mirror_images, MirrorImages};
 use super::mlp::{Mlp, GAMMA};
 use super::model::{bad_model, ModelFile, MODEL_FORMAT};
 use super::model_cmd::sidecar_path;
 use super::pipeline_data::{harvest_split, int8_top1, training_samples, PipelineTraining};
 use super::quant::{model_error, quantize};
 use super::rules::Templates;
-use super::symmetry::Agreement;
 use super::train::{train, TrainParams};
 use crate::error::{HostError, Result};
 use crate::output::ensure_dir;
 use crate::summary::Summary;
 use ndarray::Array2;
-use protogist::mlp::Symmetry;
 use protogist::shape::SHAPE_LEN;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -161,11 +159,8 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
     // before training on the clean silhouettes (module
     // `super::mirror_images`).
     let (train_set, mirrored) = if opts.mirror_images {
-        let rates = nearest_agreement(&ds.samples.iter().collect::<Vec<_>>(), n)?;
-        let flags: Vec<Symmetry> = rates.iter().map(Agreement::symmetry).collect();
-        let with = with_mirror_images(&train_set, &flags)?;
-        let added = with.len() - train_set.len();
-        (with, Some((rates, added)))
+        let (with, what) = add_mirror_images(&ds.samples, &train_set, n)?;
+        (with, Some(what))
     } else {
         (train_set, None)
     };
@@ -283,7 +278,7 @@ pub fn run_train_with(opts: &TrainOptions, pipeline: &PipelineTraining) -> Resul
             ),
         );
     }
-    if let Some((rates, added)) = &mirrored {
+    if let Some(MirrorImages { rates, added }) = &mirrored {
         s.push(
             "mirror images",
             format!(
