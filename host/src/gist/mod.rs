@@ -151,7 +151,7 @@ fn push_totals(s: &mut Summary, label: &str, t: &Totals) {
     s.push(
         label,
         format!(
-            "{} scenes, {} objects, {} detections: recall {}, precision {}, mask IoU {}, top-1 {}, top-5 {}, gist {}; unknown {}, low-contrast recall {}",
+            "{} scenes, {} objects, {} detections: recall {}, precision {}, mask IoU {}, top-1 {}, top-5 {}, gist {}; unknown {}, low-contrast recall {}, top-1 {}",
             t.scenes,
             t.objects,
             t.detections,
@@ -163,6 +163,7 @@ fn push_totals(s: &mut Summary, label: &str, t: &Totals) {
             fmt_rate(t.gist),
             fmt_rate(t.unknown),
             fmt_rate(t.low_contrast_recall),
+            fmt_rate(t.low_contrast_top1),
         ),
     );
 }

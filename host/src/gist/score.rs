@@ -13,9 +13,10 @@
 //! top-5 whether the class is among its five best. A scene's **gist** is
 //! right when every object is matched by a detection that claims its class
 //! (best class, known under Δ) and no other detection claims a class (an
-//! unmatched detection called unknown does not spoil it). Two diagnostics
+//! unmatched detection called unknown does not spoil it). Three diagnostics
 //! go with them: the share of detections called unknown under Δ, and the
-//! recall of the objects drawn without contrast to their surroundings.
+//! recall and top-1 of the objects drawn without contrast to their
+//! surroundings (whose masks come from disparity alone, docs/RECALL.md).
 
 use super::detect::Detection;
 use crate::scenes::load::Scene;
@@ -108,6 +109,8 @@ pub struct SceneScore {
     pub low_contrast: usize,
     /// Of those, the matched ones.
     pub low_contrast_matched: usize,
+    /// Of those, the ones whose detection's best class is theirs.
+    pub low_contrast_top1: usize,
     /// Every detection, in the detector's order.
     pub found: Vec<Found>,
 }
@@ -151,7 +154,9 @@ pub fn score_scene(scene: &Scene, dets: &[Detection], ms: f64) -> SceneScore {
     for m in &matches {
         let (d, o) = (&dets[m.detection], &truth[m.object]);
         s.mask_iou_sum += mask_iou(&d.mask, &scene.masks[m.object]);
-        s.top1 += usize::from(d.top5.first().is_some_and(|(c, _)| *c == o.class));
+        let right = d.top5.first().is_some_and(|(c, _)| *c == o.class);
+        s.top1 += usize::from(right);
+        s.low_contrast_top1 += usize::from(right && !o.contrast);
         s.top5 += usize::from(d.top5.iter().any(|(c, _)| *c == o.class));
         claimed_right += usize::from(d.category() == Some(o.class.as_str()));
     }
@@ -212,6 +217,8 @@ pub struct Totals {
     pub unknown: Option<f64>,
     /// Recall of the objects drawn without contrast.
     pub low_contrast_recall: Option<f64>,
+    /// Top-1 accuracy of the matched objects drawn without contrast.
+    pub low_contrast_top1: Option<f64>,
 }
 
 impl Totals {
@@ -219,7 +226,7 @@ impl Totals {
     pub fn of<'a>(scores: impl IntoIterator<Item = &'a SceneScore>) -> Self {
         let mut t = Self::default();
         let (mut iou, mut top1, mut top5, mut gist, mut ms) = (0.0, 0, 0, 0, 0.0);
-        let (mut unknown, mut low, mut low_matched) = (0, 0, 0);
+        let (mut unknown, mut low, mut low_matched, mut low_top1) = (0, 0, 0, 0);
         for s in scores {
             t.scenes += 1;
             t.objects += s.objects;
@@ -233,6 +240,7 @@ impl Totals {
             unknown += s.unknown;
             low += s.low_contrast;
             low_matched += s.low_contrast_matched;
+            low_top1 += s.low_contrast_top1;
         }
         t.recall = ratio(t.matched as f64, t.objects);
         t.precision = ratio(t.matched as f64, t.detections);
@@ -243,6 +251,7 @@ impl Totals {
         t.ms_per_scene = ratio(ms, t.scenes);
         t.unknown = ratio(unknown as f64, t.detections);
         t.low_contrast_recall = ratio(low_matched as f64, low);
+        t.low_contrast_top1 = ratio(low_top1 as f64, low_matched);
         t
     }
 }
@@ -418,6 +427,11 @@ mod tests {
         assert_eq!((sc.low_contrast, sc.low_contrast_matched), (1, 0));
         let sc = score_scene(&low, &right, 0.0);
         assert_eq!((sc.low_contrast, sc.low_contrast_matched), (1, 1));
+        assert_eq!((sc.top1, sc.low_contrast_top1), (2, 1));
+        // Named wrong: matched, not right.
+        let wrong = [det(&low, 0, &["a"], true), det(&low, 1, &["a", "b"], true)];
+        let sc = score_scene(&low, &wrong, 0.0);
+        assert_eq!((sc.low_contrast_matched, sc.low_contrast_top1), (1, 0));
     }
 
     #[test]
@@ -434,6 +448,7 @@ mod tests {
             unknown: 1,
             low_contrast: 1,
             low_contrast_matched: 1,
+            low_contrast_top1: 1,
             ..SceneScore::default()
         };
         let two = SceneScore {
@@ -467,6 +482,7 @@ mod tests {
         assert_eq!(t.ms_per_scene, Some(20.0));
         assert_eq!(t.unknown, Some(0.2));
         assert_eq!(t.low_contrast_recall, Some(0.5));
+        assert_eq!(t.low_contrast_top1, Some(1.0));
         // No detections at all: precision and per-match rates undefined.
         let t = Totals::of([&two]);
         assert_eq!((t.recall, t.precision, t.top1), (Some(0.0), None, None));
