@@ -6,8 +6,9 @@
 use proptest::prelude::*;
 use protogist::image::{ImageView, ImageViewMut, Rgb8};
 use protogist::mlp::{
-    forward, mirror_check, mirror_mean, mirror_outputs_len, mirror_top_k, scores, top_k,
-    MirrorScratch, MlpError, Model, Ranked, Scratch, Symmetry, MIRROR_VIEWS, TOP_K,
+    forward, mirror_check, mirror_check_below_with, mirror_mean, mirror_outputs_len, mirror_top_k,
+    scores, top_k, MirrorScratch, MlpError, Model, Ranked, SafeKernel, Scratch, Symmetry,
+    MIRROR_VIEWS, TOP_K,
 };
 use protogist::pipeline::{workspace_words, Pipeline, PipelineParams};
 use protogist::shape::{
@@ -175,7 +176,12 @@ impl Bufs {
         (out, r[..n].to_vec())
     }
 
-    fn check(&mut self, m: &Model<'_>, x: &[ShapeElem]) -> Vec<Ranked> {
+    /// `f` on the scratch, the mirror scratch and a ranking; the ranks it
+    /// filled.
+    fn ranked(
+        &mut self,
+        f: impl FnOnce(&mut Scratch<'_>, &mut MirrorScratch<'_>, &mut [Ranked]) -> usize,
+    ) -> Vec<Ranked> {
         let mut s = Scratch {
             input: &mut self.xi,
             hidden: &mut self.hi,
@@ -187,9 +193,43 @@ impl Bufs {
             mean: &mut self.mean,
         };
         let mut r = [Ranked::default(); TOP_K];
-        let n = mirror_check(m, x, &mut s, &mut ms, &mut r).unwrap();
+        let n = f(&mut s, &mut ms, &mut r);
         r[..n].to_vec()
     }
+
+    fn check(&mut self, m: &Model<'_>, x: &[ShapeElem]) -> Vec<Ranked> {
+        self.ranked(|s, ms, r| mirror_check(m, x, s, ms, r).unwrap())
+    }
+
+    /// The check for an object whose own best cosine is under `below`.
+    fn gated(&mut self, m: &Model<'_>, x: &[ShapeElem], below: u32) -> Vec<Ranked> {
+        self.ranked(|s, ms, r| {
+            mirror_check_below_with::<SafeKernel>(m, x, s, ms, r, below).unwrap()
+        })
+    }
+}
+
+/// The bar: an object whose plain best cosine reaches it keeps the plain
+/// ranking, one under it gets the whole check; `u32::MAX` checks every
+/// object and 0 none.
+#[test]
+fn the_bar_sends_only_the_unsure_objects_to_the_check() {
+    let k = Model::parse(shipped_v1()).unwrap().classes();
+    let blob = with_flags(&vec![3; k]);
+    let m = Model::parse(&blob).unwrap();
+    let mut b = Bufs::new(&m);
+    let mut differ = 0;
+    for x in probes() {
+        let (_, plain) = b.plain(&m, &x);
+        let check = b.check(&m, &x);
+        differ += usize::from(plain != check);
+        let best = plain[0].score;
+        assert_eq!(b.gated(&m, &x, u32::MAX), check);
+        assert_eq!(b.gated(&m, &x, 0), plain);
+        assert_eq!(b.gated(&m, &x, best), plain);
+        assert_eq!(b.gated(&m, &x, best + 1), check);
+    }
+    assert!(differ > 0, "the check changes some ranking here");
 }
 
 #[test]
@@ -444,17 +484,30 @@ fn run_with_check(params: &PipelineParams, model: &[u8]) -> (Vec<String>, Vec<(S
 #[test]
 fn the_switch_off_is_todays_pipeline() {
     let k = Model::parse(shipped_v1()).unwrap().classes();
-    let off = PipelineParams::DEFAULT.with_objects(4);
-    let on = off.with_mirror_check(true);
-    const { assert!(!PipelineParams::DEFAULT.mirror_check && PipelineParams::ACCURATE.mirror_check) };
+    let off = PipelineParams::DEFAULT
+        .with_objects(4)
+        .with_mirror_check(false);
+    // On for every object, as the accurate preset runs it.
+    let on = PipelineParams {
+        mirror_below_q16: u32::MAX,
+        ..off.with_mirror_check(true)
+    };
+    const {
+        assert!(PipelineParams::DEFAULT.mirror_check && PipelineParams::ACCURATE.mirror_check);
+        assert!(PipelineParams::ACCURATE.mirror_below_q16 == u32::MAX);
+        assert!(PipelineParams::DEFAULT.mirror_below_q16 == 62_259);
+    };
     // The switch's buffers only when it is on.
-    use protogist::pipeline::layout::{mirror_bytes, object_bytes};
+    use protogist::pipeline::layout::{classify_bytes, mirror_bytes, object_bytes, segment_bytes};
     assert_eq!(mirror_bytes(&off), 0);
     assert!(mirror_bytes(&on) >= protogist::mlp::mirror_scratch_bytes(64));
     assert_eq!(
-        object_bytes(160, 120, &on),
-        object_bytes(160, 120, &off) + mirror_bytes(&on)
+        classify_bytes(&on),
+        classify_bytes(&off) + mirror_bytes(&on)
     );
+    // They take segmentation's maps' place: the object phase is the maps'.
+    assert_eq!(object_bytes(160, 120, &on), segment_bytes(160, 120));
+    assert_eq!(object_bytes(160, 120, &off), segment_bytes(160, 120));
     let today = run(&off, shipped_v1());
     assert!(!today.is_empty());
     // A v1 model with the check on, a v2 model with the check off.

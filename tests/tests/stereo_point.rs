@@ -217,12 +217,13 @@ fn run_into_a_map_gives_the_cells_run_gives() {
 fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size() {
     let p = PipelineParams::ACCURATE;
     // The default pipeline but for the stereo point's coarse levels and
-    // the mirror check.
+    // the mirror check, which it runs on every object.
     assert!(p.mirror_check);
+    assert_eq!(p.mirror_below_q16, u32::MAX);
     assert_eq!(
         PipelineParams {
             stereo: STEREO_DEFAULT,
-            mirror_check: false,
+            mirror_below_q16: protogist::pipeline::MIRROR_BELOW_DEFAULT,
             ..p
         },
         PipelineParams::DEFAULT
@@ -261,11 +262,11 @@ fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size() {
         PipelineParams::ACCURATE
     );
     // The workspace at 160x120 with K = 4, as the product runs: the
-    // half-size level's full search needs 3,168 B more than the default's
-    // windows.
+    // half-size level's full search needs 9,440 B more than the default's
+    // largest phase, figure-ground's.
     let bytes = |p: &PipelineParams| protogist::pipeline::workspace_bytes(W, H, &p.with_objects(4));
     assert_eq!(bytes(&p), 170_616);
-    assert_eq!(bytes(&p) - bytes(&PipelineParams::DEFAULT), 3_168);
+    assert_eq!(bytes(&p) - bytes(&PipelineParams::DEFAULT), 9_440);
 }
 
 /// Scene `index` of the training split, seed 1, 1 to 4 objects (the set

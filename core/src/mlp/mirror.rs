@@ -15,6 +15,8 @@
 //! Cost: one forward pass per mirror in [`Model::any_symmetry`] beside
 //! `x`'s (two more for a model with both), and `K²` more operations for
 //! the per-class means; memory: [`mirror_scratch_bytes`].
+//! [`mirror_check_below_with`] spends them only on the objects whose own
+//! best cosine is under a bar, where the check changes rankings.
 
 use super::blob::{Model, Symmetry};
 use super::rules::{cosine_q16, rank_by};
@@ -94,11 +96,36 @@ pub fn mirror_check_with<K: MacKernel>(
     mirror: &mut MirrorScratch<'_>,
     ranked: &mut [Ranked],
 ) -> Result<usize, MlpError> {
+    mirror_check_below_with::<K>(model, input, scratch, mirror, ranked, u32::MAX)
+}
+
+/// [`mirror_check_with`] for the objects the network is unsure of: the
+/// mirrors run only when the object's own best cosine (the plain
+/// identification's, [`super::top_k`]) is below `below_q16` (Q16); else
+/// `ranked` is the plain ranking, after one forward pass. `u32::MAX`
+/// checks every object, as [`mirror_check_with`].
+///
+/// # Errors
+/// As [`mirror_check_with`].
+pub fn mirror_check_below_with<K: MacKernel>(
+    model: &Model<'_>,
+    input: &[ShapeElem],
+    scratch: &mut Scratch<'_>,
+    mirror: &mut MirrorScratch<'_>,
+    ranked: &mut [Ranked],
+    below_q16: u32,
+) -> Result<usize, MlpError> {
     let k = model.classes();
     check_scratch("outputs", mirror_outputs_len(k), mirror.outputs.len())?;
     check_scratch("mean", mirror_mean_len(k), mirror.mean.len())?;
     let out = forward_with::<K>(model, input, scratch)?;
     copy_view(out, mirror.outputs, 0, k);
+    if below_q16 < u32::MAX {
+        let filled = super::top_k(model, out, ranked)?;
+        if ranked.first().is_none_or(|b| b.score >= below_q16) {
+            return Ok(filled);
+        }
+    }
     let any = model.any_symmetry();
     if any != Symmetry::NONE {
         // The model parser allows a symmetry only on SHAPE_LEN inputs,

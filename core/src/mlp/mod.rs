@@ -59,8 +59,8 @@ mod symmetry;
 pub use blob::{crc32, InputKind, Model, ModelError, Symmetry};
 pub use kernel::{safe_dot_rows, MacKernel, SafeKernel};
 pub use mirror::{
-    mirror_check, mirror_check_with, mirror_mean, mirror_mean_len, mirror_outputs_len,
-    mirror_scratch_bytes, mirror_top_k, MirrorScratch, MIRROR_VIEWS,
+    mirror_check, mirror_check_below_with, mirror_check_with, mirror_mean, mirror_mean_len,
+    mirror_outputs_len, mirror_scratch_bytes, mirror_top_k, MirrorScratch, MIRROR_VIEWS,
 };
 pub use rules::{cosine_q16, identify, scores, top_k, verify};
 

@@ -4,14 +4,14 @@
 //! ┌ kept for the frame's result ─────────────┬ one region, reused by phase ─────────────┐
 //! │ edges C │ disparity │ K masks │ K vectors │ stereo scratch                          │
 //! │         │           │ (bits)  │           │ or: row rings + tones + completion      │
-//! │         │           │         │           │ or: segmentation maps + classifier      │
+//! │         │           │         │           │ or: segmentation maps, then classifier  │
 //! └─────────┴───────────┴─────────┴───────────┴──────────────────────────────────────────┘
 //! ```
 //!
 //! The stages reuse each other's scratch: stereo's is free once its map is
 //! written, the colour phase's (conspicuity on a rolling window of rows,
 //! one [`Tone`] byte per pixel, the completion by runs) once the completion
-//! is done. Each buffer is
+//! is done, segmentation's maps once the masks are written. Each buffer is
 //! rounded up to whole 8-byte words (the private `arena` module).
 
 use super::arena::bytes;
@@ -101,13 +101,22 @@ pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) 
         }
 }
 
-/// Bytes of segmentation and of the classifier's activations (with the
-/// mirror check's [`mirror_bytes`]).
+/// Bytes of the object phase: segmentation's maps, then, in their place,
+/// the classifier's buffers ([`classify_bytes`]).
 pub const fn object_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
+    max(segment_bytes(width, height), classify_bytes(params))
+}
+
+/// Bytes of segmentation's maps and label table.
+pub const fn segment_bytes(width: usize, height: usize) -> usize {
+    bytes(maps_len(width, height), 4) + bytes(table_len(width, height), 4)
+}
+
+/// Bytes of the classifier's activations, with the mirror check's
+/// [`mirror_bytes`].
+pub const fn classify_bytes(params: &PipelineParams) -> usize {
     let m = &params.model;
-    bytes(maps_len(width, height), 4)
-        + bytes(table_len(width, height), 4)
-        + bytes(mlp::packed_len(SHAPE_LEN, m.hidden as usize), 4)
+    bytes(mlp::packed_len(SHAPE_LEN, m.hidden as usize), 4)
         + bytes(mlp::hidden_len(m.hidden as usize), 1)
         + bytes(mlp::output_len(m.classes as usize), 2)
         + mirror_bytes(params)

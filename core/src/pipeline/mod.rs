@@ -109,7 +109,19 @@ pub struct PipelineParams {
     /// the shipped 720-256-19 model) and [`crate::mlp::mirror_scratch_bytes`]
     /// of workspace; nothing changes with a model without symmetry.
     pub mirror_check: bool,
+    /// With the mirror check, the bar under which an object's own best
+    /// cosine (Q16, 65536 = 1) sends it to the check
+    /// ([`crate::mlp::mirror_check_below_with`]); an object at or above
+    /// it keeps the plain ranking, after one forward pass. `u32::MAX`:
+    /// every object.
+    pub mirror_below_q16: u32,
 }
+
+/// [`PipelineParams::mirror_below_q16`] of the default: 0.95. On the
+/// training scenes the objects under it are about a fifth of those
+/// found, and they hold what the check changes (docs/CLASSIFY.md, "Only
+/// the unsure objects, in the default").
+pub const MIRROR_BELOW_DEFAULT: u32 = 62_259;
 
 /// The stereo point the pipeline runs by default,
 /// [`C2fParams::HALF_NARROW`]: the half-size search, each cell spread
@@ -137,6 +149,7 @@ impl PipelineParams {
             classes: 64,
         },
         mirror_check: false,
+        mirror_below_q16: u32::MAX,
     };
 
     /// The default: [`PipelineParams::PAPER`] without the foreground
@@ -156,7 +169,8 @@ impl PipelineParams {
     /// fitted near their median, [`CompleteParams::tilt_band`]); with the
     /// stereo's narrow filters ([`STEREO_DEFAULT`]); and the depth pass
     /// for what C does not outline ([`SegmentParams::depth_pass`];
-    /// docs/CHOICES.md).
+    /// docs/CHOICES.md); and the mirror check for the objects whose own
+    /// best cosine is under 0.95 ([`MIRROR_BELOW_DEFAULT`]).
     pub const DEFAULT: Self = Self {
         stereo: STEREO_DEFAULT,
         complete: CompleteParams::DEFAULT,
@@ -174,6 +188,8 @@ impl PipelineParams {
             depth_pass: Some(DepthPass::DEFAULT),
             ..Self::PAPER.segment
         },
+        mirror_check: true,
+        mirror_below_q16: MIRROR_BELOW_DEFAULT,
         ..Self::PAPER
     };
 
@@ -184,14 +200,14 @@ impl PipelineParams {
     /// 1,000 training-split scenes, K = 4: recall 87.4 → 90.6 %,
     /// precision 95.5 → 96.5 %; docs/PIPELINE.md, "The stereo point") for
     /// 2.4 times the default's M4 instructions a 160x120 frame (74.5 M
-    /// against 31.4 M, the product's budget 32 M) and 3,168 B more
+    /// against 31.4 M, the product's budget 32 M) and 9,440 B more
     /// workspace there: a setting for boards with several times the
     /// cycles. Two decoder tables, levels 0 and 1 of the default's. With
-    /// the mirror check ([`PipelineParams::mirror_check`]), which the
-    /// default's budget has no room for.
+    /// the mirror check ([`PipelineParams::mirror_check`]) for every
+    /// object, where the default's budget holds it for the unsure ones.
     pub const ACCURATE: Self = Self {
         stereo: C2fParams::HALF_NARROW_FULL_SEARCH,
-        mirror_check: true,
+        mirror_below_q16: u32::MAX,
         ..Self::DEFAULT
     };
 

@@ -210,19 +210,23 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
     // Figure-ground (with the depth pass, C takes the disparity map's
     // steps), then shape and the classifier per object.
     obs.enter(Stage::Segment);
-    let mut s = Arena::new(shared);
-    let mut seg = SegmentBuffers::new(w, h, s.take(maps_len(w, h))?, s.take(table_len(w, h))?)?;
     let edges: &'w [EdgeCell] = edges;
     let edges_v = ImageView::packed(edges, w, h)?;
-    let report = segment_with_depth_pass(
-        &params.segment,
-        &disparity_v,
-        &edges_v,
-        left,
-        &mut seg,
-        Masks::Bits(&mut *masks),
-        &mut SegmentSteps(obs),
-    )?;
+    let report = {
+        // The maps are free once the objects' masks are written: the
+        // classifier's buffers take their place.
+        let mut s = Arena::new(&mut *shared);
+        let mut seg = SegmentBuffers::new(w, h, s.take(maps_len(w, h))?, s.take(table_len(w, h))?)?;
+        segment_with_depth_pass(
+            &params.segment,
+            &disparity_v,
+            &edges_v,
+            left,
+            &mut seg,
+            Masks::Bits(&mut *masks),
+            &mut SegmentSteps(obs),
+        )?
+    };
 
     let masks: &'w [u32] = masks;
 
@@ -257,6 +261,7 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
 
     obs.enter(Stage::Classify);
     let m = &p.model;
+    let mut s = Arena::new(shared);
     let mut scratch = Scratch {
         input: s.take(mlp::packed_len(m.inputs(), m.hidden()))?,
         hidden: s.take(mlp::hidden_len(m.hidden()))?,
@@ -285,7 +290,14 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
             .unwrap_or(&[]);
         let mut top = [Ranked::default(); TOP_K];
         let filled = match mirror.as_mut() {
-            Some(mirror) => mlp::mirror_check_with::<K>(m, v, &mut scratch, mirror, &mut top)?,
+            Some(mirror) => mlp::mirror_check_below_with::<K>(
+                m,
+                v,
+                &mut scratch,
+                mirror,
+                &mut top,
+                params.mirror_below_q16,
+            )?,
             None => {
                 let outputs = mlp::forward_with::<K>(m, v, &mut scratch)?;
                 mlp::top_k(m, outputs, &mut top)?
