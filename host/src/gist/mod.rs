@@ -51,9 +51,17 @@ pub struct GistEvalOptions {
     #[arg(long, default_value = "default")]
     pub preset: String,
     /// The mirror check (`PipelineParams::mirror_check`, the model's
-    /// per-class symmetry) on or off, whatever the preset says.
+    /// per-class symmetry) on or off, whatever the preset says; on, it
+    /// checks the objects the preset's bar sends to it
+    /// (`PipelineParams::mirror_below_q16`: the default's unsure ones,
+    /// every object of the accurate preset).
     #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
     pub mirror_check: Option<bool>,
+    /// With the mirror check, the bar under which an object's own best
+    /// cosine sends it to the check (`PipelineParams::mirror_below_q16`),
+    /// instead of the preset's: 0 checks no object, 1 or more every one.
+    #[arg(long, value_name = "COS", value_parser = parse_bar)]
+    pub mirror_below: Option<u32>,
     /// Which chain runs.
     #[arg(long, value_enum, default_value = "core")]
     pub mode: Mode,
@@ -74,6 +82,15 @@ fn parse_on_off(s: &str) -> std::result::Result<bool, String> {
     }
 }
 
+/// A cosine bar as Q16 (`u32::MAX` from 1 up: every object).
+fn parse_bar(s: &str) -> std::result::Result<u32, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v >= 1.0 => Ok(u32::MAX),
+        Ok(v) if v >= 0.0 => Ok((v * 65536.0).round() as u32),
+        _ => Err(format!("{s:?}: a cosine from 0")),
+    }
+}
+
 /// `report.json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
@@ -85,6 +102,9 @@ pub struct Report {
     pub preset: String,
     /// Whether the mirror check ran (the preset's, or `--mirror-check`).
     pub mirror_check: bool,
+    /// Its bar: the objects whose own best cosine is under it are checked
+    /// (`None`: every object).
+    pub mirror_below: Option<f64>,
     /// The scene set.
     pub scenes_dir: String,
     /// The model file.
@@ -212,6 +232,9 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
     if let Some(on) = opts.mirror_check {
         preset = preset.with_mirror_check(on);
     }
+    if let Some(bar) = opts.mirror_below {
+        preset.mirror_below_q16 = bar;
+    }
     let shared = Shared {
         preset,
         segment: SegmentParams {
@@ -268,6 +291,8 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
         mode: opts.mode,
         preset: opts.preset.clone(),
         mirror_check: shared.preset.mirror_check,
+        mirror_below: (shared.preset.mirror_below_q16 < u32::MAX)
+            .then(|| f64::from(shared.preset.mirror_below_q16) / 65536.0),
         scenes_dir: opts.scenes.display().to_string(),
         model: opts.model.display().to_string(),
         max_objects: opts.objects,
@@ -291,7 +316,11 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
         opts.mode.name(),
         opts.objects,
         opts.preset,
-        if report.mirror_check { "on" } else { "off" }
+        match (report.mirror_check, report.mirror_below) {
+            (false, _) => "off".to_string(),
+            (true, None) => "on".to_string(),
+            (true, Some(b)) => format!("on under {b:.3}"),
+        }
     ));
     push_totals(&mut s, "all scenes", &report.overall);
     for (n, t) in &report.by_objects {
@@ -319,4 +348,20 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
         s.raw = Some(json);
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_bar;
+
+    #[test]
+    fn bars_are_q16_cosines() {
+        assert_eq!(parse_bar("0.95"), Ok(62_259));
+        assert_eq!(parse_bar("0"), Ok(0));
+        assert_eq!(parse_bar("1"), Ok(u32::MAX));
+        assert_eq!(parse_bar("2.5"), Ok(u32::MAX));
+        assert!(parse_bar("-0.1").is_err());
+        assert!(parse_bar("NaN").is_err());
+        assert!(parse_bar("high").is_err());
+    }
 }
