@@ -1,69 +1,23 @@
 //! The mirror check (`protogist::mlp::mirror`, docs/CLASSIFY.md "The
 //! mirror check"): mirrors as permutations of the shape vector, per-class
-//! averaging by the model's symmetry, the pipeline switch and the float
-//! reference (how the symmetry is derived: `mlp_symmetry.rs`).
+//! averaging by the model's symmetry, the bar of the unsure objects and
+//! the pipeline switch (the float reference and the error bound:
+//! `mlp_mirror_reference.rs`; how the symmetry is derived:
+//! `mlp_symmetry.rs`).
 
-use proptest::prelude::*;
+mod mirror_common;
+
+use mirror_common::*;
 use protogist::image::{ImageView, ImageViewMut, Rgb8};
 use protogist::mlp::{
-    forward, mirror_check, mirror_check_below_with, mirror_mean, mirror_outputs_len, mirror_top_k,
-    scores, top_k, MirrorScratch, MlpError, Model, Ranked, SafeKernel, Scratch, Symmetry,
-    MIRROR_VIEWS, TOP_K,
+    mirror_check, mirror_mean, mirror_top_k, scores, MirrorScratch, MlpError, Model, Ranked,
+    Scratch, Symmetry, MIRROR_VIEWS, TOP_K,
 };
 use protogist::pipeline::{workspace_words, Pipeline, PipelineParams};
-use protogist::shape::{
-    shape_vector, Mirror, RadialProfile, ShapeElem, ShapeVector, BINS, SHAPE_LEN,
-};
+use protogist::shape::{Mirror, ShapeElem, BINS, SHAPE_LEN};
 use protogist::synth::{render_left, render_right, SceneSpec};
-use protogist_host::classify::mirror as fref;
-use protogist_host::classify::mlp::{unit, Mlp, SplitMix};
-use protogist_host::classify::quant::{
-    output_error_bound, quantize_net, shape_elems, write_blob, BlobExtras,
-};
-use protogist_host::classify::rules::Templates;
-use protogist_host::classify::symmetry::with_symmetry;
-use protogist_tests::nets::{blob_version_1, random_net};
-
-/// The shipped model as version 1 (no symmetry section).
-static MODEL_V1: std::sync::LazyLock<Vec<u8>> =
-    std::sync::LazyLock::new(|| blob_version_1(SHIPPED));
-const SHIPPED: &[u8] = include_bytes!("../../host/data/shapes_model.bin");
-/// The shipped model's network and templates, without symmetry.
-fn shipped_v1() -> &'static [u8] {
-    &MODEL_V1
-}
-
-/// An asymmetric blob (a tilted, off-centre L with a notch and a disc),
-/// 41x41, as the tta26 probe drew it.
-fn blob(x: i32, y: i32) -> bool {
-    let (u, v) = (x - 20, 20 - y);
-    let l = (-12..=10).contains(&u) && (-12..=-4).contains(&v)
-        || (-12..=-5).contains(&u) && (-12..=14).contains(&v);
-    l && !(u == 3 && v == -8) || (u - 8).pow(2) + (v - 6).pow(2) <= 9
-}
-
-fn vector(f: impl Fn(i32, i32) -> bool) -> ShapeVector {
-    let px: Vec<u8> = (0..41 * 41).map(|i| u8::from(f(i % 41, i / 41))).collect();
-    let mask = ImageView::packed(&px, 41, 41).unwrap();
-    let mut p = RadialProfile::new();
-    let mut v = [ShapeElem::ZERO; SHAPE_LEN];
-    shape_vector(&mask, &mut p, &mut v).unwrap();
-    v
-}
-
-fn mirrored(m: Mirror, x: &ShapeVector) -> ShapeVector {
-    let mut v = [ShapeElem::ZERO; SHAPE_LEN];
-    m.apply(x, &mut v);
-    v
-}
-
-fn mean_abs(a: &ShapeVector, b: &ShapeVector) -> f32 {
-    a.iter()
-        .zip(b)
-        .map(|(a, b)| (*a - *b).abs().to_num::<f32>())
-        .sum::<f32>()
-        / SHAPE_LEN as f32
-}
+use protogist_host::classify::mlp::Mlp;
+use protogist_host::classify::quant::{quantize_net, write_blob, BlobExtras};
 
 #[test]
 fn mirrors_are_involutive_permutations() {
@@ -117,95 +71,6 @@ fn mirrors_agree_with_really_mirrored_masks() {
             good < 0.05 && good * 5.0 < bad && good * 5.0 < wrong,
             "{m:?}"
         );
-    }
-}
-
-/// The shipped model with symmetry `flags` (one byte per class).
-fn with_flags(flags: &[u8]) -> Vec<u8> {
-    with_symmetry(shipped_v1(), flags).unwrap()
-}
-
-/// Shape vectors of a few real masks and their mirrors.
-fn probes() -> Vec<ShapeVector> {
-    let mut out = vec![vector(blob)];
-    for (a, b) in [(9, 4), (5, 12), (14, 7)] {
-        out.push(vector(|x, y| {
-            let (u, v) = (x - 20, y - 20);
-            (u * u * b + v * v * a <= 12 * a * b) || (u > 0 && v.abs() < 2 && u < 18)
-        }));
-    }
-    let m: Vec<ShapeVector> = out
-        .iter()
-        .flat_map(|x| Mirror::ALL.map(|m| mirrored(m, x)))
-        .collect();
-    out.extend(m);
-    out
-}
-
-struct Bufs {
-    xi: Vec<u32>,
-    hi: Vec<u8>,
-    yo: Vec<u16>,
-    v: Vec<ShapeElem>,
-    o: Vec<u16>,
-    mean: Vec<u16>,
-}
-
-impl Bufs {
-    fn new(m: &Model<'_>) -> Self {
-        let (d, h, k) = (m.inputs(), m.hidden(), m.classes());
-        Self {
-            xi: vec![0; protogist::mlp::packed_len(d, h)],
-            hi: vec![0; h],
-            yo: vec![0; k],
-            v: vec![ShapeElem::ZERO; SHAPE_LEN],
-            o: vec![0; mirror_outputs_len(k)],
-            mean: vec![0; k],
-        }
-    }
-
-    fn plain(&mut self, m: &Model<'_>, x: &[ShapeElem]) -> (Vec<u16>, Vec<Ranked>) {
-        let mut s = Scratch {
-            input: &mut self.xi,
-            hidden: &mut self.hi,
-            output: &mut self.yo,
-        };
-        let out = forward(m, x, &mut s).unwrap().to_vec();
-        let mut r = [Ranked::default(); TOP_K];
-        let n = top_k(m, &out, &mut r).unwrap();
-        (out, r[..n].to_vec())
-    }
-
-    /// `f` on the scratch, the mirror scratch and a ranking; the ranks it
-    /// filled.
-    fn ranked(
-        &mut self,
-        f: impl FnOnce(&mut Scratch<'_>, &mut MirrorScratch<'_>, &mut [Ranked]) -> usize,
-    ) -> Vec<Ranked> {
-        let mut s = Scratch {
-            input: &mut self.xi,
-            hidden: &mut self.hi,
-            output: &mut self.yo,
-        };
-        let mut ms = MirrorScratch {
-            vector: &mut self.v,
-            outputs: &mut self.o,
-            mean: &mut self.mean,
-        };
-        let mut r = [Ranked::default(); TOP_K];
-        let n = f(&mut s, &mut ms, &mut r);
-        r[..n].to_vec()
-    }
-
-    fn check(&mut self, m: &Model<'_>, x: &[ShapeElem]) -> Vec<Ranked> {
-        self.ranked(|s, ms, r| mirror_check(m, x, s, ms, r).unwrap())
-    }
-
-    /// The check for an object whose own best cosine is under `below`.
-    fn gated(&mut self, m: &Model<'_>, x: &[ShapeElem], below: u32) -> Vec<Ranked> {
-        self.ranked(|s, ms, r| {
-            mirror_check_below_with::<SafeKernel>(m, x, s, ms, r, below).unwrap()
-        })
     }
 }
 
@@ -523,98 +388,4 @@ fn the_switch_off_is_todays_pipeline() {
     }
     let (_, plain) = run_with_check(&off, &all);
     assert_ne!(checked, plain);
-}
-
-proptest! {
-    #![proptest_config(ProptestConfig::with_cases(24))]
-
-    /// Per class, the rounded mean of the int8 outputs over the views stays
-    /// within the mean of the views' bounds `B_k` plus half an output LSB
-    /// of the float network's mean (docs/ERROR_BOUNDS.md §9).
-    #[test]
-    fn averaged_outputs_within_the_bound(
-        h in 1usize..12,
-        k in 1usize..5,
-        seed in any::<u64>(),
-        a1 in 0.002f64..0.2,
-        a2 in 0.05f64..8.0,
-        flags in proptest::collection::vec(0u8..4, 4),
-    ) {
-        let mut rng = SplitMix::new(seed);
-        let net = random_net(&mut rng, (SHAPE_LEN, h, k), a1, a2, 1.0);
-        let raw: Vec<i16> = (0..SHAPE_LEN)
-            .map(|_| (8000.0 * (2.0 * unit(&mut rng) - 1.0)).round() as i16)
-            .collect();
-        let q = quantize_net(&net, std::slice::from_ref(&raw)).unwrap();
-        let names: Vec<String> = (0..k).map(|c| format!("c{c}")).collect();
-        let sym: Vec<u8> = flags[..k].to_vec();
-        let blob = write_blob(&q, &BlobExtras {
-            templates: &vec![1; k * k],
-            delta_q16: 0,
-            names: &names,
-            meta: "",
-            symmetry: Some(&sym),
-        }).unwrap();
-        let m = Model::parse(&blob).unwrap();
-        let x: ShapeVector = shape_elems(&raw).try_into().unwrap();
-        let views = [x, mirrored(Mirror::Vertical, &x), mirrored(Mirror::Horizontal, &x)];
-        let mut b = Bufs::new(&m);
-        let mut ints = Vec::new();
-        let mut bounds = Vec::new();
-        for v in &views {
-            ints.extend(b.plain(&m, v).0);
-            let vr: Vec<i16> = v.iter().map(|e| e.to_bits()).collect();
-            bounds.push(output_error_bound(&net, &q, &vr).1);
-        }
-        let xf: Vec<f64> = raw.iter().map(|&r| f64::from(r) / 4096.0).collect();
-        let floats = fref::mirror_outputs(&net, &xf, Symmetry::from_bits(3).unwrap()).unwrap();
-        for (c, &f) in sym.iter().enumerate() {
-            let s = Symmetry::from_bits(f).unwrap();
-            let mut mean = vec![0u16; k];
-            mirror_mean(s, &ints, &mut mean);
-            let fmean = fref::mirror_mean(s, &floats);
-            let rows: Vec<usize> = std::iter::once(0)
-                .chain(Mirror::ALL.into_iter().enumerate().filter(|(_, m)| s.has(*m)).map(|(i, _)| i + 1))
-                .collect();
-            for j in 0..k {
-                let bound = rows.iter().map(|&r| bounds[r][j]).sum::<f64>() / rows.len() as f64
-                    + 0.5 / 65535.0;
-                let err = (f64::from(mean[j]) / 65535.0 - fmean[j]).abs();
-                prop_assert!(err <= bound, "class {c} output {j}: {err:e} > {bound:e}");
-            }
-        }
-    }
-}
-
-/// The float reference ranks as core does on a model whose int8 outputs
-/// are close to the float ones: the shipped network's sidecar is not in the
-/// repository, so a random one with its own float templates.
-#[test]
-fn float_reference_check_follows_the_flags() {
-    let mut rng = SplitMix::new(7);
-    let net = random_net(&mut rng, (SHAPE_LEN, 6, 3), 0.05, 4.0, 1.0);
-    let x: Vec<f64> = vector(blob).iter().map(|e| e.to_num::<f64>()).collect();
-    let t = Templates::new(vec![
-        vec![1.0, 0.2, 0.1],
-        vec![0.1, 1.0, 0.3],
-        vec![0.2, 0.1, 1.0],
-    ])
-    .unwrap();
-    let none = [Symmetry::NONE; 3];
-    let plain = fref::mirror_check(&net, &t, &none, &x).unwrap();
-    let direct: Vec<f32> = fref::mirror_outputs(&net, &x, Symmetry::NONE).unwrap()[0]
-        .iter()
-        .map(|&v| v as f32)
-        .collect();
-    assert_eq!(plain, t.scores(&direct).unwrap());
-    let vh = [Symmetry::from_bits(3).unwrap(); 3];
-    let outs = fref::mirror_outputs(&net, &x, vh[0]).unwrap();
-    let all = fref::mirror_check(&net, &t, &vh, &x).unwrap();
-    for (c, &score) in all.iter().enumerate() {
-        let mean: Vec<f32> = (0..3)
-            .map(|j| ((outs[0][j] + outs[1][j] + outs[2][j]) / 3.0) as f32)
-            .collect();
-        assert!((score - t.scores(&mean).unwrap()[c]).abs() < 1e-12);
-    }
-    assert!(fref::mirror_check(&net, &t, &none[..2], &x).is_err());
 }
