@@ -290,7 +290,9 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
         format: REPORT_FORMAT,
         mode: opts.mode,
         preset: opts.preset.clone(),
-        mirror_check: shared.preset.mirror_check,
+        // Only core's pipeline runs the check; the other chains classify
+        // each mask plainly.
+        mirror_check: opts.mode == Mode::Core && shared.preset.mirror_check,
         mirror_below: (shared.preset.mirror_below_q16 < u32::MAX)
             .then(|| f64::from(shared.preset.mirror_below_q16) / 65536.0),
         scenes_dir: opts.scenes.display().to_string(),
