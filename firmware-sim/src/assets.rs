@@ -16,7 +16,7 @@ pub const TABLES: [&[u8]; 3] = [
     &Aligned(*include_bytes!("../data/dem_c2f_narrow_l1.bin")).0,
     &Aligned(*include_bytes!("../data/dem_c2f_narrow_l2.bin")).0,
 ];
-/// With the `accurate` feature: its point (`half-narrow-full-search`)
+/// With the `accurate` feature: its point (`fast-narrow-full-search`)
 /// has no level 2, so levels 0 and 1 of the same tables.
 #[cfg(feature = "accurate")]
 pub const TABLES: [&[u8]; 2] = [

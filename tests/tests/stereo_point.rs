@@ -6,14 +6,16 @@
 //! `C2fParams::HALF_LOW_PENALTY`: with narrow filters more of a small
 //! object's interior takes its disparity (docs/CHOICES.md, "Narrow
 //! filters"). And the `accurate` preset's point,
-//! `C2fParams::HALF_NARROW_FULL_SEARCH`: the pipeline's point searching
-//! every disparity at the half-size level, which finds a small object of a
-//! generated scene that the coarse-to-fine default loses.
+//! `C2fParams::FAST_NARROW_FULL_SEARCH`: the pipeline's point searching
+//! every disparity at the half-size level (and refined by phase), which
+//! finds a small object of a generated scene that the coarse-to-fine
+//! default loses.
 
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, ImageViewMut, Rgb8};
 use protogist::pipeline::{PipelineParams, STEREO_DEFAULT};
 use protogist::stereo::c2f::{C2f, C2fParams};
+use protogist::stereo::phase::PhaseParams;
 use protogist::stereo::DemTable;
 use protogist::synth::{render_left, render_right, ObjectSpec, SceneSpec, Shape};
 use protogist_host::storage::C2fStorage;
@@ -214,7 +216,7 @@ fn run_into_a_map_gives_the_cells_run_gives() {
 }
 
 #[test]
-fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size() {
+fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size_refined_by_phase() {
     let p = PipelineParams::ACCURATE;
     // The default pipeline but for the stereo point's coarse levels and
     // the mirror check, which it runs on every object.
@@ -228,18 +230,19 @@ fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size() {
         },
         PipelineParams::DEFAULT
     );
-    assert_eq!(p.stereo, C2fParams::HALF_NARROW_FULL_SEARCH);
+    assert_eq!(p.stereo, C2fParams::FAST_NARROW_FULL_SEARCH);
     assert_eq!(
         p.stereo,
         C2fParams {
             coarse: 1,
+            phase: Some(PhaseParams::DEFAULT),
             ..C2fParams::HALF_NARROW
         }
     );
-    // Every disparity at the half-size level, which is the output, spread
-    // over 2x2 blocks; two tables, levels 0 and 1 of the default's.
+    // Every disparity at the half-size level, refined to the frame's
+    // resolution by phase; two tables, levels 0 and 1 of the default's.
     assert_eq!((p.stereo.coarse, p.stereo.finest), (1, 1));
-    assert_eq!(p.stereo.phase, None);
+    assert_eq!(p.stereo.phase, Some(PhaseParams::DEFAULT));
     assert_eq!(p.stereo.candidates(1), 17);
     assert_eq!(p.tables(), 2);
     let tables = protogist_host::product::tables_for(&p).unwrap();
@@ -253,20 +256,29 @@ fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size() {
     assert_eq!(p.name(), Some("accurate"));
     assert_eq!(PipelineParams::DEFAULT.name(), Some("default"));
     assert_eq!(
-        C2fParams::from_name("half-narrow-full-search"),
+        C2fParams::from_name("fast-narrow-full-search"),
         Some(p.stereo)
     );
-    assert_eq!(p.stereo.name(), Some("half-narrow-full-search"));
+    assert_eq!(p.stereo.name(), Some("fast-narrow-full-search"));
     assert_eq!(
         protogist_host::product::preset("accurate").unwrap(),
         PipelineParams::ACCURATE
     );
     // The workspace at 160x120 with K = 4, as the product runs: the
-    // half-size level's full search needs 9,440 B more than the default's
-    // largest phase, figure-ground's.
+    // half-size level's full search and the phase step's rows need
+    // 12,320 B more than the default's largest phase, figure-ground's
+    // (2,880 B of it the phase step's).
     let bytes = |p: &PipelineParams| protogist::pipeline::workspace_bytes(W, H, &p.with_objects(4));
-    assert_eq!(bytes(&p), 170_616);
-    assert_eq!(bytes(&p) - bytes(&PipelineParams::DEFAULT), 9_440);
+    assert_eq!(bytes(&p), 173_496);
+    assert_eq!(bytes(&p) - bytes(&PipelineParams::DEFAULT), 12_320);
+    let unrefined = PipelineParams {
+        stereo: C2fParams {
+            phase: None,
+            ..p.stereo
+        },
+        ..p
+    };
+    assert_eq!(bytes(&p) - bytes(&unrefined), 2_880);
 }
 
 /// Scene `index` of the training split, seed 1, 1 to 4 objects (the set

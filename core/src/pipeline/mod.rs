@@ -194,19 +194,20 @@ impl PipelineParams {
     };
 
     /// **Accurate**: [`PipelineParams::DEFAULT`] with the stereo point
-    /// [`C2fParams::HALF_NARROW_FULL_SEARCH`], every disparity searched at
+    /// [`C2fParams::FAST_NARROW_FULL_SEARCH`], every disparity searched at
     /// the half-size level instead of coarse to fine from a quarter of the
-    /// frame, where small objects average away. More objects found (on
-    /// 1,000 training-split scenes, K = 4: recall 87.4 → 90.6 %,
-    /// precision 95.5 → 96.5 %; docs/PIPELINE.md, "The stereo point") for
-    /// 2.4 times the default's M4 instructions a 160x120 frame (74.5 M
-    /// against 31.4 M, the product's budget 32 M) and 9,440 B more
-    /// workspace there: a setting for boards with several times the
-    /// cycles. Two decoder tables, levels 0 and 1 of the default's. With
-    /// the mirror check ([`PipelineParams::mirror_check`]) for every
-    /// object, where the default's budget holds it for the unsure ones.
+    /// frame, where small objects average away, and the map refined to
+    /// the frame's resolution by phase. More objects found (on 1,000
+    /// training-split scenes, K = 4: recall 87.4 → 90.7 %, precision
+    /// 95.5 → 96.3 %; docs/PIPELINE.md, "The stereo point") for about 2.5
+    /// times the default's M4 instructions a 160x120 frame (the
+    /// product's budget is 32 M) and more workspace there: a setting for
+    /// boards with several times the cycles. Two decoder tables, levels 0
+    /// and 1 of the default's. With the mirror check
+    /// ([`PipelineParams::mirror_check`]) for every object, where the
+    /// default's budget holds it for the unsure ones.
     pub const ACCURATE: Self = Self {
-        stereo: C2fParams::HALF_NARROW_FULL_SEARCH,
+        stereo: C2fParams::FAST_NARROW_FULL_SEARCH,
         mirror_below_q16: u32::MAX,
         ..Self::DEFAULT
     };

@@ -164,18 +164,21 @@ impl C2fParams {
         ..Self::HALF_LOW_PENALTY
     };
 
-    /// **Half, narrow filters, full search**: [`C2fParams::HALF_NARROW`]
+    /// **Fast, narrow filters, full search**: [`C2fParams::HALF_NARROW`]
     /// with one coarse level fewer (`coarse` 1): every disparity is
     /// searched at the half-size level, with no coarser level whose
-    /// windows a small object could fall out of; the output is the same
-    /// half-size map spread over 2x2 blocks. Levels 0 and 1 of
-    /// `half-narrow`'s tables. More objects found end to end (the
-    /// pipeline's `accurate` preset, docs/PIPELINE.md, "The stereo point")
-    /// for about 55 % more host time and 42.6 M M4 instructions a 160x120
-    /// frame more (the stereo stage 62.1 M instead of 19.4 M): a point for
-    /// boards with several times the product's 32 M.
-    pub const HALF_NARROW_FULL_SEARCH: Self = Self {
+    /// windows a small object could fall out of; the half-size map is
+    /// then refined to the frame's resolution by phase
+    /// ([`PhaseParams::DEFAULT`], as [`C2fParams::FAST`] does). Levels 0
+    /// and 1 of `half-narrow`'s tables. More objects found end to end,
+    /// and named right more often (the pipeline's `accurate` preset,
+    /// docs/PIPELINE.md, "The stereo point"), for about 55 % more host
+    /// time and about 45 M M4 instructions a 160x120 frame more than
+    /// `half-narrow`: a point for boards with several times the product's
+    /// 32 M.
+    pub const FAST_NARROW_FULL_SEARCH: Self = Self {
         coarse: 1,
+        phase: Some(PhaseParams::DEFAULT),
         ..Self::HALF_NARROW
     };
 
@@ -187,7 +190,7 @@ impl C2fParams {
         ("fast-low-penalty", Self::FAST_LOW_PENALTY),
         ("half-low-penalty", Self::HALF_LOW_PENALTY),
         ("half-narrow", Self::HALF_NARROW),
-        ("half-narrow-full-search", Self::HALF_NARROW_FULL_SEARCH),
+        ("fast-narrow-full-search", Self::FAST_NARROW_FULL_SEARCH),
     ];
 
     /// The named point called `name` ([`C2fParams::NAMED`]).
