@@ -172,10 +172,10 @@ impl C2fParams {
     /// ([`PhaseParams::DEFAULT`], as [`C2fParams::FAST`] does). Levels 0
     /// and 1 of `half-narrow`'s tables. More objects found end to end,
     /// and named right more often (the pipeline's `accurate` preset,
-    /// docs/PIPELINE.md, "The stereo point"), for about 55 % more host
-    /// time and about 45 M M4 instructions a 160x120 frame more than
-    /// `half-narrow`: a point for boards with several times the product's
-    /// 32 M.
+    /// docs/PIPELINE.md, "The stereo point"), for about twice the host
+    /// time of the pipeline at `half-narrow` and about 45 M M4
+    /// instructions a 160x120 frame more: a point for boards with several
+    /// times the product's 32 M.
     pub const FAST_NARROW_FULL_SEARCH: Self = Self {
         coarse: 1,
         phase: Some(PhaseParams::DEFAULT),
