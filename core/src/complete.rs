@@ -33,7 +33,7 @@
 //! at the horizon to the nearest at the bottom: its median would put the
 //! horizon's edge cells, and the cells next to anything standing on it,
 //! at the disparity of its middle rows, a line across the frame that
-//! joins objects at that disparity (docs/RECALL.md). A region whose
+//! joins objects at that disparity (docs/RECALL_EARLIER.md). A region whose
 //! trusted cells lie at least [`CompleteParams::tilt_rows`] rows apart
 //! (at most [`MAX_TILTED`] a frame, in label order, and within the tilt
 //! table) takes, in row `y`, its median plus its least-squares tilt:
