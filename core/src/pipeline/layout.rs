@@ -24,7 +24,7 @@ use crate::conspicuity::{stream_scratch_len, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
 use crate::image::Rgb8;
 use crate::mlp;
-use crate::segment::{bit_map_len, maps_len, table_len};
+use crate::segment::{bit_map_len, maps_len, relabel_len, table_len};
 use crate::shape::{ShapeElem, SHAPE_LEN};
 use crate::stereo::c2f;
 use crate::stereo::filters::Z;
@@ -104,7 +104,20 @@ pub const fn colour_bytes(width: usize, height: usize, params: &PipelineParams) 
 /// Bytes of the object phase: segmentation's maps, then, in their place,
 /// the classifier's buffers ([`classify_bytes`]).
 pub const fn object_bytes(width: usize, height: usize, params: &PipelineParams) -> usize {
-    max(segment_bytes(width, height), classify_bytes(params))
+    max(
+        segment_bytes(width, height) + relabel_bytes(width, params),
+        classify_bytes(params),
+    )
+}
+
+/// Bytes of the band relabelling's rows ([`relabel_len`]; 0 when
+/// [`PipelineParams::relabel`] is off).
+pub const fn relabel_bytes(width: usize, params: &PipelineParams) -> usize {
+    if params.relabel.is_some() {
+        bytes(relabel_len(width), 4)
+    } else {
+        0
+    }
 }
 
 /// Bytes of segmentation's maps and label table.

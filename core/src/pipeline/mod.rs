@@ -58,7 +58,7 @@ use crate::disparity::DisparityCell;
 use crate::image::ImageView;
 use crate::mlp::blob::Model;
 use crate::mlp::MacKernel;
-use crate::segment::{DepthPass, Detection, Ratio, SegmentBuffers, SegmentParams};
+use crate::segment::{DepthPass, Detection, Ratio, Relabel, SegmentBuffers, SegmentParams};
 use crate::shape::SHAPE_LEN;
 use crate::stereo::c2f::{C2f, C2fParams, MAX_COARSE};
 use crate::stereo::phase::{PhaseKernel, SafePhase};
@@ -115,6 +115,12 @@ pub struct PipelineParams {
     /// it keeps the plain ranking, after one forward pass. `u32::MAX`:
     /// every object.
     pub mirror_below_q16: u32,
+    /// The band relabelling of masks whose outline C does not follow
+    /// ([`crate::segment::relabel_object`]): colour and stereo matching
+    /// with a smoothness term re-decide the cells near the outline. Both
+    /// eyes' rows are read again; [`crate::segment::relabel_len`] words
+    /// of workspace. `None`: off.
+    pub relabel: Option<Relabel>,
 }
 
 /// [`PipelineParams::mirror_below_q16`] of the default: 0.95. On the
@@ -150,6 +156,7 @@ impl PipelineParams {
         },
         mirror_check: false,
         mirror_below_q16: u32::MAX,
+        relabel: None,
     };
 
     /// The default: [`PipelineParams::PAPER`] without the foreground
@@ -205,10 +212,12 @@ impl PipelineParams {
     /// boards with several times the cycles. Two decoder tables, levels 0
     /// and 1 of the default's. With the mirror check
     /// ([`PipelineParams::mirror_check`]) for every object, where the
-    /// default's budget holds it for the unsure ones.
+    /// default's budget holds it for the unsure ones, and the band
+    /// relabelling of low-contrast masks ([`Relabel::DEFAULT`]).
     pub const ACCURATE: Self = Self {
         stereo: C2fParams::FAST_NARROW_FULL_SEARCH,
         mirror_below_q16: u32::MAX,
+        relabel: Some(Relabel::DEFAULT),
         ..Self::DEFAULT
     };
 
@@ -393,6 +402,9 @@ impl<'a, K: PhaseKernel> Pipeline<'a, K> {
             return Err(PipelineError::BadParams("objects (K) must be 1..=8"));
         }
         params.segment.validate()?;
+        if let Some(r) = &params.relabel {
+            r.validate()?;
+        }
         if params.edges.threshold_percent > 100 {
             return Err(PipelineError::BadParams("edge threshold above 100 %"));
         }

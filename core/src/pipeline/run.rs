@@ -14,8 +14,8 @@ use crate::disparity::DisparityCell;
 use crate::image::{ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, MirrorScratch, Ranked, Scratch};
 use crate::segment::{
-    bit_map_len, maps_len, segment_with_depth_pass, table_len, BitView, Masks, SegmentBuffers,
-    SegmentObserver,
+    bit_map_len, maps_len, relabel_len, relabel_object, segment_with_depth_pass, table_len,
+    BitView, Masks, SegmentBuffers, SegmentObserver,
 };
 use crate::shape::{shape_vector_bits, RadialProfile, ShapeError, ShapeVector, SHAPE_LEN};
 use crate::stereo::c2f::{self, C2fBuffers};
@@ -217,7 +217,7 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
         // classifier's buffers take their place.
         let mut s = Arena::new(&mut *shared);
         let mut seg = SegmentBuffers::new(w, h, s.take(maps_len(w, h))?, s.take(table_len(w, h))?)?;
-        segment_with_depth_pass(
+        let mut report = segment_with_depth_pass(
             &params.segment,
             &disparity_v,
             &edges_v,
@@ -225,7 +225,14 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
             &mut seg,
             Masks::Bits(&mut *masks),
             &mut SegmentSteps(obs),
-        )?
+        )?;
+        if let Some(r) = &params.relabel {
+            let rows = s.take(relabel_len(w))?;
+            for det in report.objects.iter_mut() {
+                relabel_object(r, left, right, &edges_v, det, masks, &mut seg, rows)?;
+            }
+        }
+        report
     };
 
     let masks: &'w [u32] = masks;

@@ -85,6 +85,7 @@ mod parts;
 mod passes;
 mod pipeline;
 mod refine;
+mod relabel;
 mod stats;
 
 pub use bits::{
@@ -103,6 +104,7 @@ pub use pipeline::{
     Detection, Masks, SegmentObserver, SegmentReport, Step,
 };
 pub use refine::Refine;
+pub use relabel::{relabel_len, relabel_object, Relabel};
 pub use stats::{
     above_mean, foreground, foreground_conspicuity, foreground_rows, in_selected_area,
     object_conspicuity, object_region, plane, select_slice, selected_area, selected_bounds,
