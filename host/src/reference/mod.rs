@@ -3,6 +3,7 @@
 pub mod complete;
 pub mod conspicuity;
 pub mod refine;
+pub mod relabel;
 pub mod segment;
 pub mod shape;
 pub mod stereo;

@@ -14,7 +14,7 @@ use protogist::image::Rgb8;
 use protogist::segment::{Connectivity, Disk, Holes, Refine};
 
 /// `n` steps of `step` on `map`.
-fn steps(
+pub(super) fn steps(
     step: fn(Disk, &[bool], usize, usize) -> Vec<bool>,
     map: &[bool],
     n: u8,
@@ -43,7 +43,7 @@ fn sum(left: &[Rgb8], on: &[bool]) -> (i128, [i128; 3]) {
 
 /// `Σ (n·c − S)²` over the channels: `n²` times the squared distance of
 /// `p` to the mean.
-fn scaled(p: Rgb8, (n, s): (i128, [i128; 3])) -> i128 {
+pub(super) fn scaled(p: Rgb8, (n, s): (i128, [i128; 3])) -> i128 {
     [p.r, p.g, p.b]
         .iter()
         .zip(s)
