@@ -14,6 +14,7 @@
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, ImageViewMut, Rgb8};
 use protogist::pipeline::{PipelineParams, STEREO_DEFAULT};
+use protogist::segment::Relabel;
 use protogist::stereo::c2f::{C2f, C2fParams};
 use protogist::stereo::phase::PhaseParams;
 use protogist::stereo::DemTable;
@@ -218,14 +219,18 @@ fn run_into_a_map_gives_the_cells_run_gives() {
 #[test]
 fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size_refined_by_phase() {
     let p = PipelineParams::ACCURATE;
-    // The default pipeline but for the stereo point's coarse levels and
-    // the mirror check, which it runs on every object.
+    // The default pipeline but for the stereo point's coarse levels, the
+    // mirror check, which it runs on every object, and the band
+    // relabelling of low-contrast masks.
     assert!(p.mirror_check);
     assert_eq!(p.mirror_below_q16, u32::MAX);
+    assert_eq!(p.relabel, Some(Relabel::DEFAULT));
+    assert_eq!(PipelineParams::DEFAULT.relabel, None);
     assert_eq!(
         PipelineParams {
             stereo: STEREO_DEFAULT,
             mirror_below_q16: protogist::pipeline::MIRROR_BELOW_DEFAULT,
+            relabel: None,
             ..p
         },
         PipelineParams::DEFAULT
@@ -267,10 +272,15 @@ fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size_refined_by
     // The workspace at 160x120 with K = 4, as the product runs: the
     // half-size level's full search and the phase step's rows need
     // 12,320 B more than the default's largest phase, figure-ground's
-    // (2,880 B of it the phase step's).
+    // (2,880 B of it the phase step's). The relabelling's rows (10,720
+    // B) share figure-ground's phase, under the stereo's: they add
+    // nothing, but without the phase step figure-ground's phase with
+    // them is the largest, 1,600 B under the preset's.
     let bytes = |p: &PipelineParams| protogist::pipeline::workspace_bytes(W, H, &p.with_objects(4));
     assert_eq!(bytes(&p), 173_496);
     assert_eq!(bytes(&p) - bytes(&PipelineParams::DEFAULT), 12_320);
+    assert_eq!(protogist::pipeline::layout::relabel_bytes(W, &p), 10_720);
+    assert_eq!(bytes(&PipelineParams { relabel: None, ..p }), bytes(&p));
     let unrefined = PipelineParams {
         stereo: C2fParams {
             phase: None,
@@ -278,7 +288,15 @@ fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size_refined_by
         },
         ..p
     };
-    assert_eq!(bytes(&p) - bytes(&unrefined), 2_880);
+    assert_eq!(bytes(&p) - bytes(&unrefined), 1_600);
+    assert_eq!(
+        bytes(&p)
+            - bytes(&PipelineParams {
+                relabel: None,
+                ..unrefined
+            }),
+        2_880
+    );
 }
 
 /// Scene `index` of the training split, seed 1, 1 to 4 objects (the set

@@ -31,7 +31,7 @@
 //! 4. a band cell with `m` of its 4 neighbours in the object (none past
 //!    the frame's edge) is of the object when
 //!    `27·(A_b·n_o² − A_o·n_b²) + (matching·Δ + 9·smooth·(2m − 4))·W > 0`:
-//!    the colour's log-likelihood ratio `3 (d_b² − d_o²) / (v_o + v_b)`
+//!    the colour's log-likelihood ratio `3 (d_b² − d_o²) / (v_o + v_b + 2)`
 //!    plus the matching's and a Potts term, times `9·W` (exact in
 //!    `i128`). Each cell's least `m` that passes (0 to 4, or never) is
 //!    computed once;
@@ -41,8 +41,9 @@
 //! 6. the mask is the largest 4-connected component of the result, holes
 //!    filled.
 //!
-//! A mask of fewer than 5 core or ring cells, or with no outline cell, is
-//! left as it is. Integer only; the reference
+//! A mask of fewer than 5 core or ring cells, or of more than
+//! [`MAX_CELLS`] (where the exact `i128` comparison could overflow), or
+//! with no outline cell, is left as it is. Integer only; the reference
 //! (`protogist_host::reference::relabel::relabel_mask`) decides the same
 //! cells (docs/ERROR_BOUNDS.md, bound 0).
 
@@ -110,6 +111,11 @@ impl Relabel {
         }
     }
 }
+
+/// Most cells the core or the ring may hold: with `n ≤ 2^20`, `A·n²` is
+/// under 2^98 and `W` times the largest weight sum under 2^112, so the
+/// decision's `i128` never overflows.
+pub const MAX_CELLS: i128 = 1 << 20;
 
 /// Rows of grey the census reads (5x5).
 const GREY_ROWS: usize = 5;
@@ -249,27 +255,47 @@ impl Moments {
     }
 }
 
-/// Whether the outline of the mask in `bufs.mask` has an edge of C
-/// within 1 px on under `percent` % of its cells (an outline cell is ON
-/// with a 4-neighbour OFF or past the frame).
+/// Whether the outline of the mask `mask` has an edge of C within 1 px
+/// on under `percent` % of its cells (an outline cell is ON with a
+/// 4-neighbour OFF or past the frame). The outline is found a word at a
+/// time.
 fn weak_outline(g: Geom, mask: &[u32], edges: &ImageView<'_, EdgeCell>, percent: u8) -> bool {
     let (mut outline, mut edged) = (0u64, 0u64);
-    bits::for_each_on(g, mask, |x, y| {
-        let inner = x > 0
-            && y > 0
-            && g.bit(mask, x - 1, y)
-            && g.bit(mask, x + 1, y)
-            && g.bit(mask, x, y - 1)
-            && g.bit(mask, x, y + 1);
-        if inner {
-            return;
+    let empty: &[u32] = &[];
+    for y in 0..g.height {
+        let row = g.row(mask, y).unwrap_or(empty);
+        let up = if y > 0 {
+            g.row(mask, y - 1).unwrap_or(empty)
+        } else {
+            empty
+        };
+        let down = g.row(mask, y + 1).unwrap_or(empty);
+        for (i, &m) in row.iter().enumerate() {
+            if m == 0 {
+                continue;
+            }
+            let before = if i > 0 {
+                row.get(i - 1).copied().unwrap_or(0)
+            } else {
+                0
+            };
+            let after = row.get(i + 1).copied().unwrap_or(0);
+            let left = m << 1 | before >> 31;
+            let right = m >> 1 | after << 31;
+            let vertical = up.get(i).copied().unwrap_or(0) & down.get(i).copied().unwrap_or(0);
+            let mut edge_cells = m & !(left & right & vertical);
+            while edge_cells != 0 {
+                let x = i * 32 + edge_cells.trailing_zeros() as usize;
+                edge_cells &= edge_cells.wrapping_sub(1);
+                outline += 1;
+                let near = (y.saturating_sub(1)..=y + 1).any(|yy| {
+                    (x.saturating_sub(1)..=x + 1)
+                        .any(|xx| edges.get(xx, yy).is_some_and(|e| !e.is_off()))
+                });
+                edged += u64::from(near);
+            }
         }
-        outline += 1;
-        let near = (y.saturating_sub(1)..=y + 1).any(|yy| {
-            (x.saturating_sub(1)..=x + 1).any(|xx| edges.get(xx, yy).is_some_and(|e| !e.is_off()))
-        });
-        edged += u64::from(near);
-    });
+    }
     outline > 0 && edged * 100 < u64::from(percent) * outline
 }
 
@@ -297,9 +323,11 @@ fn set(g: Geom, m: &mut [u32], x: usize, y: usize, on: bool) {
 /// holds [`relabel_len`] words. Returns whether the mask was relabelled.
 ///
 /// # Errors
-/// [`SegmentError::Image`] for short scratch or frames of another size;
+/// [`SegmentError::Image`] for short scratch;
+/// [`SegmentError::SizeMismatch`] for frames or a C map of another size;
 /// [`SegmentError::LabelCapacity`] from the labelling.
 #[allow(clippy::too_many_arguments)]
+#[inline(never)]
 pub fn relabel_object<S: RgbRows>(
     p: &Relabel,
     left: &S,
@@ -356,7 +384,7 @@ pub fn relabel_object<S: RgbRows>(
             each(px, rb, |_, c| b.add(c));
         }
     }
-    if o.n < 5 || b.n < 5 {
+    if o.n < 5 || b.n < 5 || o.n > MAX_CELLS || b.n > MAX_CELLS {
         return Ok(false);
     }
     let (no2, nb2) = (o.n * o.n, b.n * b.n);

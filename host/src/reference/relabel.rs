@@ -16,6 +16,9 @@ use protogist::conspicuity::EdgeCell;
 use protogist::image::Rgb8;
 use protogist::segment::{DisparityRange, Relabel, STAT_FRAC_BITS};
 
+/// Most cells the core or the ring may hold (core's `relabel::MAX_CELLS`).
+const MAX_CELLS: i128 = 1 << 20;
+
 /// The 4-neighbours of a cell.
 const FOUR: [(isize, isize); 4] = [(-1, 0), (1, 0), (0, -1), (0, 1)];
 
@@ -140,7 +143,7 @@ pub fn relabel_mask(
     let outer = steps(dilate, &reach, relabel.ring, w, h);
     let ring: Vec<bool> = outer.iter().zip(&reach).map(|(&o, &r)| o && !r).collect();
     let (object, behind) = (Moments::of(left, &core), Moments::of(left, &ring));
-    if object.n < 5 || behind.n < 5 {
+    if object.n < 5 || behind.n < 5 || object.n > MAX_CELLS || behind.n > MAX_CELLS {
         return None;
     }
     let band: Vec<bool> = reach.iter().zip(&core).map(|(&r, &c)| r && !c).collect();
