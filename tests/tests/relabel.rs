@@ -5,16 +5,18 @@
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
 use proptest::test_runner::TestRunner;
-use protogist::conspicuity::{Conspicuity, EdgeCell};
-use protogist::disparity::{Disparity, DisparityCell};
-use protogist::image::{ImageError, ImageView, Rgb8};
+use protogist::image::{ImageError, ImageView};
 use protogist::segment::{
     bit_map_len, relabel_len, relabel_object, segment_with_depth_pass, BitView, BoundingBox,
-    DepthPass, Detection, Holes, Masks, Ratio, Refine, Relabel, SegmentError, SegmentParams,
+    DepthPass, Detection, Holes, Masks, Ratio, Refine, Relabel, SegmentBuffers, SegmentError,
+    SegmentParams,
 };
 use protogist_host::reference::relabel as rfl;
 use protogist_host::reference::segment as rf;
 use protogist_tests::SegmentStorage;
+
+mod relabel_scenes;
+use relabel_scenes::{fattened, inside, scene, Object, Scene};
 
 // ---------------------------------------------------------------------------
 // The settings and the errors.
@@ -69,262 +71,6 @@ fn each_setting_out_of_range_is_named() {
     }
 }
 
-// ---------------------------------------------------------------------------
-// Scenes.
-
-/// Most frame sizes of the scenes.
-const MAX_W: usize = 64;
-const MAX_H: usize = 44;
-/// Background disparity tiles, px.
-const TILE_W: usize = 8;
-const TILE_H: usize = 6;
-const TILES: usize = MAX_W.div_ceil(TILE_W) * MAX_H.div_ceil(TILE_H);
-
-/// An object: its true box `(x, y, w, h)` in colour, nearer than the
-/// background by `rise` disparity bits; the stereo's map has it grown by
-/// `fat` px on the left, top, right and bottom (its blur); its colour is
-/// the background's plus `colour`; an `outlined` one has its box's ring
-/// in C.
-#[derive(Clone, Debug)]
-struct Object {
-    rect: (usize, usize, usize, usize),
-    rise: u16,
-    fat: [usize; 4],
-    colour: [i16; 3],
-    outlined: bool,
-}
-
-/// A stereo scene of `w` x `h`: a background at `base` disparity bits,
-/// plus per tile `tiles`; objects; OFF cells of the map, and rows of it
-/// OFF but every fifth cell (rows without a dominant disparity); C's random
-/// edges (`edge[i] < density`); the background colour; noise of the
-/// left image and of the right (`noise_l`, `noise_r`, times `amp` / 16;
-/// none in a flat scene).
-#[derive(Clone, Debug)]
-struct Scene {
-    w: usize,
-    h: usize,
-    base: u16,
-    tiles: Vec<i16>,
-    objects: Vec<Object>,
-    off: Vec<bool>,
-    off_rows: Vec<bool>,
-    edge: Vec<u8>,
-    density: u8,
-    bg: [u8; 3],
-    amp: i16,
-    noise_l: Vec<i16>,
-    noise_r: Vec<i16>,
-}
-
-fn object(w: usize, h: usize) -> impl Strategy<Value = Object> {
-    (
-        (0..w - 12, 0..h - 10, 12usize..26, 10usize..22),
-        (4 * 256u16)..(20 * 256),
-        prop::array::uniform4(0usize..4),
-        prop_oneof![1 => Just([0; 3]), 4 => prop::array::uniform3(-24i16..25)],
-        prop::bool::weighted(0.15),
-    )
-        .prop_map(
-            move |((x, y, bw, bh), rise, fat, colour, outlined)| Object {
-                rect: (x, y, bw.min(w - x), bh.min(h - y)),
-                rise,
-                fat,
-                colour,
-                outlined,
-            },
-        )
-}
-
-fn scene() -> impl Strategy<Value = Scene> {
-    (32usize..=MAX_W, 24usize..=MAX_H).prop_flat_map(|(w, h)| {
-        (
-            (Just(w), Just(h), 0u16..(6 * 256)),
-            (
-                prop::collection::vec(-96i16..97, TILES),
-                prop_oneof![3 => Just(1i16), 1 => 2i16..9],
-            ),
-            prop::collection::vec(object(w, h), 1..3),
-            (
-                prop::collection::vec(prop::bool::weighted(0.04), w * h),
-                prop::collection::vec(prop::bool::weighted(0.1), h),
-            ),
-            (
-                prop::collection::vec(any::<u8>(), w * h),
-                prop_oneof![Just(0u8), 0u8..10],
-            ),
-            (
-                prop::array::uniform3(40u8..216),
-                prop_oneof![1 => Just(0i16), 4 => 4i16..17],
-            ),
-            prop::collection::vec(-20i16..21, w * h),
-            prop::collection::vec(-3i16..4, w * h),
-        )
-            .prop_map(
-                |(
-                    (w, h, base),
-                    (tiles, spread),
-                    objects,
-                    (off, off_rows),
-                    (edge, density),
-                    (bg, amp),
-                    nl,
-                    nr,
-                )| Scene {
-                    w,
-                    h,
-                    base,
-                    tiles: tiles.iter().map(|t| t * spread).collect(),
-                    objects,
-                    off,
-                    off_rows,
-                    edge,
-                    density,
-                    bg,
-                    amp,
-                    noise_l: nl,
-                    noise_r: nr,
-                },
-            )
-    })
-}
-
-fn inside((x0, y0, bw, bh): (usize, usize, usize, usize), x: usize, y: usize) -> bool {
-    (x0..x0 + bw).contains(&x) && (y0..y0 + bh).contains(&y)
-}
-
-fn add(c: u8, d: i16) -> u8 {
-    (i16::from(c) + d).clamp(0, 255) as u8
-}
-
-impl Scene {
-    /// The background's disparity bits at `(x, y)`.
-    fn background(&self, x: usize, y: usize) -> u16 {
-        let t = (y / TILE_H) * MAX_W.div_ceil(TILE_W) + x / TILE_W;
-        (i32::from(self.base) + i32::from(self.tiles[t])).max(0) as u16
-    }
-
-    /// The object seen at `(x, y)` (the last one there), if any.
-    fn object_at(&self, x: usize, y: usize) -> Option<&Object> {
-        self.objects.iter().rev().find(|o| inside(o.rect, x, y))
-    }
-
-    /// The stereo's map: the background's tiles, each object's box grown
-    /// by its blur at its disparity, OFF cells.
-    fn disparity(&self) -> Vec<DisparityCell> {
-        let (w, h) = (self.w, self.h);
-        let mut d: Vec<u16> = (0..w * h).map(|i| self.background(i % w, i / w)).collect();
-        for o in &self.objects {
-            let (x0, y0, bw, bh) = o.rect;
-            let [l, t, r, b] = o.fat;
-            for y in y0.saturating_sub(t)..(y0 + bh + b).min(h) {
-                for x in x0.saturating_sub(l)..(x0 + bw + r).min(w) {
-                    d[y * w + x] = self.base + o.rise;
-                }
-            }
-        }
-        d.iter()
-            .zip(&self.off)
-            .enumerate()
-            .map(|(i, (&v, &off))| {
-                if off || (self.off_rows[i / w] && i % w % 5 != 0) {
-                    DisparityCell::OFF
-                } else {
-                    DisparityCell::on(Disparity::from_bits(v)).unwrap()
-                }
-            })
-            .collect()
-    }
-
-    /// C: random edges, and the true boxes' rings of the outlined objects.
-    fn edges(&self) -> Vec<EdgeCell> {
-        let (w, h) = (self.w, self.h);
-        let on = |v: u8| EdgeCell::on(Conspicuity::from_num(v)).unwrap();
-        let mut c: Vec<EdgeCell> = self
-            .edge
-            .iter()
-            .map(|&e| {
-                if e < self.density {
-                    on(5 + e % 30)
-                } else {
-                    EdgeCell::OFF
-                }
-            })
-            .collect();
-        for o in self.objects.iter().filter(|o| o.outlined) {
-            let (x0, y0, bw, bh) = o.rect;
-            for y in y0..y0 + bh {
-                for x in x0..x0 + bw {
-                    if x == x0 || y == y0 || x + 1 == x0 + bw || y + 1 == y0 + bh {
-                        c[y * w + x] = on(40);
-                    }
-                }
-            }
-        }
-        debug_assert_eq!(c.len(), w * h);
-        c
-    }
-
-    /// The left image: the background's colour, the objects' close to
-    /// it, and noise.
-    fn left(&self) -> Vec<Rgb8> {
-        let w = self.w;
-        (0..w * self.h)
-            .map(|i| {
-                let (x, y) = (i % w, i / w);
-                let d = self.object_at(x, y).map_or([0; 3], |o| o.colour);
-                let n = self.noise_l[i] * self.amp / 16;
-                Rgb8 {
-                    r: add(self.bg[0], d[0] + n),
-                    g: add(self.bg[1], d[1] + n),
-                    b: add(self.bg[2], d[2] + n),
-                }
-            })
-            .collect()
-    }
-
-    /// The right image: each left pixel moved left by its true disparity
-    /// (whole px; the nearer wins), the background's colour where none
-    /// lands, and noise.
-    fn right(&self, left: &[Rgb8]) -> Vec<Rgb8> {
-        let (w, h) = (self.w, self.h);
-        let truth = |i: usize| {
-            let (x, y) = (i % w, i / w);
-            let bits = match self.object_at(x, y) {
-                Some(o) => self.base + o.rise,
-                None => self.background(x, y),
-            };
-            usize::from((bits + 128) >> 8)
-        };
-        let mut order: Vec<usize> = (0..w * h).collect();
-        order.sort_by_key(|&i| truth(i));
-        let plain = Rgb8 {
-            r: self.bg[0],
-            g: self.bg[1],
-            b: self.bg[2],
-        };
-        let mut right = vec![plain; w * h];
-        for i in order {
-            let (x, y, d) = (i % w, i / w, truth(i));
-            if x >= d {
-                right[y * w + x - d] = left[i];
-            }
-        }
-        right
-            .iter()
-            .zip(&self.noise_r)
-            .map(|(p, &n)| {
-                let n = n * self.amp / 16;
-                Rgb8 {
-                    r: add(p.r, n),
-                    g: add(p.g, n),
-                    b: add(p.b, n),
-                }
-            })
-            .collect()
-    }
-}
-
 /// The whole frame as S, no upper cut, up to 3 objects, the depth pass
 /// of `depth_pass.rs`.
 const PASS: SegmentParams = SegmentParams {
@@ -374,64 +120,88 @@ fn bbox(m: &[bool], w: usize) -> Option<BoundingBox> {
     })
 }
 
-/// Core's segmentation of `scene` with `p`, then the relabelling of each
-/// object with `relabel`, each against the reference.
-fn relabel_scene(scene: &Scene, p: &SegmentParams, relabel: &Relabel) -> Vec<Outcome> {
+/// A scene segmented by core: its maps and views, the segmentation's
+/// buffers and masks, and its report, as `relabel_object` takes them.
+struct Segmented<'a, 's> {
+    w: usize,
+    h: usize,
+    d: &'a [protogist::disparity::DisparityCell],
+    c: &'a [protogist::conspicuity::EdgeCell],
+    left: &'a [protogist::image::Rgb8],
+    right: &'a [protogist::image::Rgb8],
+    bufs: &'a mut SegmentBuffers<'s>,
+    masks: &'a mut Vec<u32>,
+    report: protogist::segment::SegmentReport,
+}
+
+/// Core's segmentation of `scene` with `p`, handed to `f`.
+fn segmented<R>(scene: &Scene, p: &SegmentParams, f: impl FnOnce(Segmented<'_, '_>) -> R) -> R {
     let (w, h) = (scene.w, scene.h);
     let (d, c) = (scene.disparity(), scene.edges());
     let left = scene.left();
     let right = scene.right(&left);
     let mut store = SegmentStorage::new(w, h);
     let mut bufs = store.buffers().unwrap();
-    let chunk = bit_map_len(w, h);
-    let mut masks = vec![0u32; usize::from(p.max_objects) * chunk];
-    let (lv, rv, cv) = (
-        ImageView::packed(&left, w, h).unwrap(),
-        ImageView::packed(&right, w, h).unwrap(),
-        ImageView::packed(&c, w, h).unwrap(),
-    );
-    let mut report = segment_with_depth_pass(
+    let mut masks = vec![0u32; usize::from(p.max_objects) * bit_map_len(w, h)];
+    let report = segment_with_depth_pass(
         p,
         &ImageView::packed(&d, w, h).unwrap(),
-        &cv,
-        &lv,
+        &ImageView::packed(&c, w, h).unwrap(),
+        &ImageView::packed(&left, w, h).unwrap(),
         &mut bufs,
         Masks::Bits(&mut masks),
         &mut (),
     )
     .unwrap();
-    let df: Vec<rf::DispF> = d.iter().map(|v| v.get().map(f32::from)).collect();
-    let ground = rf::row_disparities(&df, w, h);
-    let mut scratch = vec![0u32; relabel_len(w)];
-    let mut out = Vec::new();
-    for det in report.objects.iter_mut() {
-        let slot = det.index * chunk..(det.index + 1) * chunk;
-        let before = bools(&masks[slot.clone()], w, h);
-        let want = rfl::relabel_mask(
-            relabel, &before, &left, &right, &c, &ground, det.range, w, h,
+    f(Segmented {
+        w,
+        h,
+        d: &d,
+        c: &c,
+        left: &left,
+        right: &right,
+        bufs: &mut bufs,
+        masks: &mut masks,
+        report,
+    })
+}
+
+/// Core's segmentation of `scene` with `p`, then the relabelling of each
+/// object with `relabel`, each against the reference.
+fn relabel_scene(scene: &Scene, p: &SegmentParams, relabel: &Relabel) -> Vec<Outcome> {
+    segmented(scene, p, |s| {
+        let (w, h) = (s.w, s.h);
+        let chunk = bit_map_len(w, h);
+        let (lv, rv, cv) = (
+            ImageView::packed(s.left, w, h).unwrap(),
+            ImageView::packed(s.right, w, h).unwrap(),
+            ImageView::packed(s.c, w, h).unwrap(),
         );
-        let was = *det;
-        let relabelled = relabel_object(
-            relabel,
-            &lv,
-            &rv,
-            &cv,
-            det,
-            &mut masks,
-            &mut bufs,
-            &mut scratch,
-        )
-        .unwrap();
-        out.push(Outcome {
-            after: bools(&masks[slot], w, h),
-            before,
-            relabelled,
-            det: *det,
-            was,
-            want,
-        });
-    }
-    out
+        let df: Vec<rf::DispF> = s.d.iter().map(|v| v.get().map(f32::from)).collect();
+        let ground = rf::row_disparities(&df, w, h);
+        let mut scratch = vec![0u32; relabel_len(w)];
+        let mut report = s.report;
+        let mut out = Vec::new();
+        for det in report.objects.iter_mut() {
+            let slot = det.index * chunk..(det.index + 1) * chunk;
+            let before = bools(&s.masks[slot.clone()], w, h);
+            let want = rfl::relabel_mask(
+                relabel, &before, s.left, s.right, s.c, &ground, det.range, w, h,
+            );
+            let was = *det;
+            let relabelled =
+                relabel_object(relabel, &lv, &rv, &cv, det, s.masks, s.bufs, &mut scratch).unwrap();
+            out.push(Outcome {
+                after: bools(&s.masks[slot], w, h),
+                before,
+                relabelled,
+                det: *det,
+                was,
+                want,
+            });
+        }
+        out
+    })
 }
 
 /// Checks core's relabelling of every object (of a frame `w` wide)
@@ -514,47 +284,6 @@ fn segment_settings() -> impl Strategy<Value = SegmentParams> {
     })
 }
 
-/// `n` values in `-a..=a`, from a fixed LCG.
-fn fixed_noise(n: usize, a: i16, seed: u64) -> Vec<i16> {
-    let mut s = seed;
-    (0..n)
-        .map(|_| {
-            s = s
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            ((s >> 33) % (2 * a as u64 + 1)) as i16 - a
-        })
-        .collect()
-}
-
-/// A 48x36 scene: a 18x14 object at (14, 10), 10 px against a background
-/// at 2 px, its colour close to the background's, with textures of
-/// noise; the stereo's map has it 2 px too wide on every side.
-fn fattened() -> Scene {
-    let (w, h) = (48, 36);
-    Scene {
-        w,
-        h,
-        base: 2 * 256,
-        tiles: vec![0; TILES],
-        objects: vec![Object {
-            rect: (14, 10, 18, 14),
-            rise: 8 * 256,
-            fat: [2; 4],
-            colour: [14, -10, 8],
-            outlined: false,
-        }],
-        off: vec![false; w * h],
-        off_rows: vec![false; h],
-        edge: vec![0; w * h],
-        density: 0,
-        bg: [100, 110, 90],
-        amp: 16,
-        noise_l: fixed_noise(w * h, 12, 7),
-        noise_r: fixed_noise(w * h, 3, 11),
-    }
-}
-
 /// Intersection over union of a mask and a box.
 fn iou_box(m: &[bool], w: usize, rect: (usize, usize, usize, usize)) -> f64 {
     let (mut i, mut u) = (0, 0);
@@ -609,71 +338,56 @@ fn a_fattened_low_contrast_object_is_cut_back_to_its_colour() {
 
 #[test]
 fn short_scratch_and_frames_of_another_size_are_typed_errors() {
-    let scene = fattened();
-    let (w, h) = (scene.w, scene.h);
-    let (d, c) = (scene.disparity(), scene.edges());
-    let left = scene.left();
-    let right = scene.right(&left);
-    let mut store = SegmentStorage::new(w, h);
-    let mut bufs = store.buffers().unwrap();
-    let chunk = bit_map_len(w, h);
-    let mut masks = vec![0u32; usize::from(PASS.max_objects) * chunk];
-    let (lv, rv, cv) = (
-        ImageView::packed(&left, w, h).unwrap(),
-        ImageView::packed(&right, w, h).unwrap(),
-        ImageView::packed(&c, w, h).unwrap(),
-    );
-    let mut report = segment_with_depth_pass(
-        &PASS,
-        &ImageView::packed(&d, w, h).unwrap(),
-        &cv,
-        &lv,
-        &mut bufs,
-        Masks::Bits(&mut masks),
-        &mut (),
-    )
-    .unwrap();
-    let det = &mut report.objects[0];
-    let (was, before) = (*det, masks.clone());
-    let needed = relabel_len(w);
-    let mut short = vec![0u32; needed - 1];
-    let r = relabel_object(
-        &Relabel::DEFAULT,
-        &lv,
-        &rv,
-        &cv,
-        det,
-        &mut masks,
-        &mut bufs,
-        &mut short,
-    );
-    assert_eq!(
-        r,
-        Err(SegmentError::Image(ImageError::BufferTooSmall {
-            needed,
-            got: needed - 1
-        }))
-    );
-    let narrow = ImageView::packed(&right[..w * h - h], w - 1, h).unwrap();
-    let mut scratch = vec![0u32; needed];
-    let r = relabel_object(
-        &Relabel::DEFAULT,
-        &lv,
-        &narrow,
-        &cv,
-        det,
-        &mut masks,
-        &mut bufs,
-        &mut scratch,
-    );
-    assert_eq!(
-        r,
-        Err(SegmentError::SizeMismatch {
-            expected: (w, h),
-            got: (w - 1, h)
-        })
-    );
-    assert_eq!((*det, &masks), (was, &before));
+    segmented(&fattened(), &PASS, |s| {
+        let (w, h) = (s.w, s.h);
+        let (lv, rv, cv) = (
+            ImageView::packed(s.left, w, h).unwrap(),
+            ImageView::packed(s.right, w, h).unwrap(),
+            ImageView::packed(s.c, w, h).unwrap(),
+        );
+        let mut report = s.report;
+        let det = &mut report.objects[0];
+        let (was, before) = (*det, s.masks.clone());
+        let needed = relabel_len(w);
+        let mut short = vec![0u32; needed - 1];
+        let r = relabel_object(
+            &Relabel::DEFAULT,
+            &lv,
+            &rv,
+            &cv,
+            det,
+            s.masks,
+            s.bufs,
+            &mut short,
+        );
+        assert_eq!(
+            r,
+            Err(SegmentError::Image(ImageError::BufferTooSmall {
+                needed,
+                got: needed - 1
+            }))
+        );
+        let narrow = ImageView::packed(&s.right[..w * h - h], w - 1, h).unwrap();
+        let mut scratch = vec![0u32; needed];
+        let r = relabel_object(
+            &Relabel::DEFAULT,
+            &lv,
+            &narrow,
+            &cv,
+            det,
+            s.masks,
+            s.bufs,
+            &mut scratch,
+        );
+        assert_eq!(
+            r,
+            Err(SegmentError::SizeMismatch {
+                expected: (w, h),
+                got: (w - 1, h)
+            })
+        );
+        assert_eq!((*det, &*s.masks), (was, &before));
+    });
 }
 
 proptest! {
