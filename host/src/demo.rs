@@ -182,15 +182,16 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
     }
     // Figure-ground from ground-truth disparity, for comparison.
     let gt_disparity: Vec<_> = scene.disparity.iter().map(|&d| from_pixels(d)).collect();
-    let seg_gt = run_chain(
+    let mut chain_gt = run_chain(
         &params.segment,
         Source::Given(&gt_disparity),
         &scene.left,
         &scene.right,
         w,
         h,
-    )?
-    .segment;
+    )?;
+    chain_gt.relabel(params.relabel.as_ref(), &scene.left, &scene.right);
+    let seg_gt = chain_gt.segment;
     summary.push(
         "mask IoU, GT disparity",
         format!("{:.3}", seg_gt.iou(0, &scene.mask)),

@@ -6,8 +6,9 @@
 //! Stereo is the host's f32 disparity energy model (or a given disparity,
 //! e.g. ground truth); the conspicuity, the completion and figure-ground
 //! are core's stages run step by step ([`crate::stages`]), with the
-//! pipeline's segmentation parameters, so that the chain differs from the
-//! product only where its disparity comes from.
+//! pipeline's segmentation parameters, and the band relabelling is the
+//! reference's ([`ChainRun::relabel`]), so that the chain differs from
+//! the product only where its disparity comes from.
 
 use crate::error::Result;
 use crate::reference::stereo::{Decoder, DemParams};
@@ -16,7 +17,7 @@ use protogist::complete::{CompleteParams, CompleteReport};
 use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
-use protogist::segment::SegmentParams;
+use protogist::segment::{BoundingBox, Relabel, SegmentParams};
 
 /// Where the chain's disparity comes from.
 #[derive(Clone, Copy, Debug)]
@@ -99,6 +100,72 @@ pub fn run_chain(
         disparity,
         completion,
         segment,
+    })
+}
+
+impl ChainRun {
+    /// Relabels every object's mask with `relabel` (the pipeline's
+    /// [`PipelineParams::relabel`](protogist::pipeline::PipelineParams::relabel))
+    /// as core's pipeline does after figure-ground: by the reference
+    /// [`relabel_mask`](crate::reference::relabel::relabel_mask), against
+    /// the pair, C and each row's dominant disparity of the chain's map,
+    /// updating the object's area and box. `None` leaves the masks as they
+    /// are.
+    pub fn relabel(&mut self, relabel: Option<&Relabel>, left: &[Rgb8], right: &[Rgb8]) {
+        let Some(relabel) = relabel else { return };
+        let (w, h) = (self.segment.width, self.segment.height);
+        let n = w * h;
+        let df: Vec<crate::reference::segment::DispF> = self
+            .disparity
+            .iter()
+            .map(|v| v.get().map(f32::from))
+            .collect();
+        let ground = crate::reference::segment::row_disparities(&df, w, h);
+        for det in &mut self.segment.report.objects {
+            let Some(slot) = self
+                .segment
+                .masks
+                .get_mut(det.index * n..(det.index + 1) * n)
+            else {
+                continue;
+            };
+            let Some(mask) = crate::reference::relabel::relabel_mask(
+                relabel,
+                slot,
+                left,
+                right,
+                &self.edges.edges,
+                &ground,
+                det.range,
+                w,
+                h,
+            ) else {
+                continue;
+            };
+            slot.copy_from_slice(&mask);
+            det.area = mask.iter().map(|&b| u32::from(b)).sum();
+            det.bbox = mask_box(&mask, w);
+        }
+    }
+}
+
+/// The box of a row-major mask `w` wide (`None` when empty).
+fn mask_box(mask: &[bool], w: usize) -> Option<BoundingBox> {
+    let on = mask
+        .iter()
+        .enumerate()
+        .filter(|(_, &b)| b)
+        .map(|(i, _)| (i % w, i / w));
+    let (x0, y0, x1, y1) = on.fold(None, |b: Option<(usize, usize, usize, usize)>, (x, y)| {
+        Some(b.map_or((x, y, x, y), |(x0, y0, x1, y1)| {
+            (x0.min(x), y0.min(y), x1.max(x), y1.max(y))
+        }))
+    })?;
+    Some(BoundingBox {
+        x: x0,
+        y: y0,
+        width: x1 - x0 + 1,
+        height: y1 - y0 + 1,
     })
 }
 

@@ -249,9 +249,10 @@ fn reference_chain(
     max_disp: u8,
     s: &mut Summary,
 ) -> Result<ReferenceRun> {
+    let preset = crate::product::preset(&opts.preset)?;
     let seg_params = SegmentParams {
         max_objects: opts.objects,
-        ..crate::product::preset(&opts.preset)?.segment
+        ..preset.segment
     };
     seg_params.validate()?;
     let (w, h) = (pair.width, pair.height);
@@ -276,7 +277,8 @@ fn reference_chain(
             }
         }
     };
-    let chain = run_chain(&seg_params, chain_source, &pair.left, &pair.right, w, h)?;
+    let mut chain = run_chain(&seg_params, chain_source, &pair.left, &pair.right, w, h)?;
+    chain.relabel(preset.relabel.as_ref(), &pair.left, &pair.right);
     if let Some(report) = &chain.completion {
         s.push(
             "disparity completion",

@@ -408,6 +408,72 @@ proptest! {
     }
 }
 
+/// The reference chain's relabelling (`ChainRun::relabel`, what
+/// `gist-eval --mode reference|gt-disparity` and `run --reference` run)
+/// of the host stage's segmentation of `scene`: each slot's mask and each
+/// object's area and box.
+fn chain_relabelled(
+    scene: &Scene,
+    p: &SegmentParams,
+    relabel: Option<&Relabel>,
+) -> (Vec<Vec<bool>>, Vec<Detection>) {
+    let (w, h) = (scene.w, scene.h);
+    let (d, c) = (scene.disparity(), scene.edges());
+    let left = scene.left();
+    let right = scene.right(&left);
+    let segment = protogist_host::stages::run_segment(p, &d, &c, Some(&left), w, h).unwrap();
+    let mut chain = protogist_host::reference_chain::ChainRun {
+        edges: protogist_host::stages::ConspicuityMaps {
+            width: w,
+            height: h,
+            luv: Vec::new(),
+            smoothed: Vec::new(),
+            raw: Vec::new(),
+            edges: c,
+            max: Default::default(),
+            on_count: 0,
+            elapsed: Default::default(),
+        },
+        disparity: d,
+        completion: None,
+        segment,
+    };
+    chain.relabel(relabel, &left, &right);
+    let masks = chain
+        .segment
+        .masks
+        .chunks(w * h)
+        .map(<[bool]>::to_vec)
+        .collect();
+    (masks, chain.segment.report.objects.to_vec())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(32))]
+
+    /// The reference chain relabels as core's pipeline does: the same
+    /// masks, areas and boxes after the relabelling, and none changed
+    /// without one.
+    #[test]
+    fn the_reference_chain_relabels_as_core_does(
+        scene in scene(),
+        p in segment_settings(),
+        relabel in relabel_settings(),
+    ) {
+        let core = relabel_scene(&scene, &p, &relabel);
+        let (masks, objects) = chain_relabelled(&scene, &p, Some(&relabel));
+        prop_assert_eq!(objects.len(), core.len());
+        for (o, det) in core.iter().zip(&objects) {
+            prop_assert_eq!(&masks[det.index], &o.after);
+            prop_assert_eq!((det.area, det.bbox), (o.det.area, o.det.bbox));
+        }
+        let (masks, _) = chain_relabelled(&scene, &p, None);
+        for (o, det) in core.iter().zip(&objects) {
+            prop_assert_eq!(&masks[det.index], &o.before);
+        }
+    }
+}
+
 #[test]
 fn the_scenes_exercise_the_relabelling() {
     // The property's cases, from a fixed seed: in a quarter of the

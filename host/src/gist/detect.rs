@@ -179,7 +179,9 @@ fn segment_and_classify(
             })
         }
     };
-    let seg = run_chain(&shared.segment, source, &scene.left, &scene.right, w, h)?.segment;
+    let mut chain = run_chain(&shared.segment, source, &scene.left, &scene.right, w, h)?;
+    chain.relabel(shared.preset.relabel.as_ref(), &scene.left, &scene.right);
+    let seg = chain.segment;
     let n = w * h;
     let mut out = Vec::new();
     for (k, obj) in seg.report.objects.iter().enumerate() {
