@@ -56,6 +56,8 @@ fn each_setting_out_of_range_is_named() {
             matching: 0,
             smooth: 0,
             edge_percent: 0,
+            mismatch_cost: 0,
+            mismatch_lean: 0,
         },
         Relabel {
             core: 8,
@@ -65,6 +67,8 @@ fn each_setting_out_of_range_is_named() {
             matching: 16,
             smooth: 64,
             edge_percent: 100,
+            mismatch_cost: 255,
+            mismatch_lean: 255,
         },
     ] {
         assert_eq!(p.validate(), Ok(()), "{p:?}");
@@ -251,20 +255,25 @@ fn relabel_settings() -> impl Strategy<Value = Relabel> {
     let near = (
         (0u8..=3, 1u8..=4, 1u8..=6, 1u8..=8),
         (0u8..=16, 0u8..=64, 30u8..=100),
+        (30u8..=120, 0u8..=100),
     );
     let any = (
         (0u8..=8, 1u8..=8, 1u8..=8, 1u8..=16),
         (0u8..=16, 0u8..=64, 0u8..=100),
+        (any::<u8>(), any::<u8>()),
     );
-    let make = |((core, reach, ring, passes), (matching, smooth, edge_percent))| Relabel {
-        core,
-        reach,
-        ring,
-        passes,
-        matching,
-        smooth,
-        edge_percent,
-    };
+    let make =
+        |((core, reach, ring, passes), (matching, smooth, edge_percent), (cost, lean))| Relabel {
+            core,
+            reach,
+            ring,
+            passes,
+            matching,
+            smooth,
+            edge_percent,
+            mismatch_cost: cost,
+            mismatch_lean: lean,
+        };
     prop_oneof![
         Just(Relabel::DEFAULT),
         near.prop_map(make),
@@ -479,7 +488,7 @@ fn the_scenes_exercise_the_relabelling() {
     // The property's cases, from a fixed seed: in a quarter of the
     // scenes or more a mask is relabelled and changed, a fifth of the
     // objects or more are relabelled, and most of these change (when
-    // written: 26 of 64 scenes; 30 of 96 objects, 29 changed).
+    // written: 31 of 64 scenes; 38 of 100 objects, 35 changed).
     let mut runner = TestRunner::deterministic();
     let strategy = (scene(), segment_settings(), relabel_settings());
     let cases = 64;
@@ -501,4 +510,42 @@ fn the_scenes_exercise_the_relabelling() {
     assert!(4 * scenes >= cases, "{scenes} scenes of {cases}");
     assert!(5 * relabelled >= objects, "{relabelled} of {objects}");
     assert!(2 * changed >= relabelled, "{changed} of {relabelled}");
+}
+
+#[test]
+fn a_cell_that_matches_badly_at_the_slice_leans_to_the_background() {
+    // The exercise's scenes with the default settings, with and without
+    // the lean: it changes masks, and brings them nearer the truth (when
+    // written: 18 of the 32 relabelled masks changed, IoU with the
+    // object's box summed 21.94 against 21.71).
+    let mut runner = TestRunner::deterministic();
+    let strategy = (scene(), segment_settings());
+    let without = Relabel {
+        mismatch_lean: 0,
+        ..Relabel::DEFAULT
+    };
+    let (mut changed, mut iou_with, mut iou_without, mut n) = (0, 0.0, 0.0, 0);
+    for _ in 0..64 {
+        let (scene, p) = strategy.new_tree(&mut runner).unwrap().current();
+        let with = relabel_scene(&scene, &p, &Relabel::DEFAULT);
+        let wo = relabel_scene(&scene, &p, &without);
+        for (a, b) in with.iter().zip(&wo) {
+            if !a.relabelled {
+                continue;
+            }
+            // The object the mask covers most.
+            let Some(o) = scene.objects.iter().max_by(|x, y| {
+                iou_box(&a.after, scene.w, x.rect).total_cmp(&iou_box(&a.after, scene.w, y.rect))
+            }) else {
+                continue;
+            };
+            changed += usize::from(a.after != b.after);
+            iou_with += iou_box(&a.after, scene.w, o.rect);
+            iou_without += iou_box(&b.after, scene.w, o.rect);
+            n += 1;
+        }
+    }
+    eprintln!("{n} relabelled, {changed} changed by the lean; IoU {iou_with:.3} against {iou_without:.3} (sums)");
+    assert!(changed > 0);
+    assert!(iou_with >= iou_without);
 }

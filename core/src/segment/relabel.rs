@@ -27,7 +27,11 @@
 //!    `Δ = min over the background's disparities − min over the
 //!    object's`, the object's being the whole pixels from ⌊low⌋ to
 //!    ⌈high⌉ of its slice, the background's the row's dominant disparity
-//!    (the ground fit's, rounded) ± 1 (no term in a row without one);
+//!    (the ground fit's, rounded) ± 1 (no term in a row without one),
+//!    less [`Relabel::mismatch_lean`] where the object's minimum is over
+//!    [`Relabel::mismatch_cost`]: left of a near object lies a strip the
+//!    right eye cannot see, where neither disparity matches and the
+//!    difference alone says nothing;
 //! 4. a band cell with `m` of its 4 neighbours in the object (none past
 //!    the frame's edge) is of the object when
 //!    `27·(A_b·n_o² − A_o·n_b²) + (matching·Δ + 9·smooth·(2m − 4))·W > 0`:
@@ -75,12 +79,21 @@ pub struct Relabel {
     /// The mask is relabelled when under this share (%) of its outline
     /// cells have an edge of C within 1 px (0 to 100).
     pub edge_percent: u8,
+    /// A band cell whose least census cost at the object's slice is over
+    /// this matches badly there, as the strip left of a near object that
+    /// the right eye cannot see does (costs are at most 225: 255 never).
+    pub mismatch_cost: u8,
+    /// What such a cell's matching term leans towards the background, in
+    /// census bits before the matching weight (0 to 255).
+    pub mismatch_lean: u8,
 }
 
 impl Relabel {
     /// A core of 2 steps, a reach of 3, a ring of 4 more, 5 passes,
     /// matching 2, smoothness 6, outlines under 40 % edges
-    /// (docs/RECALL.md, "Colour and matching together").
+    /// (docs/RECALL.md, "Colour and matching together"); cells costing
+    /// over 70 at the slice lean 40 towards the background (docs/RECALL.md,
+    /// "After the relabelling").
     pub const DEFAULT: Self = Self {
         core: 2,
         reach: 3,
@@ -89,6 +102,8 @@ impl Relabel {
         matching: 2,
         smooth: 6,
         edge_percent: 40,
+        mismatch_cost: 70,
+        mismatch_lean: 40,
     };
 
     /// Checks the settings.
@@ -464,7 +479,12 @@ pub fn relabel_object<S: RgbRows>(
                 let db = ((bg - 1 + 128) >> 8) as usize;
                 let c_in = (d_lo..=d_hi).map(cost).min().unwrap_or(0);
                 let c_bg = (db.saturating_sub(1)..=db + 1).map(cost).min().unwrap_or(0);
-                i128::from(c_bg) - i128::from(c_in)
+                let lean = if c_in > u32::from(p.mismatch_cost) {
+                    i128::from(p.mismatch_lean)
+                } else {
+                    0
+                };
+                i128::from(c_bg) - i128::from(c_in) - lean
             };
             let colour = 27 * (b.scaled_dist(c) * no2 - o.scaled_dist(c) * nb2);
             let k = (0..=4i128)

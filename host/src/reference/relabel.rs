@@ -194,7 +194,15 @@ pub fn relabel_mask(
                     let bits = (v * 256.0).round() as i64;
                     let db = ((bits + 128) >> 8) as usize;
                     let bg = least_cost(x, y, db.saturating_sub(1)..=db + 1);
-                    bg - least_cost(x, y, objects.clone())
+                    let object = least_cost(x, y, objects.clone());
+                    // A cell that matches badly at the slice leans to
+                    // the background.
+                    let lean = if object > i128::from(relabel.mismatch_cost) {
+                        i128::from(relabel.mismatch_lean)
+                    } else {
+                        0
+                    };
+                    bg - object - lean
                 }
                 None => 0,
             };
