@@ -12,6 +12,7 @@
 
 use crate::error::Result;
 use crate::reference::stereo::{Decoder, DemParams};
+use crate::scenes::BoxPx;
 use crate::stages::{run_complete, run_conspicuity, run_segment, ConspicuityMaps, SegmentResult};
 use protogist::complete::{CompleteParams, CompleteReport};
 use protogist::conspicuity::{EdgeParams, LuvTables};
@@ -144,29 +145,17 @@ impl ChainRun {
             };
             slot.copy_from_slice(&mask);
             det.area = mask.iter().map(|&b| u32::from(b)).sum();
-            det.bbox = mask_box(&mask, w);
+            det.bbox =
+                BoxPx::of(w as u32, h as u32, |x, y| mask[y as usize * w + x as usize]).map(|b| {
+                    BoundingBox {
+                        x: b.x as usize,
+                        y: b.y as usize,
+                        width: b.width as usize,
+                        height: b.height as usize,
+                    }
+                });
         }
     }
-}
-
-/// The box of a row-major mask `w` wide (`None` when empty).
-fn mask_box(mask: &[bool], w: usize) -> Option<BoundingBox> {
-    let on = mask
-        .iter()
-        .enumerate()
-        .filter(|(_, &b)| b)
-        .map(|(i, _)| (i % w, i / w));
-    let (x0, y0, x1, y1) = on.fold(None, |b: Option<(usize, usize, usize, usize)>, (x, y)| {
-        Some(b.map_or((x, y, x, y), |(x0, y0, x1, y1)| {
-            (x0.min(x), y0.min(y), x1.max(x), y1.max(y))
-        }))
-    })?;
-    Some(BoundingBox {
-        x: x0,
-        y: y0,
-        width: x1 - x0 + 1,
-        height: y1 - y0 + 1,
-    })
 }
 
 #[cfg(test)]
