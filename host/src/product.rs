@@ -249,6 +249,43 @@ pub fn run_frame(
     w: usize,
     h: usize,
 ) -> Result<FrameRun> {
+    run_frame_from(params, tables, model, (left, right), None, (w, h))
+}
+
+/// [`run_frame`] with the left view's disparity given (`w x h` cells, OFF
+/// where unknown) in place of the stereo and its completion
+/// ([`Pipeline::run_with_disparity`]).
+///
+/// # Errors
+/// [`HostError::Pipeline`] for what the pipeline rejects, a map of
+/// another size included.
+pub fn run_frame_with_disparity(
+    params: &PipelineParams,
+    tables: &[Vec<u8>],
+    model: &[u8],
+    (left, right): (&[Rgb8], &[Rgb8]),
+    disparity: &[DisparityCell],
+    w: usize,
+    h: usize,
+) -> Result<FrameRun> {
+    run_frame_from(
+        params,
+        tables,
+        model,
+        (left, right),
+        Some(disparity),
+        (w, h),
+    )
+}
+
+fn run_frame_from(
+    params: &PipelineParams,
+    tables: &[Vec<u8>],
+    model: &[u8],
+    (left, right): (&[Rgb8], &[Rgb8]),
+    disparity: Option<&[DisparityCell]>,
+    (w, h): (usize, usize),
+) -> Result<FrameRun> {
     let refs: Vec<&[u8]> = tables.iter().map(Vec::as_slice).collect();
     let p = Pipeline::new(params, &refs, model)?;
     let mut ws = vec![0u64; workspace_words(w, h, params)];
@@ -258,7 +295,13 @@ pub fn run_frame(
         ImageView::packed(right, w, h)?,
     );
     let start = Instant::now();
-    let frame = p.run_observed(&lv, &rv, &mut ws, &mut maps)?;
+    let frame = match disparity {
+        Some(d) => {
+            let dv = ImageView::packed(d, w, h)?;
+            p.run_with_disparity_observed(&lv, &rv, &dv, &mut ws, &mut maps)?
+        }
+        None => p.run_observed(&lv, &rv, &mut ws, &mut maps)?,
+    };
     let elapsed = start.elapsed();
     let objects = frame
         .objects()

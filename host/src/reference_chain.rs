@@ -1,6 +1,6 @@
 //! The f32 chain beside core's pipeline: one orchestration of the stages
-//! for every front end that compares against it (`run --reference`,
-//! `gist-eval --mode reference|gt-disparity`, `segment-eval` and the
+//! for every front end that compares against it (`run --reference` and
+//! `--gt-disparity`, `gist-eval --mode reference`, `segment-eval` and the
 //! demo's ground-truth row).
 //!
 //! Stereo is the host's f32 disparity energy model (or a given disparity,

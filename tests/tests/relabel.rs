@@ -418,7 +418,7 @@ proptest! {
 }
 
 /// The reference chain's relabelling (`ChainRun::relabel`, what
-/// `gist-eval --mode reference|gt-disparity` and `run --reference` run)
+/// `gist-eval --mode reference` and `run --reference` run)
 /// of the host stage's segmentation of `scene`: each slot's mask and each
 /// object's area and box.
 fn chain_relabelled(

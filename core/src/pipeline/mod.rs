@@ -515,7 +515,55 @@ impl<K: Kernels> Pipeline<'_, K> {
         workspace: &'w mut [u64],
         observer: &mut O,
     ) -> Result<Frame<'w>, PipelineError> {
-        run::run(self, left, right, workspace, observer)
+        run::run(self, left, right, run::Depth::Stereo, workspace, observer)
+    }
+
+    /// [`Pipeline::run`] with the disparity of the left view given:
+    /// `disparity` (the frames' size, OFF where unknown) takes the place
+    /// of the stereo engine's map and of its completion, and every stage
+    /// after them runs as in [`Pipeline::run`], the right frame serving
+    /// the band relabelling's matching. For boards whose depth comes from
+    /// elsewhere (a stereo ASIC, a depth camera registered to the left
+    /// view), and for the benchmark's upper bound of the stereo stage
+    /// (`protogist gist-eval --mode gt-disparity`). The workspace is
+    /// [`workspace_bytes`], as for [`Pipeline::run`].
+    ///
+    /// # Errors
+    /// [`PipelineError::Image`] when the right frame or `disparity` is not
+    /// the left frame's size, or for a zero or too large size;
+    /// [`PipelineError::WorkspaceTooSmall`] with the bytes needed; both
+    /// before any work.
+    pub fn run_with_disparity<'w, S: RgbRows>(
+        &self,
+        left: &S,
+        right: &S,
+        disparity: &ImageView<'_, DisparityCell>,
+        workspace: &'w mut [u64],
+    ) -> Result<Frame<'w>, PipelineError> {
+        self.run_with_disparity_observed(left, right, disparity, workspace, &mut ())
+    }
+
+    /// [`Pipeline::run_with_disparity`], showing the intermediate maps to
+    /// `observer` (the given map as the raw disparity).
+    ///
+    /// # Errors
+    /// As [`Pipeline::run_with_disparity`].
+    pub fn run_with_disparity_observed<'w, S: RgbRows, O: Observer>(
+        &self,
+        left: &S,
+        right: &S,
+        disparity: &ImageView<'_, DisparityCell>,
+        workspace: &'w mut [u64],
+        observer: &mut O,
+    ) -> Result<Frame<'w>, PipelineError> {
+        run::run(
+            self,
+            left,
+            right,
+            run::Depth::Given(disparity),
+            workspace,
+            observer,
+        )
     }
 
     /// [`Pipeline::run`] in a workspace of two slices, for boards whose
@@ -550,6 +598,14 @@ impl<K: Kernels> Pipeline<'_, K> {
         shared: &'w mut [u64],
         observer: &mut O,
     ) -> Result<Frame<'w>, PipelineError> {
-        run::run_split(self, left, right, kept, shared, observer)
+        run::run_split(
+            self,
+            left,
+            right,
+            run::Depth::Stereo,
+            kept,
+            shared,
+            observer,
+        )
     }
 }

@@ -11,7 +11,7 @@ use crate::complete::{
 };
 use crate::conspicuity::{self, EdgeCell, Luv};
 use crate::disparity::DisparityCell;
-use crate::image::{ImageView, ImageViewMut, Rgb8};
+use crate::image::{ImageError, ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, MirrorScratch, Ranked, Scratch};
 use crate::segment::{
     bit_map_len, maps_len, relabel_len, relabel_object, segment_with_depth_pass, table_len,
@@ -44,10 +44,20 @@ impl<O: Observer> SegmentObserver for SegmentSteps<'_, O> {
     }
 }
 
+/// Where a frame's disparity comes from.
+#[derive(Clone, Copy)]
+pub(super) enum Depth<'d> {
+    /// The stereo engine, then the completion over conspicuity regions.
+    Stereo,
+    /// The caller's map of the left view, used as it is.
+    Given(&'d ImageView<'d, DisparityCell>),
+}
+
 pub(super) fn run<'w, S: RgbRows, O: Observer, K: Kernels>(
     p: &Pipeline<'_, K>,
     left: &S,
     right: &S,
+    depth: Depth<'_>,
     workspace: &'w mut [u64],
     obs: &mut O,
 ) -> Result<Frame<'w>, PipelineError> {
@@ -65,13 +75,14 @@ pub(super) fn run<'w, S: RgbRows, O: Observer, K: Kernels>(
     let (kept, shared) = workspace
         .split_at_mut_checked(super::kept_words(w, h, params))
         .ok_or(too_small)?;
-    run_split(p, left, right, kept, shared, obs)
+    run_split(p, left, right, depth, kept, shared, obs)
 }
 
 pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
     p: &Pipeline<'_, K>,
     left: &S,
     right: &S,
+    depth: Depth<'_>,
     kept: &'w mut [u64],
     shared: &'w mut [u64],
     obs: &mut O,
@@ -79,7 +90,21 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
     let params = &p.params;
     let (w, h) = left.size();
     let tables = p.tables.as_slice();
-    p.c2f.check(tables, (w, h), right.size())?;
+    match depth {
+        Depth::Stereo => p.c2f.check(tables, (w, h), right.size())?,
+        Depth::Given(d) => {
+            crate::image::buffer_len(w, h, w)?;
+            for got in [right.size(), d.size()] {
+                if got != (w, h) {
+                    return Err(ImageError::SizeMismatch {
+                        expected: (w, h),
+                        got,
+                    }
+                    .into());
+                }
+            }
+        }
+    }
     for (region, words, needed) in [
         (Region::Kept, kept.len(), layout::kept_bytes(w, h, params)),
         (
@@ -106,7 +131,13 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
 
     // Stereo: its buffers take the shared region first.
     obs.enter(Stage::Stereo);
-    {
+    if let Depth::Given(given) = depth {
+        for (row, src) in disparity.chunks_exact_mut(w.max(1)).zip(given.rows()) {
+            for (o, &v) in row.iter_mut().zip(src) {
+                *o = v;
+            }
+        }
+    } else {
         let mut s = Arena::new(&mut *shared);
         let sp = &params.stereo;
         let phase = match &sp.phase {
@@ -194,14 +225,17 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
                 0
             })?,
         };
-        complete_runs(
-            &params.complete,
-            &c_v.as_view(),
-            &ImageView::packed(&*tone, w, h)?,
-            &mut ImageViewMut::packed(&mut *disparity, w, h)?,
-            &mut bufs,
-            &mut tables,
-        )?;
+        // A given map is used as it is.
+        if matches!(depth, Depth::Stereo) {
+            complete_runs(
+                &params.complete,
+                &c_v.as_view(),
+                &ImageView::packed(&*tone, w, h)?,
+                &mut ImageViewMut::packed(&mut *disparity, w, h)?,
+                &mut bufs,
+                &mut tables,
+            )?;
+        }
     }
     let disparity: &'w [DisparityCell] = disparity;
     let disparity_v = ImageView::packed(disparity, w, h)?;

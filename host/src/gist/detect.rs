@@ -64,7 +64,9 @@ pub enum Mode {
     /// The f32 reference disparity energy model, completed over the
     /// conspicuity regions, then core segmentation, shape and classifier.
     Reference,
-    /// The scenes' ground-truth disparity instead of stereo: an upper
+    /// Core's pipeline with the scenes' ground-truth disparity in place
+    /// of its stereo and completion
+    /// ([`protogist::pipeline::Pipeline::run_with_disparity`]): an upper
     /// bound for the stereo stage.
     GtDisparity,
 }
@@ -77,6 +79,12 @@ impl Mode {
             Self::Reference => "reference",
             Self::GtDisparity => "gt-disparity",
         }
+    }
+
+    /// Whether core's pipeline runs (with its stereo or with the given
+    /// disparity), needing [`Shared::tables`].
+    pub fn runs_core(self) -> bool {
+        matches!(self, Self::Core | Self::GtDisparity)
     }
 
     /// Whether [`Shared::dem`] must hold the f32 stereo model.
@@ -123,8 +131,9 @@ impl Classifier<'_> {
 
 /// What every detector of a run shares: parameters and the classifier.
 pub struct Shared<'a> {
-    /// The pipeline's named setting (`--preset`), for [`Mode::Core`]: its
-    /// stereo point, conspicuity, completion and Δ ([`core_params`]).
+    /// The pipeline's named setting (`--preset`): for core's modes
+    /// ([`Mode::runs_core`]) every stage's settings ([`core_params`]), for
+    /// the reference chain its relabelling.
     pub preset: protogist::pipeline::PipelineParams,
     /// Segmentation parameters (`max_objects` = K): the preset's, for
     /// every mode.
@@ -133,9 +142,9 @@ pub struct Shared<'a> {
     pub classifier: Classifier<'a>,
     /// The stereo model, for [`Mode::Reference`].
     pub dem: Option<(DemParams, Decoder)>,
-    /// The model blob, for [`Mode::Core`].
+    /// The model blob, for core's modes.
     pub blob: &'a [u8],
-    /// The stereo point's decoder tables, for [`Mode::Core`] (empty
+    /// The stereo point's decoder tables, for core's modes (empty
     /// otherwise).
     pub tables: Vec<Vec<u8>>,
 }
@@ -157,27 +166,20 @@ fn cell(v: Option<f32>) -> DisparityCell {
         .into()
 }
 
-/// Segments `disparity` against the conspicuity of the left view and
-/// categorises every object found.
-fn segment_and_classify(
-    shared: &Shared<'_>,
-    scene: &Scene,
-    disparity: Option<&[DisparityCell]>,
-) -> Result<Vec<Detection>> {
+/// Runs the reference chain on `scene` (its stereo completed over the
+/// conspicuity regions) and categorises every object found.
+fn segment_and_classify(shared: &Shared<'_>, scene: &Scene) -> Result<Vec<Detection>> {
     let (w, h) = (scene.width, scene.height);
-    let source = match (disparity, shared.dem.as_ref()) {
-        (Some(d), _) => Source::Given(d),
-        (None, Some((params, decoder))) => Source::Dem {
-            params,
-            decoder,
-            complete: true,
-        },
-        (None, None) => {
-            return Err(HostError::InvalidArgument {
-                name: "mode",
-                reason: "the reference chain needs a stereo model".into(),
-            })
-        }
+    let Some((params, decoder)) = shared.dem.as_ref() else {
+        return Err(HostError::InvalidArgument {
+            name: "mode",
+            reason: "the reference chain needs a stereo model".into(),
+        });
+    };
+    let source = Source::Dem {
+        params,
+        decoder,
+        complete: true,
     };
     let mut chain = run_chain(&shared.segment, source, &scene.left, &scene.right, w, h)?;
     chain.relabel(shared.preset.relabel.as_ref(), &scene.left, &scene.right);
@@ -212,7 +214,7 @@ pub struct ReferenceDetector<'s, 'm> {
 
 impl Detector for ReferenceDetector<'_, '_> {
     fn detect(&mut self, scene: &Scene) -> Result<Vec<Detection>> {
-        segment_and_classify(self.shared, scene, None)
+        segment_and_classify(self.shared, scene)
     }
 }
 
@@ -224,7 +226,16 @@ pub struct GtDisparityDetector<'s, 'm> {
 impl Detector for GtDisparityDetector<'_, '_> {
     fn detect(&mut self, scene: &Scene) -> Result<Vec<Detection>> {
         let d: Vec<DisparityCell> = scene.disparity.iter().map(|&v| cell(v)).collect();
-        segment_and_classify(self.shared, scene, Some(&d))
+        let run = crate::product::run_frame_with_disparity(
+            &core_params(self.shared, scene.width),
+            &self.shared.tables,
+            self.shared.blob,
+            (&scene.left, &scene.right),
+            &d,
+            scene.width,
+            scene.height,
+        )?;
+        Ok(core_detections(run))
     }
 }
 
@@ -236,36 +247,40 @@ pub struct CoreDetector<'s, 'm> {
 
 impl Detector for CoreDetector<'_, '_> {
     fn detect(&mut self, scene: &Scene) -> Result<Vec<Detection>> {
-        let (w, h) = (scene.width, scene.height);
-        let params = core_params(self.shared, w);
+        let params = core_params(self.shared, scene.width);
         let run = crate::product::run_frame(
             &params,
             &self.shared.tables,
             self.shared.blob,
             &scene.left,
             &scene.right,
-            w,
-            h,
+            scene.width,
+            scene.height,
         )?;
-        Ok(run
-            .objects
-            .into_iter()
-            .filter_map(|o| {
-                let bbox = BoxPx::of(w as u32, h as u32, |x, y| {
-                    o.mask
-                        .get(y as usize * w + x as usize)
-                        .copied()
-                        .unwrap_or(false)
-                })?;
-                Some(Detection {
-                    bbox,
-                    known: o.category.is_some(),
-                    top5: o.top,
-                    mask: o.mask,
-                })
-            })
-            .collect())
+        Ok(core_detections(run))
     }
+}
+
+/// The detections of one run of core's pipeline, each with its mask's box.
+fn core_detections(run: crate::product::FrameRun) -> Vec<Detection> {
+    let (w, h) = (run.width, run.height);
+    run.objects
+        .into_iter()
+        .filter_map(|o| {
+            let bbox = BoxPx::of(w as u32, h as u32, |x, y| {
+                o.mask
+                    .get(y as usize * w + x as usize)
+                    .copied()
+                    .unwrap_or(false)
+            })?;
+            Some(Detection {
+                bbox,
+                known: o.category.is_some(),
+                top5: o.top,
+                mask: o.mask,
+            })
+        })
+        .collect()
 }
 
 /// A detector of `mode` over `shared` (one per worker thread).

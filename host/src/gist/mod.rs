@@ -251,7 +251,7 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
         tables: Vec::new(),
     };
     let mut shared = shared;
-    if opts.mode == Mode::Core {
+    if opts.mode.runs_core() {
         let params = detect::core_params(&shared, set.index.width as usize);
         shared.tables = crate::product::tables_for(&params)?;
     }
@@ -290,9 +290,9 @@ pub fn gist_eval(opts: &GistEvalOptions) -> Result<Summary> {
         format: REPORT_FORMAT,
         mode: opts.mode,
         preset: opts.preset.clone(),
-        // Only core's pipeline runs the check; the other chains classify
-        // each mask plainly.
-        mirror_check: opts.mode == Mode::Core && shared.preset.mirror_check,
+        // Only core's pipeline runs the check; the reference chain
+        // classifies each mask plainly.
+        mirror_check: opts.mode.runs_core() && shared.preset.mirror_check,
         mirror_below: (shared.preset.mirror_below_q16 < u32::MAX)
             .then(|| f64::from(shared.preset.mirror_below_q16) / 65536.0),
         scenes_dir: opts.scenes.display().to_string(),
