@@ -191,6 +191,7 @@ pub fn run_demo(opts: &DemoOptions) -> Result<Summary> {
         h,
     )?;
     chain_gt.relabel(params.relabel.as_ref(), &scene.left, &scene.right);
+    chain_gt.depth_hole(params.depth_hole.as_ref());
     let seg_gt = chain_gt.segment;
     summary.push(
         "mask IoU, GT disparity",

@@ -18,7 +18,7 @@ use protogist::complete::{CompleteParams, CompleteReport};
 use protogist::conspicuity::{EdgeParams, LuvTables};
 use protogist::disparity::DisparityCell;
 use protogist::image::{ImageView, Rgb8};
-use protogist::segment::{BoundingBox, Relabel, SegmentParams};
+use protogist::segment::{BoundingBox, DepthHole, Relabel, SegmentParams};
 
 /// Where the chain's disparity comes from.
 #[derive(Clone, Copy, Debug)]
@@ -144,18 +144,51 @@ impl ChainRun {
                 continue;
             };
             slot.copy_from_slice(&mask);
-            det.area = mask.iter().map(|&b| u32::from(b)).sum();
-            det.bbox =
-                BoxPx::of(w as u32, h as u32, |x, y| mask[y as usize * w + x as usize]).map(|b| {
-                    BoundingBox {
-                        x: b.x as usize,
-                        y: b.y as usize,
-                        width: b.width as usize,
-                        height: b.height as usize,
-                    }
-                });
+            set_area_and_box(det, slot, w, h);
         }
     }
+
+    /// Takes each object's hole by disparity out of its mask with `p`
+    /// (the pipeline's
+    /// [`PipelineParams::depth_hole`](protogist::pipeline::PipelineParams::depth_hole))
+    /// as core's pipeline does after the relabelling: by the reference
+    /// [`depth_hole`](crate::reference::holes::depth_hole) against the
+    /// chain's map, updating the object's area and box. `None` leaves
+    /// the masks as they are.
+    pub fn depth_hole(&mut self, p: Option<&DepthHole>) {
+        let Some(p) = p else { return };
+        let (w, h) = (self.segment.width, self.segment.height);
+        let n = w * h;
+        for det in &mut self.segment.report.objects {
+            let (Some(b), Some(slot)) = (
+                det.bbox,
+                self.segment
+                    .masks
+                    .get_mut(det.index * n..(det.index + 1) * n),
+            ) else {
+                continue;
+            };
+            let bbox = (b.x, b.y, b.width, b.height);
+            if !crate::reference::holes::depth_hole(p, slot, &self.disparity, det.range, bbox, w, h)
+            {
+                continue;
+            }
+            set_area_and_box(det, slot, w, h);
+        }
+    }
+}
+
+/// `det`'s area and box: those of its `w x h` mask `mask`.
+fn set_area_and_box(det: &mut protogist::segment::Detection, mask: &[bool], w: usize, h: usize) {
+    det.area = mask.iter().map(|&b| u32::from(b)).sum();
+    det.bbox = BoxPx::of(w as u32, h as u32, |x, y| mask[y as usize * w + x as usize]).map(|b| {
+        BoundingBox {
+            x: b.x as usize,
+            y: b.y as usize,
+            width: b.width as usize,
+            height: b.height as usize,
+        }
+    });
 }
 
 #[cfg(test)]

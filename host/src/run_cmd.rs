@@ -279,6 +279,7 @@ fn reference_chain(
     };
     let mut chain = run_chain(&seg_params, chain_source, &pair.left, &pair.right, w, h)?;
     chain.relabel(preset.relabel.as_ref(), &pair.left, &pair.right);
+    chain.depth_hole(preset.depth_hole.as_ref());
     if let Some(report) = &chain.completion {
         s.push(
             "disparity completion",

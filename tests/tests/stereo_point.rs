@@ -220,17 +220,20 @@ fn run_into_a_map_gives_the_cells_run_gives() {
 fn the_accurate_preset_is_the_default_with_a_full_search_at_half_size_refined_by_phase() {
     let p = PipelineParams::ACCURATE;
     // The default pipeline but for the stereo point's coarse levels, the
-    // mirror check, which it runs on every object, and the band
-    // relabelling of low-contrast masks.
+    // mirror check, which it runs on every object, the band
+    // relabelling of low-contrast masks and the hole by disparity.
     assert!(p.mirror_check);
     assert_eq!(p.mirror_below_q16, u32::MAX);
     assert_eq!(p.relabel, Some(Relabel::DEFAULT));
     assert_eq!(PipelineParams::DEFAULT.relabel, None);
+    assert_eq!(p.depth_hole, Some(protogist::segment::DepthHole::DEFAULT));
+    assert_eq!(PipelineParams::DEFAULT.depth_hole, None);
     assert_eq!(
         PipelineParams {
             stereo: STEREO_DEFAULT,
             mirror_below_q16: protogist::pipeline::MIRROR_BELOW_DEFAULT,
             relabel: None,
+            depth_hole: None,
             ..p
         },
         PipelineParams::DEFAULT

@@ -58,7 +58,9 @@ use crate::disparity::DisparityCell;
 use crate::image::ImageView;
 use crate::mlp::blob::Model;
 use crate::mlp::MacKernel;
-use crate::segment::{DepthPass, Detection, Ratio, Relabel, SegmentBuffers, SegmentParams};
+use crate::segment::{
+    DepthHole, DepthPass, Detection, Ratio, Relabel, SegmentBuffers, SegmentParams,
+};
 use crate::shape::SHAPE_LEN;
 use crate::stereo::c2f::{C2f, C2fParams, MAX_COARSE};
 use crate::stereo::phase::{PhaseKernel, SafePhase};
@@ -121,6 +123,12 @@ pub struct PipelineParams {
     /// eyes' rows are read again; [`crate::segment::relabel_len`] words
     /// of workspace. `None`: off.
     pub relabel: Option<Relabel>,
+    /// The hole by disparity, after the relabelling
+    /// ([`crate::segment::open_depth_hole`]): the cells behind an
+    /// object's slice at the centre of its box leave its mask (a ring's
+    /// hole, which neither the colour nor the relabelling keeps). `None`:
+    /// off.
+    pub depth_hole: Option<DepthHole>,
 }
 
 /// [`PipelineParams::mirror_below_q16`] of the default: 0.95. On the
@@ -157,6 +165,7 @@ impl PipelineParams {
         mirror_check: false,
         mirror_below_q16: u32::MAX,
         relabel: None,
+        depth_hole: None,
     };
 
     /// The default: [`PipelineParams::PAPER`] without the foreground
@@ -212,12 +221,14 @@ impl PipelineParams {
     /// boards with several times the cycles. Two decoder tables, levels 0
     /// and 1 of the default's. With the mirror check
     /// ([`PipelineParams::mirror_check`]) for every object, where the
-    /// default's budget holds it for the unsure ones, and the band
-    /// relabelling of low-contrast masks ([`Relabel::DEFAULT`]).
+    /// default's budget holds it for the unsure ones, the band
+    /// relabelling of low-contrast masks ([`Relabel::DEFAULT`]) and the
+    /// hole by disparity ([`DepthHole::DEFAULT`]).
     pub const ACCURATE: Self = Self {
         stereo: C2fParams::FAST_NARROW_FULL_SEARCH,
         mirror_below_q16: u32::MAX,
         relabel: Some(Relabel::DEFAULT),
+        depth_hole: Some(DepthHole::DEFAULT),
         ..Self::DEFAULT
     };
 
@@ -404,6 +415,9 @@ impl<'a, K: PhaseKernel> Pipeline<'a, K> {
         params.segment.validate()?;
         if let Some(r) = &params.relabel {
             r.validate()?;
+        }
+        if let Some(d) = &params.depth_hole {
+            d.validate()?;
         }
         if params.edges.threshold_percent > 100 {
             return Err(PipelineError::BadParams("edge threshold above 100 %"));

@@ -14,8 +14,8 @@ use crate::disparity::DisparityCell;
 use crate::image::{ImageError, ImageView, ImageViewMut, Rgb8};
 use crate::mlp::{self, Identity, MirrorScratch, Ranked, Scratch};
 use crate::segment::{
-    bit_map_len, maps_len, relabel_len, relabel_object, segment_with_depth_pass, table_len,
-    BitView, Masks, SegmentBuffers, SegmentObserver,
+    bit_map_len, maps_len, open_depth_hole, relabel_len, relabel_object, segment_with_depth_pass,
+    table_len, BitView, Masks, SegmentBuffers, SegmentObserver,
 };
 use crate::shape::{shape_vector_bits, RadialProfile, ShapeError, ShapeVector, SHAPE_LEN};
 use crate::stereo::c2f::{self, C2fBuffers};
@@ -264,6 +264,11 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
             let rows = s.take(relabel_len(w))?;
             for det in report.objects.iter_mut() {
                 relabel_object(r, left, right, &edges_v, det, masks, &mut seg, rows)?;
+            }
+        }
+        if let Some(d) = &params.depth_hole {
+            for det in report.objects.iter_mut() {
+                open_depth_hole(d, &disparity_v, det, masks, &mut seg)?;
             }
         }
         report

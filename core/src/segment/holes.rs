@@ -28,14 +28,21 @@
 //! `Σ (16·c − m)²` in 32-bit integers (at most 3·4080², no overflow): a
 //! few instructions a cell on the board, and the same integers in the
 //! reference.
+//!
+//! The hole by disparity ([`open_depth_hole`], [`DepthHole`]) takes out
+//! the hole the colour cannot see, from the disparity map, after the band
+//! relabelling.
 
 use super::bits;
 use super::buffers::SegmentBuffers;
 use super::label::Connectivity;
 use super::morph::Disk;
+use super::pipeline::{BoundingBox, Detection};
 use super::refine::{each, inside_and_ring, read, rgb_row, two_sums};
+use super::stats::STAT_FRAC_BITS;
 use super::{Ratio, SegmentError};
-use crate::image::RgbRows;
+use crate::disparity::DisparityCell;
+use crate::image::{ImageView, RgbRows};
 
 /// Settings of the holes by colour
 /// ([`DepthPass::holes`](super::DepthPass::holes)).
@@ -233,5 +240,174 @@ mod tests {
         assert_eq!(dist_q4([1, 2, 3], [16, 32, 48]), 0);
         assert_eq!(dist_q4([255, 0, 0], [0, 0, 0]), 4080 * 4080);
         assert_eq!(dist_q4([0, 0, 0], [4080, 4080, 4080]), 3 * 4080 * 4080);
+    }
+}
+
+/// Settings of the hole by disparity
+/// ([`PipelineParams::depth_hole`](crate::pipeline::PipelineParams::depth_hole)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DepthHole {
+    /// How far behind the low end of the object's slice a cell's
+    /// disparity must be, disparity bits (1/256 px); at most
+    /// [`MAX_GROUND_BAND`](super::MAX_GROUND_BAND).
+    pub margin: u16,
+    /// Square opening steps of the cells behind (0 to 4).
+    pub opening: u8,
+}
+
+impl DepthHole {
+    /// Cells more than 1 px behind the slice, opened by 2 steps
+    /// (docs/RECALL.md, "Holes by disparity").
+    pub const DEFAULT: Self = Self {
+        margin: 256,
+        opening: 2,
+    };
+
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// [`SegmentError::BadParams`] naming the field.
+    pub fn validate(&self) -> Result<(), SegmentError> {
+        if self.margin > super::MAX_GROUND_BAND {
+            return Err(SegmentError::BadParams("depth_hole.margin"));
+        }
+        if self.opening > 4 {
+            return Err(SegmentError::BadParams("depth_hole.opening"));
+        }
+        Ok(())
+    }
+}
+
+/// The hole by disparity: a ring whose colour is close to what is seen
+/// through it keeps no hole by colour ([`Holes`]), and the band
+/// relabelling fills every hole, but the disparity map still shows what
+/// is behind it. For object `det` (its mask is slot `det.index` of
+/// `masks`, bit maps of `bufs`' geometry):
+///
+/// 1. the cells *behind* are the mask's cells whose disparity is ON and
+///    more than [`DepthHole::margin`] under the low end of the object's
+///    slice (`det.range`);
+/// 2. they are opened by [`DepthHole::opening`] square steps (the
+///    stereo's specks inside an object are no hole);
+/// 3. when the centre of the object's box, `(x + ⌊w/2⌋, y + ⌊h/2⌋)`, is
+///    one of them, their 8-connected component holding it leaves the
+///    mask (a ring's hole is at its centre; a cell behind elsewhere is
+///    as likely the stereo's error), and the object's area and box
+///    follow.
+///
+/// Returns whether the mask changed. Uses `closed`, `filled`, `region`
+/// and `scratch` as scratch. Integer only; the reference
+/// (`protogist_host::reference::holes::depth_hole`) takes the same cells
+/// (docs/ERROR_BOUNDS.md, bound 0).
+///
+/// # Errors
+/// [`SegmentError::SizeMismatch`] for a map of another size.
+pub fn open_depth_hole(
+    p: &DepthHole,
+    disparity: &ImageView<'_, DisparityCell>,
+    det: &mut Detection,
+    masks: &mut [u32],
+    bufs: &mut SegmentBuffers<'_>,
+) -> Result<bool, SegmentError> {
+    let g = bufs.g;
+    if disparity.size() != (g.width, g.height) {
+        return Err(SegmentError::SizeMismatch {
+            expected: (g.width, g.height),
+            got: disparity.size(),
+        });
+    }
+    let chunk = g.len();
+    let Some(slot) = masks.get_mut(det.index * chunk..(det.index + 1) * chunk) else {
+        return Ok(false);
+    };
+    let Some(b) = det.bbox else {
+        return Ok(false);
+    };
+    // Disparity bits (1/256 px) under which a cell is behind.
+    let low = (det.range.low >> (STAT_FRAC_BITS - 8)) - i64::from(p.margin);
+    bufs.closed.fill(0);
+    let mut any = false;
+    for (y, row) in disparity.rows().enumerate() {
+        let Some(m) = slot.get(y * g.stride..(y + 1) * g.stride) else {
+            break;
+        };
+        let Some(out) = bufs.closed.get_mut(y * g.stride..(y + 1) * g.stride) else {
+            break;
+        };
+        each_bit(m, |x| {
+            let behind = row
+                .get(x)
+                .and_then(|c| c.get())
+                .is_some_and(|d| i64::from(d.to_bits()) < low);
+            if let Some(w) = out.get_mut(x / 32).filter(|_| behind) {
+                *w |= 1 << (x % 32);
+                any = true;
+            }
+        });
+    }
+    if !any {
+        return Ok(false);
+    }
+    for erode in [true, false] {
+        bits::morph_n(
+            g,
+            Disk::Square,
+            bufs.closed,
+            bufs.scratch,
+            bufs.morph_rows,
+            p.opening,
+            erode,
+        );
+    }
+    let (cx, cy) = (b.x + b.width / 2, b.y + b.height / 2);
+    if !g.bit(bufs.closed, cx, cy) {
+        return Ok(false);
+    }
+    // The component of the centre: grown a square step at a time within
+    // the cells behind, until it stops (at most once per cell).
+    let cells: u32 = bufs.closed.iter().map(|w| w.count_ones()).sum();
+    bufs.filled.fill(0);
+    if let Some(w) = bufs.filled.get_mut(cy * g.stride + cx / 32) {
+        *w |= 1 << (cx % 32);
+    }
+    for _ in 0..cells {
+        bits::copy_map(bufs.scratch, bufs.filled);
+        bits::square(g, bufs.region, bufs.scratch, 1, false);
+        let mut grew = false;
+        for ((r, c), f) in bufs
+            .region
+            .iter_mut()
+            .zip(bufs.closed.iter())
+            .zip(bufs.filled.iter_mut())
+        {
+            let next = *r & *c;
+            grew |= next != *f;
+            *f = next;
+        }
+        if !grew {
+            break;
+        }
+    }
+    for (m, f) in slot.iter_mut().zip(bufs.filled.iter()) {
+        *m &= !*f;
+    }
+    det.area = slot.iter().map(|w| w.count_ones()).sum();
+    det.bbox = bits::bbox(g, slot).map(|(x0, y0, x1, y1)| BoundingBox {
+        x: x0,
+        y: y0,
+        width: x1 - x0 + 1,
+        height: y1 - y0 + 1,
+    });
+    Ok(true)
+}
+
+/// Calls `f(x)` for every ON bit `x` of `words` (a row of a bit map).
+fn each_bit(words: &[u32], mut f: impl FnMut(usize)) {
+    for (i, &word) in words.iter().enumerate() {
+        let mut v = word;
+        while v != 0 {
+            f(i * 32 + v.trailing_zeros() as usize);
+            v &= v.wrapping_sub(1);
+        }
     }
 }

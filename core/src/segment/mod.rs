@@ -94,7 +94,7 @@ pub use bits::{
 pub use buffers::{maps_len, scratch_bytes, table_len, SegmentBuffers, BIT_MAPS};
 pub use depth::{segment_with_depth_pass, DepthPass};
 pub use ground::{fit_ground, ground_rows_len, inhibit_ground, GroundLine, MAX_SLOPE, MIN_SLOPE};
-pub use holes::Holes;
+pub use holes::{open_depth_hole, DepthHole, Holes};
 pub use label::{area_filter, fill_holes, label_capacity, AreaReport, Connectivity, Labeller};
 pub use morph::{
     close, dilate, dilate_n, erode, erode_n, non_max_suppression, Disk, NMS_DIRECTIONS,

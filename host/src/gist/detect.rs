@@ -183,6 +183,7 @@ fn segment_and_classify(shared: &Shared<'_>, scene: &Scene) -> Result<Vec<Detect
     };
     let mut chain = run_chain(&shared.segment, source, &scene.left, &scene.right, w, h)?;
     chain.relabel(shared.preset.relabel.as_ref(), &scene.left, &scene.right);
+    chain.depth_hole(shared.preset.depth_hole.as_ref());
     let seg = chain.segment;
     let n = w * h;
     let mut out = Vec::new();

@@ -2,6 +2,7 @@
 
 pub mod complete;
 pub mod conspicuity;
+pub mod holes;
 pub mod refine;
 pub mod relabel;
 pub mod segment;

@@ -10,7 +10,7 @@ const SEED: &str = "1";
 const MODES: [(&str, &str, &str); 5] = [
     ("core pipeline (the product)", "core", "default"),
     (
-        "core pipeline, `accurate` preset (full search at half size, phase step, band relabelling)",
+        "core pipeline, `accurate` preset (full search at half size, phase step, band relabelling, hole by disparity)",
         "core",
         "accurate",
     ),
