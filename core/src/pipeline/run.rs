@@ -132,10 +132,8 @@ pub(super) fn run_split<'w, S: RgbRows, O: Observer, K: Kernels>(
     // Stereo: its buffers take the shared region first.
     obs.enter(Stage::Stereo);
     if let Depth::Given(given) = depth {
-        for (row, src) in disparity.chunks_exact_mut(w.max(1)).zip(given.rows()) {
-            for (o, &v) in row.iter_mut().zip(src) {
-                *o = v;
-            }
+        for (o, v) in disparity.iter_mut().zip(given.pixels()) {
+            *o = v;
         }
     } else {
         let mut s = Arena::new(&mut *shared);

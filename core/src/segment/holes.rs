@@ -327,24 +327,14 @@ pub fn open_depth_hole(
     let low = (det.range.low >> (STAT_FRAC_BITS - 8)) - i64::from(p.margin);
     bufs.closed.fill(0);
     let mut any = false;
-    for (y, row) in disparity.rows().enumerate() {
-        let Some(m) = slot.get(y * g.stride..(y + 1) * g.stride) else {
-            break;
-        };
-        let Some(out) = bufs.closed.get_mut(y * g.stride..(y + 1) * g.stride) else {
-            break;
-        };
-        each_bit(m, |x| {
-            let behind = row
-                .get(x)
-                .and_then(|c| c.get())
-                .is_some_and(|d| i64::from(d.to_bits()) < low);
-            if let Some(w) = out.get_mut(x / 32).filter(|_| behind) {
-                *w |= 1 << (x % 32);
-                any = true;
-            }
-        });
-    }
+    let behind = &mut *bufs.closed;
+    bits::for_each_on(g, slot, |x, y| {
+        let d = disparity.get(x, y).and_then(|c| c.get());
+        if d.is_some_and(|d| i64::from(d.to_bits()) < low) {
+            g.set(behind, x, y, true);
+            any = true;
+        }
+    });
     if !any {
         return Ok(false);
     }
@@ -367,9 +357,7 @@ pub fn open_depth_hole(
     // the cells behind, until it stops (at most once per cell).
     let cells: u32 = bufs.closed.iter().map(|w| w.count_ones()).sum();
     bufs.filled.fill(0);
-    if let Some(w) = bufs.filled.get_mut(cy * g.stride + cx / 32) {
-        *w |= 1 << (cx % 32);
-    }
+    g.set(bufs.filled, cx, cy, true);
     for _ in 0..cells {
         bits::copy_map(bufs.scratch, bufs.filled);
         bits::square(g, bufs.region, bufs.scratch, 1, false);
@@ -392,22 +380,6 @@ pub fn open_depth_hole(
         *m &= !*f;
     }
     det.area = slot.iter().map(|w| w.count_ones()).sum();
-    det.bbox = bits::bbox(g, slot).map(|(x0, y0, x1, y1)| BoundingBox {
-        x: x0,
-        y: y0,
-        width: x1 - x0 + 1,
-        height: y1 - y0 + 1,
-    });
+    det.bbox = BoundingBox::of_bits(g, slot);
     Ok(true)
-}
-
-/// Calls `f(x)` for every ON bit `x` of `words` (a row of a bit map).
-fn each_bit(words: &[u32], mut f: impl FnMut(usize)) {
-    for (i, &word) in words.iter().enumerate() {
-        let mut v = word;
-        while v != 0 {
-            f(i * 32 + v.trailing_zeros() as usize);
-            v &= v.wrapping_sub(1);
-        }
-    }
 }

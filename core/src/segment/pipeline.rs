@@ -70,6 +70,18 @@ pub struct BoundingBox {
     pub height: usize,
 }
 
+impl BoundingBox {
+    /// The box of the ON bits of bit map `m`, `None` when there are none.
+    pub(super) fn of_bits(g: bits::Geom, m: &[u32]) -> Option<Self> {
+        bits::bbox(g, m).map(|(x0, y0, x1, y1)| Self {
+            x: x0,
+            y: y0,
+            width: x1 - x0 + 1,
+            height: y1 - y0 + 1,
+        })
+    }
+}
+
 /// The bounding box of the ON pixels, `None` when there are none.
 pub fn bounding_box(mask: &ImageView<'_, bool>) -> Option<BoundingBox> {
     let mut b: Option<(usize, usize, usize, usize)> = None;
@@ -513,8 +525,8 @@ pub(super) fn emit(
     let (w, h) = (g.width, g.height);
     let index = report.objects.len();
     let area = regions.area;
-    let bbox = bits::bbox(g, bufs.mask);
-    let box_size = bbox.map_or((0, 0), |(x0, y0, x1, y1)| (x1 + 1 - x0, y1 + 1 - y0));
+    let bbox = BoundingBox::of_bits(g, bufs.mask);
+    let box_size = bbox.map_or((0, 0), |b| (b.width, b.height));
     let object = params.is_object(area, box_size, (w, h))
         && union.is_none_or(|u| u.keeps(g, area, bufs.mask, masks, chunk));
     if object {
@@ -526,12 +538,7 @@ pub(super) fn emit(
         range,
         score: slice.score,
         area,
-        bbox: bbox.map(|(x0, y0, x1, y1)| BoundingBox {
-            x: x0,
-            y: y0,
-            width: x1 - x0 + 1,
-            height: y1 - y0 + 1,
-        }),
+        bbox,
         regions,
     };
     if object {

@@ -321,17 +321,6 @@ fn neighbours(g: Geom, m: &[u32], x: usize, y: usize) -> u32 {
     u32::from(left) + u32::from(up) + u32::from(g.bit(m, x + 1, y)) + u32::from(g.bit(m, x, y + 1))
 }
 
-fn set(g: Geom, m: &mut [u32], x: usize, y: usize, on: bool) {
-    if let Some(word) = m.get_mut(y * g.stride + x / 32) {
-        let bit = 1u32 << (x % 32);
-        if on {
-            *word |= bit;
-        } else {
-            *word &= !bit;
-        }
-    }
-}
-
 /// Relabels object `det`'s mask (slot `det.index` of `masks`, bit maps of
 /// the frame's size) as the module docs say, against the `left` and
 /// `right` frames and C (`edges`); updates its area and box. `scratch`
@@ -490,9 +479,9 @@ pub fn relabel_object<S: RgbRows>(
             let k = (0..=4i128)
                 .find(|&m| colour + (matching * delta + 9 * smooth * (2 * m - 4)) * wt > 0)
                 .map_or(5, |m| m as u32);
-            set(g, k0, x, y, k & 1 != 0);
-            set(g, k1, x, y, k & 2 != 0);
-            set(g, k2, x, y, k & 4 != 0);
+            g.set(k0, x, y, k & 1 != 0);
+            g.set(k1, x, y, k & 2 != 0);
+            g.set(k2, x, y, k & 4 != 0);
         });
     }
     // Iterated conditional modes from the mask, in `interiors`.
@@ -504,7 +493,7 @@ pub fn relabel_object<S: RgbRows>(
             let k = u32::from(g.bit(k0, x, y))
                 | u32::from(g.bit(k1, x, y)) << 1
                 | u32::from(g.bit(k2, x, y)) << 2;
-            set(g, lab, x, y, neighbours(g, prev, x, y) >= k);
+            g.set(lab, x, y, neighbours(g, prev, x, y) >= k);
         });
     }
     // closed = the result within the reach (core ∪ band).
@@ -515,11 +504,6 @@ pub fn relabel_object<S: RgbRows>(
     let area = bufs.mask.iter().map(|w| w.count_ones()).sum::<u32>();
     bits::copy_map(slot, bufs.mask);
     det.area = area;
-    det.bbox = bits::bbox(g, bufs.mask).map(|(x0, y0, x1, y1)| BoundingBox {
-        x: x0,
-        y: y0,
-        width: x1 - x0 + 1,
-        height: y1 - y0 + 1,
-    });
+    det.bbox = BoundingBox::of_bits(g, bufs.mask);
     Ok(true)
 }

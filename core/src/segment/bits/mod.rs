@@ -89,6 +89,18 @@ impl Geom {
         m.get(y * self.stride..(y + 1) * self.stride)
     }
 
+    /// Sets pixel `(x, y)` of `m` to `on`; nothing past the map's end.
+    pub(in crate::segment) fn set(&self, m: &mut [u32], x: usize, y: usize, on: bool) {
+        if let Some(word) = m.get_mut(y * self.stride + x / 32) {
+            let bit = 1u32 << (x % 32);
+            if on {
+                *word |= bit;
+            } else {
+                *word &= !bit;
+            }
+        }
+    }
+
     /// Pixel `(x, y)`; false outside.
     pub fn bit(&self, m: &[u32], x: usize, y: usize) -> bool {
         x < self.width
