@@ -246,6 +246,10 @@ fn bad_sizes_and_parameters_are_typed_errors() {
         },
         SegmentParams { exponent: 9, ..p },
         SegmentParams {
+            closing_steps: sg::MAX_CLOSING_STEPS + 1,
+            ..p
+        },
+        SegmentParams {
             range: Ratio::new(1, 0),
             ..p
         },

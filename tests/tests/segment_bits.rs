@@ -123,7 +123,16 @@ fn by_steps(
         .unwrap();
         sg::non_max_suppression(&v!(m.c_obj), vm!(m.nms)).unwrap();
         m.closed.copy_from_slice(&m.nms);
-        sg::close(p.disk, vm!(m.closed), vm!(scratch), p.closing_steps).unwrap();
+        let (pw, ph) = sg::closing_size(w, h, p.closing_steps);
+        let (mut padded, mut pad_scratch) = (vec![false; pw * ph], vec![false; pw * ph]);
+        sg::close(
+            p.disk,
+            vm!(m.closed),
+            &mut ImageViewMut::packed(&mut padded, pw, ph).unwrap(),
+            &mut ImageViewMut::packed(&mut pad_scratch, pw, ph).unwrap(),
+            p.closing_steps,
+        )
+        .unwrap();
         sg::fill_holes(&v!(m.closed), vm!(m.filled), &mut lab).unwrap();
         let regions = sg::area_filter(&v!(m.filled), vm!(mask), &mut lab, p.min_area).unwrap();
         // With `split_interiors`, the solid interiors of the mask, each

@@ -70,11 +70,13 @@ fn view(m: &[bool], w: usize, h: usize) -> ImageView<'_, bool> {
 
 fn core_close(disk: Disk, m: &[bool], w: usize, h: usize, n: u8) -> Vec<bool> {
     let mut out = m.to_vec();
-    let mut scratch = vec![false; w * h];
+    let (pw, ph) = sg::closing_size(w, h, n);
+    let (mut padded, mut scratch) = (vec![false; pw * ph], vec![false; pw * ph]);
     sg::close(
         disk,
         &mut ImageViewMut::packed(&mut out, w, h).unwrap(),
-        &mut ImageViewMut::packed(&mut scratch, w, h).unwrap(),
+        &mut ImageViewMut::packed(&mut padded, pw, ph).unwrap(),
+        &mut ImageViewMut::packed(&mut scratch, pw, ph).unwrap(),
         n,
     )
     .unwrap();
@@ -437,12 +439,37 @@ fn closing_bridges_small_gaps_only() {
             "..............",
         ],
     );
-    // Erosion counts the outside as ON (as `imclose` pads): closing never
-    // erodes from the image border, and it may add pixels there.
+    // The closing is the unbounded plane's: it never erodes from the image
+    // border, and it adds nothing there that it would not add inside.
     let full = vec![true; w * h];
     assert_eq!(core_close(Disk::Square, &full, w, h, 4), full);
     let (m, w, h) = mask!["#.#"];
-    assert_mask(&core_close(Disk::Cross, &m, w, h, 1), w, mask!["###"]);
+    assert_mask(&core_close(Disk::Cross, &m, w, h, 1), w, mask!["#.#"]);
+    assert_mask(&core_close(Disk::Square, &m, w, h, 1), w, mask!["###"]);
+}
+
+/// A closing of the frame itself, its erosions counting the outside as ON,
+/// caps a shape near the frame's edge up to it. The unbounded plane's
+/// closing gives a lone pixel back anywhere in the frame, and an edge along
+/// the border stays one pixel wide.
+#[test]
+fn closing_adds_no_cap_at_the_frame_edge() {
+    let (w, h) = (9, 7);
+    for disk in [Disk::Cross, Disk::Square] {
+        for n in 1..=sg::MAX_CLOSING_STEPS {
+            for i in 0..w * h {
+                let mut m = vec![false; w * h];
+                m[i] = true;
+                assert_eq!(core_close(disk, &m, w, h, n), m, "{disk:?} n {n} pixel {i}");
+            }
+        }
+    }
+    let (m, w, h) = mask!["..........", "..######..", "..........", "..........",];
+    assert_mask(
+        &core_close(Disk::Square, &m, w, h, 4),
+        w,
+        mask!["..........", "..######..", "..........", "..........",],
+    );
 }
 
 #[test]

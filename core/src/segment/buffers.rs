@@ -5,7 +5,10 @@
 //! ([`BitView::masked`]). Components are labelled by runs, so the label
 //! memory is one table entry per run, not a label per pixel.
 
-use super::bits::{bit_map_len, morph_rows_len, row_runs, run_capacity, BitView, Geom};
+use super::bits::{
+    bit_map_len, closing_map_len, morph_rows_len, row_runs, run_capacity, BitView, Geom,
+    MAX_CLOSING_STEPS,
+};
 use super::ground::ground_rows_len;
 use super::SegmentError;
 use crate::image::ImageError;
@@ -13,16 +16,25 @@ use crate::image::ImageError;
 /// Bit maps [`SegmentBuffers`] holds: D_fg, D_ObjReg, C_ObjReg, the refined
 /// region, C_Obj, C_Obj^M, F_Obj, the filled map, the mask, the interiors,
 /// a scratch map and the depth pass's foreground (written with D_fg, kept
-/// for the pass).
+/// for the pass). F_Obj and the scratch map are [`closing_map_len`] words,
+/// the closing's padded maps.
 pub const BIT_MAPS: usize = 12;
 
+/// Width of the closing's padded maps, the widest the morphology's rows
+/// serve.
+const fn padded_width(width: usize) -> usize {
+    width + 2 * MAX_CLOSING_STEPS as usize
+}
+
 /// `u32` words of the `maps` buffer of [`SegmentBuffers`]: [`BIT_MAPS`] bit
-/// maps, two rows of runs for the labelling and two rows of words for the
-/// morphology, and one word per row for the ground fit.
+/// maps (two of them padded for the closing), two rows of runs for the
+/// labelling and two rows of words for the morphology, and one word per row
+/// for the ground fit.
 pub const fn maps_len(width: usize, height: usize) -> usize {
-    BIT_MAPS * bit_map_len(width, height)
+    (BIT_MAPS - 2) * bit_map_len(width, height)
+        + 2 * closing_map_len(width, height)
         + 4 * row_runs(width)
-        + morph_rows_len(width)
+        + morph_rows_len(padded_width(width))
         + ground_rows_len(height)
 }
 
@@ -101,14 +113,14 @@ impl<'a> SegmentBuffers<'a> {
             region: take(len),
             c_obj: take(len),
             nms: take(len),
-            closed: take(len),
+            closed: take(closing_map_len(width, height)),
             filled: take(len),
             mask: take(len),
             interiors: take(len),
-            scratch: take(len),
+            scratch: take(closing_map_len(width, height)),
             rise: take(len),
             rows: take(4 * row_runs(width)),
-            morph_rows: take(morph_rows_len(width)),
+            morph_rows: take(morph_rows_len(padded_width(width))),
             ground_rows: take(ground_rows_len(height)),
             table,
         })

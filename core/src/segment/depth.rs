@@ -62,7 +62,8 @@ pub struct DepthPass {
     /// [`MAX_GROUND_BAND`](super::MAX_GROUND_BAND).
     pub radius: u16,
     /// Square closing steps of the slice before its largest component is
-    /// taken (0 to 8).
+    /// taken (0 to [`MAX_CLOSING_STEPS`](super::MAX_CLOSING_STEPS); the
+    /// unbounded plane's closing, as [`close`](super::close)).
     pub closing: u8,
     /// Most searches of the pass (1 to 16).
     pub searches: u8,
@@ -108,7 +109,7 @@ impl DepthPass {
         if self.radius > super::MAX_GROUND_BAND {
             return Err(SegmentError::BadParams("depth_pass.radius"));
         }
-        if self.closing > 8 {
+        if self.closing > super::MAX_CLOSING_STEPS {
             return Err(SegmentError::BadParams("depth_pass.closing"));
         }
         if !(1..=16).contains(&self.searches) {

@@ -89,7 +89,8 @@ mod relabel;
 mod stats;
 
 pub use bits::{
-    bit_map_len, clear_square_bits, row_runs, run_capacity, square_bits, words_per_row, BitView,
+    bit_map_len, clear_square_bits, closing_map_len, row_runs, run_capacity, square_bits,
+    words_per_row, BitView, MAX_CLOSING_STEPS,
 };
 pub use buffers::{maps_len, scratch_bytes, table_len, SegmentBuffers, BIT_MAPS};
 pub use depth::{segment_with_depth_pass, DepthPass};
@@ -97,7 +98,8 @@ pub use ground::{fit_ground, ground_rows_len, inhibit_ground, GroundLine, MAX_SL
 pub use holes::{open_depth_hole, DepthHole, Holes};
 pub use label::{area_filter, fill_holes, label_capacity, AreaReport, Connectivity, Labeller};
 pub use morph::{
-    close, dilate, dilate_n, erode, erode_n, non_max_suppression, Disk, NMS_DIRECTIONS,
+    close, closing_size, dilate, dilate_n, erode, erode_n, non_max_suppression, Disk,
+    NMS_DIRECTIONS,
 };
 pub use pipeline::{
     bounding_box, inhibit, refine_border, segment, segment_into, segment_timed, BoundingBox,
@@ -156,7 +158,9 @@ pub struct SegmentParams {
     pub disk: Disk,
     /// Dilations before the border refinement's largest component (4).
     pub refine_dilations: u8,
-    /// Dilations, then as many erosions, of the closing (4).
+    /// Dilations, then as many erosions, of the closing (4), at most
+    /// [`MAX_CLOSING_STEPS`]. The closing is the unbounded plane's: the
+    /// frame is padded by OFF pixels ([`close`]).
     pub closing_steps: u8,
     /// A filled region is kept when its area is at least this fraction of
     /// the largest one's (1/5).
@@ -292,6 +296,9 @@ impl SegmentParams {
         }
         if self.min_slice_radius > MAX_GROUND_BAND {
             return Err(SegmentError::BadParams("min_slice_radius"));
+        }
+        if self.closing_steps > MAX_CLOSING_STEPS {
+            return Err(SegmentError::BadParams("closing_steps"));
         }
         if self.exponent > 8 {
             return Err(SegmentError::BadParams("exponent"));

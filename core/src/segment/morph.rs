@@ -1,8 +1,9 @@
 //! Binary morphology with a radius-1 disk, and the non-maximum suppression.
 //!
 //! Maps are `bool` images. Dilation treats pixels outside the image as OFF,
-//! erosion treats them as ON (as `imclose` pads), so a closing never eats
-//! into a shape from the image border.
+//! erosion treats them as ON (as `imclose` pads). The closing is the
+//! unbounded plane's ([`close`]): it neither eats into a shape at the
+//! image's border nor adds a cap up to it.
 
 use super::{check_size, SegmentError};
 use crate::conspicuity::EdgeCell;
@@ -139,18 +140,50 @@ pub fn erode_n(
     repeat(disk, map, scratch, n, true)
 }
 
-/// The paper's closing: `n` dilations then `n` erosions, in place.
+/// `(width, height)` of the two buffers [`close`] works in: the map padded
+/// by `n` pixels on every side.
+pub const fn closing_size(width: usize, height: usize, n: u8) -> (usize, usize) {
+    let p = 2 * n as usize;
+    (width + p, height + p)
+}
+
+/// The paper's closing, `n` dilations then `n` erosions, of the unbounded
+/// plane, in place: `map` is copied into `padded` with `n` OFF pixels on
+/// every side, closed there (`scratch` is overwritten) and cropped back.
+///
+/// Closing the frame itself, with the erosions' outside ON, would keep
+/// what the dilations grow towards the frame's edge wherever a shape comes
+/// within `n` pixels of it: a cap from the shape to the edge. In the pad
+/// the growth is eroded away as anywhere else. `padded` and `scratch` are
+/// [`closing_size`].
 ///
 /// # Errors
 /// [`SegmentError::SizeMismatch`].
 pub fn close(
     disk: Disk,
     map: &mut ImageViewMut<'_, bool>,
+    padded: &mut ImageViewMut<'_, bool>,
     scratch: &mut ImageViewMut<'_, bool>,
     n: u8,
 ) -> Result<(), SegmentError> {
-    dilate_n(disk, map, scratch, n)?;
-    erode_n(disk, map, scratch, n)
+    let (w, h) = map.size();
+    let size = closing_size(w, h, n);
+    check_size(size, padded.size())?;
+    let p = usize::from(n);
+    padded.fill(false);
+    let mismatch = SegmentError::SizeMismatch {
+        expected: size,
+        got: padded.size(),
+    };
+    padded
+        .sub_view_mut(p, p, w, h)
+        .ok_or(mismatch)?
+        .copy_from(&map.as_view())?;
+    dilate_n(disk, padded, scratch, n)?;
+    erode_n(disk, padded, scratch, n)?;
+    let view = padded.as_view();
+    map.copy_from(&view.sub_view(p, p, w, h).ok_or(mismatch)?)?;
+    Ok(())
 }
 
 /// The four NMS directions: horizontal, vertical and the two diagonals.

@@ -198,16 +198,24 @@ pub fn erode(disk: Disk, src: &[bool], w: usize, h: usize) -> Vec<bool> {
         .collect()
 }
 
-/// `n` dilations then `n` erosions.
+/// `n` dilations then `n` erosions of the unbounded plane: of `map` padded
+/// by `n` OFF pixels on every side, cropped back.
 pub fn close(disk: Disk, map: &[bool], w: usize, h: usize, n: u8) -> Vec<bool> {
-    let mut m = map.to_vec();
-    for _ in 0..n {
-        m = dilate(disk, &m, w, h);
+    let p = usize::from(n);
+    let (pw, ph) = (w + 2 * p, h + 2 * p);
+    let mut m = vec![false; pw * ph];
+    for (y, row) in map.chunks_exact(w.max(1)).take(h).enumerate() {
+        m[(y + p) * pw + p..][..w].copy_from_slice(row);
     }
     for _ in 0..n {
-        m = erode(disk, &m, w, h);
+        m = dilate(disk, &m, pw, ph);
     }
-    m
+    for _ in 0..n {
+        m = erode(disk, &m, pw, ph);
+    }
+    (0..h)
+        .flat_map(|y| m[(y + p) * pw + p..][..w].to_vec())
+        .collect()
 }
 
 /// NMS: ON cells that are ≥ both neighbours along at least one direction.

@@ -14,9 +14,12 @@ use super::SegmentError;
 use crate::conspicuity::EdgeCell;
 use crate::image::ImageView;
 
+mod closing;
 mod components;
 mod square;
 
+pub(super) use closing::close;
+pub use closing::{closing_map_len, MAX_CLOSING_STEPS};
 pub(super) use components::{components, Components};
 pub(super) use square::{clear_square, square};
 pub use square::{clear_square_bits, square_bits};
@@ -84,8 +87,12 @@ impl Geom {
         m.chunks_exact_mut(self.stride.max(1))
     }
 
-    /// Row `y` of bit map `m`; `None` past its end.
+    /// Row `y` of bit map `m`; `None` below the last row (a buffer may be
+    /// longer than the map, as [`closing_map_len`]'s are) or past its end.
     pub(in crate::segment) fn row<'m>(&self, m: &'m [u32], y: usize) -> Option<&'m [u32]> {
+        if y >= self.height {
+            return None;
+        }
         m.get(y * self.stride..(y + 1) * self.stride)
     }
 
@@ -349,26 +356,15 @@ pub(super) fn morph_n(
     }
 }
 
-/// Copies one bit map into another of the same length (the buffers are
-/// split from one slice at construction). `get` shows the compiler that the
-/// lengths match, so `copy_from_slice` has no panic path.
+/// Copies bit map `src` into `dst`: the words both hold (a map and the
+/// longer buffer of [`close`] share their first [`Geom::len`] words; the
+/// buffers are split from one slice at construction). `get` shows the
+/// compiler that the lengths match, so `copy_from_slice` has no panic path.
 pub(super) fn copy_map(dst: &mut [u32], src: &[u32]) {
-    if let Some(src) = src.get(..dst.len()) {
-        dst.copy_from_slice(src);
+    let n = dst.len().min(src.len());
+    if let (Some(d), Some(s)) = (dst.get_mut(..n), src.get(..n)) {
+        d.copy_from_slice(s);
     }
-}
-
-/// The closing: `n` dilations then `n` erosions, in place.
-pub(super) fn close(
-    g: Geom,
-    disk: Disk,
-    map: &mut [u32],
-    scratch: &mut [u32],
-    rows: &mut [u32],
-    n: u8,
-) {
-    morph_n(g, disk, map, scratch, rows, n, false);
-    morph_n(g, disk, map, scratch, rows, n, true);
 }
 
 /// Calls `f(x, y)` for every ON pixel, raster order.
