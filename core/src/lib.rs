@@ -46,6 +46,7 @@ pub mod draw;
 pub mod fixed;
 pub mod image;
 pub mod mlp;
+mod named;
 pub mod off;
 pub mod pipeline;
 pub mod rng;

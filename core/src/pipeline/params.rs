@@ -171,17 +171,14 @@ impl PipelineParams {
 
     /// The named setting `name`.
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::NAMED
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|&(_, p)| p)
+        crate::named::by_name(&Self::NAMED, name)
     }
 
     /// The name of these parameters if they are a named setting
     /// ([`PipelineParams::NAMED`]; with its own K or largest disparity a
     /// setting is no longer the named one).
     pub fn name(&self) -> Option<&'static str> {
-        Self::NAMED.iter().find(|(_, p)| p == self).map(|&(n, _)| n)
+        crate::named::name_of(&Self::NAMED, self)
     }
 
     /// These parameters searching `k` objects.

@@ -195,15 +195,12 @@ impl C2fParams {
 
     /// The named point called `name` ([`C2fParams::NAMED`]).
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::NAMED
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|&(_, p)| p)
+        crate::named::by_name(&Self::NAMED, name)
     }
 
     /// The name of these parameters if they are a named point.
     pub fn name(&self) -> Option<&'static str> {
-        Self::NAMED.iter().find(|(_, p)| p == self).map(|&(n, _)| n)
+        crate::named::name_of(&Self::NAMED, self)
     }
 
     /// `max_disp` of level `k`: `⌈D / 2^k⌉`.
